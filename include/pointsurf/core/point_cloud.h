@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstddef>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pointsurf/core/scalar_field.h"
+
+namespace pointsurf {
+
+using Vector3d = Eigen::Vector3d;
+using Vector3f = Eigen::Vector3f;
+
+/// An unorganized point cloud. Positions are double precision so that georeferenced
+/// coordinates (1e6..1e7 m) keep sub-millimetre precision. Every optional attribute is either
+/// empty or holds exactly one entry per point; `validate()` checks that.
+struct PointCloud {
+  std::vector<Vector3d> positions;  // N, cloud units
+  std::vector<Vector3d> normals;    // 0 or N, unit length (zero where undefined)
+  std::vector<Vector3f> colors;     // 0 or N, RGB in [0, 1]
+  FieldSet fields;                  // each field holds N values
+
+  std::size_t size() const noexcept { return positions.size(); }
+  bool empty() const noexcept { return positions.empty(); }
+  bool has_normals() const noexcept { return !normals.empty(); }
+  bool has_colors() const noexcept { return !colors.empty(); }
+
+  /// Throws InputError when an attribute's size differs from the point count.
+  void validate() const;
+  /// The points at `indices`, in that order, with every attribute and field.
+  PointCloud select(std::span<const std::size_t> indices) const;
+  /// Appends `other`; attributes present in only one cloud are filled with zeros.
+  void append(const PointCloud& other);
+};
+
+/// Axis-aligned bounding box. `empty()` until a point is added.
+struct BoundingBox {
+  Vector3d min = Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Vector3d max = Vector3d::Constant(-std::numeric_limits<double>::infinity());
+
+  bool empty() const noexcept { return !(min.x() <= max.x()); }
+  void extend(const Vector3d& p) noexcept { min = min.cwiseMin(p); max = max.cwiseMax(p); }
+  Vector3d extent() const noexcept { return empty() ? Vector3d::Zero() : Vector3d(max - min); }
+  Vector3d center() const noexcept { return empty() ? Vector3d::Zero() : Vector3d(0.5 * (min + max)); }
+  double diagonal() const noexcept { return extent().norm(); }
+};
+
+/// Bounding box of a set of points (empty box for no points). Parallel; thread-safe.
+BoundingBox bounding_box(std::span<const Vector3d> points);
+
+}  // namespace pointsurf

@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Reading and writing clouds and meshes in every common scan format.
+//
+// Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
+// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.2-1.4 (point formats 0-10).
+// The format of a file being read is detected from its content (magic bytes, header); the
+// extension is only a hint for headerless text. The format written follows the extension of
+// the output path unless WriteOptions::format says otherwise.
+//
+// Errors: malformed input throws InputError naming the file, the place (line, element index or
+// byte offset) and what was expected; a bad option throws UsageError. Points with NaN/Inf
+// coordinates are dropped and counted in the result (an InputError with `strict`).
+// Writes go to a temporary file in the target directory that is renamed when complete, so an
+// output is whole or absent.
+// Thread-safety: all functions are reentrant; concurrent calls on different files are safe.
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/triangle_mesh.h"
+
+namespace pointsurf {
+
+/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las".
+/// Returns the format of `path` from its first bytes, falling back on the extension for text
+/// without a header; throws InputError for an empty or unrecognised file (and for LAZ).
+std::string detect_format(const std::filesystem::path& path);
+
+/// Format implied by the extension of `path` (".ply" -> "ply", ".txt"/".pts"/".csv" -> "xyz",
+/// ".las" -> "las"); throws UsageError for an unknown extension.
+std::string format_from_extension(const std::filesystem::path& path);
+
+struct ReadOptions {
+  bool strict = false;      // NaN/Inf coordinates are an InputError instead of being dropped
+  std::string format;       // force a format ("ply", "xyz", ...); empty: detect from content
+  // Column meaning for XYZ-family text, comma separated: x,y,z,nx,ny,nz,r,g,b,i (intensity)
+  // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
+  // chosen from the column count, or taken from a header line of names.
+  std::string columns;
+};
+
+struct CloudReadResult {
+  PointCloud cloud;
+  std::string format;                  // detected format, e.g. "ply"
+  std::string encoding;                // "ascii", "binary_little_endian", "binary_compressed", ...
+  std::size_t dropped_nonfinite = 0;   // points dropped for NaN/Inf coordinates (smaller is better)
+  std::size_t face_count = 0;          // faces present in the file (meshes read as clouds)
+  std::vector<std::string> warnings;   // things the user should know, e.g. organized PCD flattened
+};
+
+struct MeshReadResult {
+  TriangleMesh mesh;
+  std::string format;
+  std::string encoding;
+  std::size_t dropped_nonfinite = 0;     // vertices dropped for NaN/Inf (faces using them too)
+  std::size_t dropped_faces = 0;         // faces dropped: degenerate or touching dropped vertices
+  std::size_t polygons_triangulated = 0; // faces with more than 3 corners split into a fan
+  std::vector<std::string> warnings;
+};
+
+/// Reads any supported file as a point cloud (a mesh file gives its vertices).
+CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOptions& options = {});
+/// Reads a mesh (PLY, OFF, OBJ, STL); a file without faces gives an empty triangle list.
+MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
+
+enum class PlyEncoding { BinaryLittleEndian, BinaryBigEndian, Ascii };
+
+struct WriteOptions {
+  std::string format;                     // force a format; empty: from the extension
+  PlyEncoding ply_encoding = PlyEncoding::BinaryLittleEndian;  // PLY only
+  bool ascii = false;                     // ascii PLY / PCD / STL (overrides ply_encoding)
+  bool single_precision = false;          // float32 positions (PLY, PCD); refused with a
+                                          // UsageError when the float32 step at the largest
+                                          // coordinate exceeds 1e-5 of the bounding-box diagonal
+                                          // (georeferenced data: keep double)
+  bool pcd_compressed = false;            // PCD binary_compressed (LZF) instead of binary
+  std::optional<Vector3d> las_offset;     // LAS offset; default near the data's minimum
+  std::optional<double> las_scale;        // LAS scale (cloud units per count); default <= 1e-4
+  int precision = 17;                     // significant digits of text coordinates (XYZ, OBJ, ...)
+};
+
+/// Writes a cloud; formats that hold faces get none. Throws UsageError for a format that
+/// cannot hold the data as asked and Error on an I/O failure.
+void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options = {});
+/// Writes a mesh (PLY, OFF, OBJ, STL; XYZ/PCD/LAS get its vertices only).
+void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options = {});
+
+}  // namespace pointsurf

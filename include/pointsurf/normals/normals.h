@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Normal estimation by PCA of local neighbourhoods and consistent orientation.
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/spatial/kd_tree.h"
+
+namespace pointsurf {
+
+enum class NeighborhoodKind { Knn, Radius, Hybrid };
+
+struct NormalParams {
+  NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
+  int k = 30;                       // neighbours per point (Knn, Hybrid), >= 3
+  double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
+  double radius_in_spacings = 3.0;  // used when radius == 0
+  bool keep_variation = true;       // add field "variation" = l0 / (l0 + l1 + l2), in [0, 1/3]
+};
+
+struct NormalResult {
+  std::size_t degenerate = 0;   // points with fewer than 3 neighbours or a rank-deficient
+                                // neighbourhood: their normal is (0, 0, 0) (smaller is better)
+  double radius_used = 0.0;     // search radius actually used (Radius, Hybrid), cloud units
+};
+
+/// Estimates unit normals by PCA: the eigenvector of the smallest eigenvalue of each point's
+/// neighbourhood covariance (Hoppe et al. 1992). Writes `cloud.normals` (N×3) and, when asked,
+/// the field "variation". Sign is arbitrary (call orient_normals afterwards) except that
+/// existing normals, if any, keep their side. Reuses `tree` if given (it must be built over
+/// `cloud.positions`). Parallel (oneTBB) in Morton order; throws UsageError for k < 3, a
+/// negative radius or fewer than 3 points; CancelledError when `progress` returns false.
+NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params = {}, const KdTree* tree = nullptr,
+                              const ProgressCallback& progress = {});
+
+enum class Orientation {
+  None,        // keep the PCA signs
+  Viewpoint,   // each normal points towards `viewpoint` (scanner position)
+  Direction,   // each normal has a positive dot product with `direction`
+  Mst,         // consistent propagation over a minimum spanning tree (Hoppe 1992)
+};
+
+struct OrientParams {
+  Orientation method = Orientation::Mst;
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // cloud units (Viewpoint)
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ(); // any length > 0 (Direction)
+  int k = 10;                                           // kNN graph degree (Mst), >= 1
+};
+
+struct OrientResult {
+  std::size_t components = 0;   // connected components of the kNN graph (Mst)
+  std::size_t flipped = 0;      // normals whose sign changed
+};
+
+/// Orients `cloud.normals` (which must be present) consistently. Mst (Hoppe et al. 1992):
+/// builds the symmetric kNN graph with edge weights 1 - |ni·nj|, takes its minimum spanning
+/// forest, and propagates the sign along it from one seed per connected component: the point
+/// of the component farthest from the component's centroid, whose normal is turned outward
+/// (away from the centroid). Memory O(k N), no dense structure; graph construction parallel.
+/// Reuses `tree` if given (built over `cloud.positions`). Throws UsageError on missing normals
+/// or bad parameters; CancelledError when `progress` returns false.
+OrientResult orient_normals(PointCloud& cloud, const OrientParams& params = {}, const KdTree* tree = nullptr,
+                            const ProgressCallback& progress = {});
+
+}  // namespace pointsurf

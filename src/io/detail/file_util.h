@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Small shared helpers for the format readers and writers: whole-file reading, a text cursor
+// with line numbers, number parsing with std::from_chars, byte swapping and a buffered writer.
+#include <bit>
+#include <charconv>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <type_traits>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "pointsurf/core/error.h"
+
+namespace pointsurf::io::detail {
+
+/// The whole file in memory. Throws InputError when it cannot be opened or read.
+std::string read_file_bytes(const std::filesystem::path& path);
+
+/// Parses a whole token as a number; false when the token is not entirely a number.
+/// Accepts a leading '+', "nan", "inf" (any case) for floating types.
+bool parse_number(std::string_view token, double& out) noexcept;
+bool parse_number(std::string_view token, long long& out) noexcept;
+
+template <typename T>
+T byteswap_value(T value) noexcept {
+  static_assert(std::is_trivially_copyable_v<T>);
+  unsigned char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+  std::memcpy(&value, bytes, sizeof(T));
+  return value;
+}
+
+/// Reads a T stored little endian (big endian when `big`) at `p`.
+template <typename T>
+T load_value(const char* p, bool big = false) noexcept {
+  T value;
+  std::memcpy(&value, p, sizeof(T));
+  if (big != (std::endian::native == std::endian::big)) value = byteswap_value(value);
+  return value;
+}
+
+/// Line-oriented cursor over text held in memory; tracks the 1-based line number.
+class TextCursor {
+public:
+  explicit TextCursor(std::string_view text) : text_(text) {}
+  /// Next line without its terminator ("\n", "\r\n" or "\r"); false at the end of the text.
+  bool next_line(std::string_view& line) noexcept;
+  /// Line number of the line last returned (1-based).
+  std::size_t line_number() const noexcept { return line_; }
+  /// Byte offset of the first byte not yet consumed.
+  std::size_t offset() const noexcept { return pos_; }
+  bool at_end() const noexcept { return pos_ >= text_.size(); }
+
+private:
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  std::size_t line_ = 0;
+};
+
+/// Splits `line` at whitespace (and at commas when `commas`), skipping empty tokens.
+/// Reuses `tokens` to avoid allocation per line.
+void split_tokens(std::string_view line, std::vector<std::string_view>& tokens, bool commas = false);
+
+/// Buffered binary/text output to a file opened for writing; throws Error on any failure.
+class FileWriter {
+public:
+  explicit FileWriter(const std::filesystem::path& path);
+  ~FileWriter();
+  FileWriter(const FileWriter&) = delete;
+  FileWriter& operator=(const FileWriter&) = delete;
+
+  void write(const void* data, std::size_t size);
+  void write(std::string_view text) { write(text.data(), text.size()); }
+  template <typename T>
+  void write_value(T value, bool big = false) {
+    if (big != (std::endian::native == std::endian::big)) value = byteswap_value(value);
+    write(&value, sizeof(T));
+  }
+  /// Appends a double in shortest round-trip form (or with `precision` significant digits).
+  void write_double(double value, int precision = 17);
+  /// Flushes and closes; throws on failure. Called by the destructor without throwing.
+  void close();
+
+private:
+  void flush();
+  std::FILE* file_ = nullptr;
+  std::filesystem::path path_;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
+};
+
+}  // namespace pointsurf::io::detail

@@ -1,0 +1,290 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Format detection, dispatch to the per-format readers and writers, and the post-processing
+// every reader shares: non-finite points, polygon triangulation, atomic output files.
+#include "pointsurf/io/io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "io/detail/file_util.h"
+#include "io/detail/formats.h"
+#include "pointsurf/core/error.h"
+
+namespace pointsurf {
+namespace {
+
+using io::detail::display_name;
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+std::string read_head(const std::filesystem::path& path, std::size_t bytes, std::uintmax_t& file_size) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(fmt::format("{}: no such file", display_name(path)));
+  if (std::filesystem::is_directory(path, ec)) throw InputError(fmt::format("{}: is a directory, expected a file", display_name(path)));
+  file_size = std::filesystem::file_size(path, ec);
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InputError(fmt::format("{}: cannot open for reading", display_name(path)));
+  std::string head(bytes, '\0');
+  head.resize(std::fread(head.data(), 1, bytes, f));
+  std::fclose(f);
+  return head;
+}
+
+bool starts_with_ci(std::string_view s, std::string_view prefix) {
+  if (s.size() < prefix.size()) return false;
+  for (std::size_t i = 0; i < prefix.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(s[i])) != std::tolower(static_cast<unsigned char>(prefix[i]))) return false;
+  return true;
+}
+
+// First non-blank, non-comment line of `head`.
+std::string_view first_content_line(std::string_view head, char comment) {
+  io::detail::TextCursor cursor(head);
+  std::string_view line;
+  while (cursor.next_line(line)) {
+    std::size_t i = line.find_first_not_of(" \t");
+    if (i == std::string_view::npos) continue;
+    line.remove_prefix(i);
+    if (line.front() == comment) continue;
+    return line;
+  }
+  return {};
+}
+
+bool looks_binary(std::string_view head) {
+  std::size_t bad = 0;
+  for (unsigned char c : head)
+    if (c == 0 || (c < 32 && c != '\n' && c != '\r' && c != '\t' && c != '\v' && c != '\f')) ++bad;
+  return bad > 0;
+}
+
+}  // namespace
+
+std::string format_from_extension(const std::filesystem::path& path) {
+  const std::string ext = lower(path.extension().string());
+  if (ext == ".ply") return "ply";
+  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".csv" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".asc") return "xyz";
+  if (ext == ".pcd") return "pcd";
+  if (ext == ".las") return "las";
+  if (ext == ".off") return "off";
+  if (ext == ".obj") return "obj";
+  if (ext == ".stl") return "stl";
+  if (ext == ".laz") throw UsageError(fmt::format("{}: compressed LAS (LAZ) is not supported yet; write .las", display_name(path)));
+  throw UsageError(fmt::format("{}: unknown output format '{}': expected .ply, .xyz, .txt, .pts, .csv, .pcd, .las, .off, .obj or .stl",
+                               display_name(path), ext.empty() ? std::string("(no extension)") : ext));
+}
+
+std::string detect_format(const std::filesystem::path& path) {
+  std::uintmax_t size = 0;
+  const std::string head = read_head(path, 4096, size);
+  if (size == 0 || head.empty()) throw InputError(fmt::format("{}: file is empty", display_name(path)));
+  if (head.rfind("ply", 0) == 0 && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return "ply";
+  if (head.rfind("LASF", 0) == 0) {
+    const std::string ext = lower(path.extension().string());
+    const bool compressed_format = head.size() > 104 && (static_cast<unsigned char>(head[104]) & 0xC0) != 0;
+    if (ext == ".laz" || compressed_format)
+      throw InputError(fmt::format("{}: compressed LAS (LAZ) is not supported yet; decompress it to .las first (e.g. laszip -i in.laz -o out.las)",
+                                   display_name(path)));
+    return "las";
+  }
+  // Binary STL: 80-byte header, triangle count, 50 bytes per triangle. Checked before the
+  // text formats because many exporters start the binary header with "solid".
+  if (size >= 84 && head.size() >= 84) {
+    const auto count = io::detail::load_value<std::uint32_t>(head.data() + 80);
+    if (84 + 50 * static_cast<std::uintmax_t>(count) == size) return "stl";
+  }
+  if (starts_with_ci(head, "# .PCD") || head.rfind("VERSION", 0) == 0 || head.rfind("FIELDS", 0) == 0) return "pcd";
+  const std::string_view first = first_content_line(head, '#');
+  if (first.rfind("solid", 0) == 0 && head.find("facet") != std::string::npos) return "stl";
+  if (first.rfind("solid", 0) == 0 && size < 200) return "stl";
+  {
+    std::string_view word = first.substr(0, first.find_first_of(" \t"));
+    if (word.size() >= 3 && word.substr(word.size() - 3) == "OFF" && word.size() <= 6) return "off";
+  }
+  if (looks_binary(head)) {
+    const std::string ext = lower(path.extension().string());
+    if (ext == ".stl") throw InputError(fmt::format("{}: binary STL: triangle count disagrees with the file size ({} bytes)", display_name(path), size));
+    throw InputError(fmt::format("{}: unknown format: binary content that is none of PLY, PCD, LAS or STL", display_name(path)));
+  }
+  // OBJ: keyword lines.
+  {
+    io::detail::TextCursor cursor(head);
+    std::string_view line;
+    while (cursor.next_line(line)) {
+      std::size_t i = line.find_first_not_of(" \t");
+      if (i == std::string_view::npos) continue;
+      line.remove_prefix(i);
+      if (line.front() == '#') continue;
+      const std::string_view word = line.substr(0, line.find_first_of(" \t"));
+      if (word == "v" || word == "vn" || word == "vt" || word == "f" || word == "o" || word == "g" || word == "mtllib" ||
+          word == "usemtl" || word == "s")
+        return "obj";
+      break;
+    }
+  }
+  const std::string ext = lower(path.extension().string());
+  if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".pcd" || ext == ".stl")
+    throw InputError(fmt::format("{}: not a valid {} file: the header is missing", display_name(path), ext.substr(1)));
+  return "xyz";
+}
+
+namespace {
+
+io::detail::RawData read_raw(const std::filesystem::path& path, const ReadOptions& options, std::string& format) {
+  format = options.format.empty() ? detect_format(path) : lower(options.format);
+  if (format == "ply") return io::detail::read_ply(path, options);
+  if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") { format = "xyz"; return io::detail::read_xyz(path, options); }
+  if (format == "pcd") return io::detail::read_pcd(path, options);
+  if (format == "las") return io::detail::read_las(path, options);
+  if (format == "off") return io::detail::read_off(path, options);
+  if (format == "obj") return io::detail::read_obj(path, options);
+  if (format == "stl") return io::detail::read_stl(path, options);
+  throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
+}
+
+bool finite(const Vector3d& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
+
+// Drops points with NaN/Inf coordinates; returns old index -> new index (-1 dropped), or an
+// empty vector when nothing was dropped.
+std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& path, bool strict, std::size_t& dropped) {
+  std::size_t first_bad = cloud.size();
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (!finite(cloud.positions[i])) { first_bad = i; break; }
+  if (first_bad == cloud.size()) return {};
+  if (strict)
+    throw InputError(fmt::format("{}: point {}: non-finite coordinate ({}, {}, {}); without --strict such points are dropped and counted",
+                                 display_name(path), first_bad, cloud.positions[first_bad].x(), cloud.positions[first_bad].y(),
+                                 cloud.positions[first_bad].z()));
+  std::vector<int> remap(cloud.size(), -1);
+  std::vector<std::size_t> keep;
+  keep.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (finite(cloud.positions[i])) { remap[i] = static_cast<int>(keep.size()); keep.push_back(i); }
+  dropped += cloud.size() - keep.size();
+  cloud = cloud.select(keep);
+  return remap;
+}
+
+}  // namespace
+
+CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOptions& options) {
+  CloudReadResult result;
+  io::detail::RawData raw = read_raw(path, options, result.format);
+  result.encoding = raw.encoding;
+  result.warnings = std::move(raw.warnings);
+  result.face_count = raw.polygons.size() + raw.triangles.size();
+  result.dropped_nonfinite = raw.dropped_nonfinite;
+  if (options.strict && raw.dropped_nonfinite > 0)
+    throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
+                                 display_name(path), raw.dropped_nonfinite));
+  drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite);
+  raw.cloud.validate();
+  result.cloud = std::move(raw.cloud);
+  return result;
+}
+
+MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
+  MeshReadResult result;
+  io::detail::RawData raw = read_raw(path, options, result.format);
+  result.encoding = raw.encoding;
+  result.warnings = std::move(raw.warnings);
+  result.dropped_nonfinite = raw.dropped_nonfinite;
+  const std::vector<int> remap = drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite);
+  const int n = static_cast<int>(raw.cloud.size());
+  std::vector<Triangle> triangles;
+  triangles.reserve(raw.triangles.size() + raw.polygons.size());
+  auto add = [&](int a, int b, int c) {
+    if (!remap.empty()) { a = remap[a]; b = remap[b]; c = remap[c]; }
+    if (a < 0 || b < 0 || c < 0 || a == b || b == c || a == c) { ++result.dropped_faces; return; }
+    triangles.emplace_back(a, b, c);
+  };
+  const int n_in = static_cast<int>(remap.empty() ? n : remap.size());
+  auto check = [&](int idx, std::size_t face) {
+    if (idx < 0 || idx >= n_in)
+      throw InputError(fmt::format("{}: face {}: vertex index {} out of range [0, {})", display_name(path), face, idx, n_in));
+  };
+  for (std::size_t f = 0; f < raw.triangles.size(); ++f) {
+    const Triangle& t = raw.triangles[f];
+    check(t[0], f); check(t[1], f); check(t[2], f);
+    add(t[0], t[1], t[2]);
+  }
+  for (std::size_t f = 0; f < raw.polygons.size(); ++f) {
+    const std::vector<int>& poly = raw.polygons[f];
+    for (int idx : poly) check(idx, raw.triangles.size() + f);
+    if (poly.size() < 3) { ++result.dropped_faces; continue; }
+    if (poly.size() > 3) ++result.polygons_triangulated;
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) add(poly[0], poly[k], poly[k + 1]);
+  }
+  raw.cloud.validate();
+  result.mesh = TriangleMesh::from_cloud(std::move(raw.cloud), std::move(triangles));
+  return result;
+}
+
+namespace {
+
+// A temporary file next to the target, renamed over it on commit(), removed otherwise.
+class TemporaryOutput {
+public:
+  explicit TemporaryOutput(const std::filesystem::path& target) : target_(target) {
+    const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+      throw Error(fmt::format("{}: cannot write: directory '{}' does not exist", display_name(target), dir.string()));
+    std::mt19937_64 rng(std::random_device{}() ^ static_cast<std::uint64_t>(::getpid()));
+    temp_ = dir / fmt::format(".{}.tmp-{:08x}", target.filename().string(), static_cast<std::uint32_t>(rng()));
+  }
+  ~TemporaryOutput() {
+    if (!committed_) { std::error_code ec; std::filesystem::remove(temp_, ec); }
+  }
+  const std::filesystem::path& path() const { return temp_; }
+  void commit() {
+    std::error_code ec;
+    std::filesystem::rename(temp_, target_, ec);
+    if (ec) throw Error(fmt::format("{}: cannot rename the finished output into place: {}", display_name(target_), ec.message()));
+    committed_ = true;
+  }
+
+private:
+  std::filesystem::path target_, temp_;
+  bool committed_ = false;
+};
+
+void write_any(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
+               const WriteOptions& options) {
+  cloud.validate();
+  const std::string format = options.format.empty() ? format_from_extension(path) : lower(options.format);
+  TemporaryOutput out(path);
+  if (format == "ply") io::detail::write_ply(out.path(), cloud, triangles, options);
+  else if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") io::detail::write_xyz(out.path(), cloud, options);
+  else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options);
+  else if (format == "las") io::detail::write_las(out.path(), cloud, options);
+  else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);
+  else if (format == "obj") io::detail::write_obj(out.path(), cloud, triangles, options);
+  else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
+  else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
+  out.commit();
+}
+
+}  // namespace
+
+void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
+  write_any(path, cloud, {}, options);
+}
+
+void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
+  mesh.validate();
+  // The vertex attributes travel as a cloud; this copies the vertices once, which is small
+  // next to the file I/O.
+  write_any(path, mesh.vertex_cloud(), mesh.triangles, options);
+}
+
+}  // namespace pointsurf
