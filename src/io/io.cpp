@@ -264,7 +264,15 @@ void write_any(const std::filesystem::path& path, const PointCloud& cloud, const
   const std::string format = options.format.empty() ? format_from_extension(path) : lower(options.format);
   TemporaryOutput out(path);
   if (format == "ply") io::detail::write_ply(out.path(), cloud, triangles, options);
-  else if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") io::detail::write_xyz(out.path(), cloud, options);
+  else if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") {
+    // The XYZ writer needs to know the family member (csv: header + commas, pts: count line).
+    WriteOptions xyz_options = options;
+    if (xyz_options.format.empty()) {
+      const std::string ext = lower(path.extension().string());
+      xyz_options.format = ext == ".csv" ? "csv" : ext == ".pts" ? "pts" : "xyz";
+    }
+    io::detail::write_xyz(out.path(), cloud, xyz_options);
+  }
   else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options);
   else if (format == "las") io::detail::write_las(out.path(), cloud, options);
   else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);

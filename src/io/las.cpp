@@ -1,9 +1,368 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// PLACEHOLDER: replaced by the las implementation.
+// LAS 1.0-1.4 reader (point data record formats 0-10) and LAS 1.4 writer (format 6, or 7 with
+// colours), following the ASPRS LAS 1.4 R15 specification. All values are little endian.
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "io/detail/file_util.h"
 #include "io/detail/formats.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf::io::detail {
-RawData read_las(const std::filesystem::path& path, const ReadOptions&) { throw InputError(path.string() + ": las reader missing"); }
-void write_las(const std::filesystem::path& path, const PointCloud&, const WriteOptions&) { throw Error(path.string() + ": las writer missing"); }
+namespace {
+
+// Byte offsets in the public header block.
+constexpr std::size_t kVersionMajor = 24;
+constexpr std::size_t kHeaderSize = 94;
+constexpr std::size_t kOffsetToPoints = 96;
+constexpr std::size_t kPointFormat = 104;
+constexpr std::size_t kRecordLength = 105;
+constexpr std::size_t kLegacyCount = 107;
+constexpr std::size_t kScale = 131;
+constexpr std::size_t kOffset = 155;
+constexpr std::size_t kCount64 = 247;
+constexpr std::size_t kHeaderSize12 = 227;  // LAS 1.0-1.2
+constexpr std::size_t kHeaderSize14 = 375;
+
+// Where the optional parts of a point record sit; -1 when the format lacks them.
+struct PointLayout {
+  std::size_t size = 0;  // bytes the format defines
+  bool extended = false; // formats 6-10: 30-byte core, 4-bit returns, 8-bit classes
+  int gps_time = -1;
+  int rgb = -1;
+  int nir = -1;
+};
+
+PointLayout point_layout(int format) {
+  switch (format) {
+    case 0: return {20, false, -1, -1, -1};
+    case 1: return {28, false, 20, -1, -1};
+    case 2: return {26, false, -1, 20, -1};
+    case 3: return {34, false, 20, 28, -1};
+    case 4: return {57, false, 20, -1, -1};  // format 1 + 29 bytes of wave packet
+    case 5: return {63, false, 20, 28, -1};  // format 3 + wave packet
+    case 6: return {30, true, 22, -1, -1};
+    case 7: return {36, true, 22, 30, -1};
+    case 8: return {38, true, 22, 30, 36};
+    case 9: return {59, true, 22, -1, -1};   // format 6 + wave packet
+    default: return {67, true, 22, 30, 36};  // 10: format 8 + wave packet
+  }
+}
+
+// The extended formats store the scan angle in steps of 0.006 degrees.
+constexpr double kScanAngleStepDeg = 0.006;
+
+}  // namespace
+
+RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
+  const std::string name = display_name(path);
+  const std::string bytes = read_file_bytes(path);
+  const std::size_t file_size = bytes.size();
+  const char* data = bytes.data();
+
+  if (file_size < 4 || bytes.compare(0, 4, "LASF") != 0)
+    throw InputError(fmt::format("{}: not a LAS file: expected the signature 'LASF' at byte 0", name));
+  if (file_size < kHeaderSize12)
+    throw InputError(fmt::format("{}: header too short: the file has {} bytes, a LAS header needs at least {}", name, file_size, kHeaderSize12));
+
+  const int major = static_cast<unsigned char>(data[kVersionMajor]);
+  const int minor = static_cast<unsigned char>(data[kVersionMajor + 1]);
+  if (major != 1 || minor > 4)
+    throw InputError(fmt::format("{}: unsupported LAS version {}.{}: expected 1.0 to 1.4", name, major, minor));
+
+  const std::size_t header_size = load_value<std::uint16_t>(data + kHeaderSize);
+  const std::size_t needed_header = minor >= 4 ? kHeaderSize14 : kHeaderSize12;
+  if (header_size < needed_header)
+    throw InputError(fmt::format("{}: header too short: header size field is {}, LAS {}.{} needs at least {}", name, header_size, major,
+                                 minor, needed_header));
+  if (header_size > file_size)
+    throw InputError(fmt::format("{}: header size {} is larger than the file ({} bytes)", name, header_size, file_size));
+
+  const std::size_t point_offset = load_value<std::uint32_t>(data + kOffsetToPoints);
+  if (point_offset < header_size)
+    throw InputError(fmt::format("{}: offset to point data {} lies inside the {}-byte header", name, point_offset, header_size));
+
+  // Bits 7 and 6 flag LAZ compression; the dispatch rejects those files, so only the low bits
+  // name the record format here.
+  const int format = static_cast<unsigned char>(data[kPointFormat]) & 0x3F;
+  if (format > 10) throw InputError(fmt::format("{}: point data record format {} is not supported: expected 0 to 10", name, format));
+  const PointLayout layout = point_layout(format);
+  const std::size_t record_length = load_value<std::uint16_t>(data + kRecordLength);
+  if (record_length < layout.size)
+    throw InputError(fmt::format("{}: point record length {} is shorter than the {} bytes point format {} needs", name, record_length,
+                                 layout.size, format));
+
+  // LAS 1.4 has a 64-bit count; the legacy 32-bit one must be 0 for formats 6-10 and for
+  // files with more than 2^32 - 1 points, but some writers fill only the legacy field.
+  std::uint64_t count = load_value<std::uint32_t>(data + kLegacyCount);
+  if (minor >= 4) {
+    const auto count64 = load_value<std::uint64_t>(data + kCount64);
+    if (count64 != 0) count = count64;
+  }
+
+  std::array<double, 3> scale{}, offset{};
+  for (int a = 0; a < 3; ++a) {
+    scale[a] = load_value<double>(data + kScale + 8 * a);
+    offset[a] = load_value<double>(data + kOffset + 8 * a);
+    if (!std::isfinite(scale[a]) || scale[a] == 0.0)
+      throw InputError(fmt::format("{}: byte {}: {} scale factor is {}: expected a finite non-zero number", name, kScale + 8 * a,
+                                   "xyz"[a], scale[a]));
+    if (!std::isfinite(offset[a]))
+      throw InputError(fmt::format("{}: byte {}: {} offset is {}: expected a finite number", name, kOffset + 8 * a, "xyz"[a], offset[a]));
+  }
+
+  // Check the announced points against the file size before allocating anything for them.
+  const std::size_t available = point_offset <= file_size ? file_size - point_offset : 0;
+  if (count > available / record_length)
+    throw InputError(fmt::format("{}: point {} of {}: file ends at byte {} (records of {} bytes from byte {})", name,
+                                 available / record_length, count, file_size, record_length, point_offset));
+  const std::size_t n = static_cast<std::size_t>(count);
+
+  RawData raw;
+  raw.encoding = fmt::format("LAS {}.{} point format {}", major, minor, format);
+  PointCloud& cloud = raw.cloud;
+  cloud.positions.resize(n);
+  std::vector<double> intensity(n), return_number(n), number_of_returns(n), classification(n);
+  std::vector<double> scan_angle(n), user_data(n), point_source_id(n), gps_time, nir;
+  if (layout.gps_time >= 0) gps_time.resize(n);
+  if (layout.nir >= 0) nir.resize(n);
+  std::vector<std::array<std::uint16_t, 3>> rgb;
+  if (layout.rgb >= 0) rgb.resize(n);
+
+  const char* record = data + point_offset;
+  for (std::size_t i = 0; i < n; ++i, record += record_length) {
+    const auto x = load_value<std::int32_t>(record);
+    const auto y = load_value<std::int32_t>(record + 4);
+    const auto z = load_value<std::int32_t>(record + 8);
+    cloud.positions[i] = Vector3d(x * scale[0] + offset[0], y * scale[1] + offset[1], z * scale[2] + offset[2]);
+    intensity[i] = load_value<std::uint16_t>(record + 12);
+    const auto returns = static_cast<unsigned char>(record[14]);
+    if (layout.extended) {
+      return_number[i] = returns & 0x0F;
+      number_of_returns[i] = returns >> 4;
+      classification[i] = static_cast<unsigned char>(record[16]);
+      user_data[i] = static_cast<unsigned char>(record[17]);
+      scan_angle[i] = load_value<std::int16_t>(record + 18) * kScanAngleStepDeg;
+      point_source_id[i] = load_value<std::uint16_t>(record + 20);
+    } else {
+      return_number[i] = returns & 0x07;
+      number_of_returns[i] = (returns >> 3) & 0x07;
+      classification[i] = static_cast<unsigned char>(record[15]) & 0x1F;  // the top 3 bits are flags
+      scan_angle[i] = static_cast<signed char>(record[16]);
+      user_data[i] = static_cast<unsigned char>(record[17]);
+      point_source_id[i] = load_value<std::uint16_t>(record + 18);
+    }
+    if (layout.gps_time >= 0) gps_time[i] = load_value<double>(record + layout.gps_time);
+    if (layout.rgb >= 0)
+      for (int c = 0; c < 3; ++c) rgb[i][c] = load_value<std::uint16_t>(record + layout.rgb + 2 * c);
+    if (layout.nir >= 0) nir[i] = load_value<std::uint16_t>(record + layout.nir);
+  }
+
+  // Scan angle, user data, point source id and NIR are usually constant zero; they become
+  // fields only when some point has another value, which keeps memory down for big clouds.
+  auto add = [&](const char* field, std::vector<double>& values, ScalarType type, bool always) {
+    if (!always && std::all_of(values.begin(), values.end(), [](double v) { return v == 0.0; })) return;
+    cloud.fields.add(field, 0, type).values = std::move(values);
+  };
+  add("intensity", intensity, ScalarType::UInt16, true);
+  add("return_number", return_number, ScalarType::UInt8, true);
+  add("number_of_returns", number_of_returns, ScalarType::UInt8, true);
+  add("classification", classification, ScalarType::UInt8, true);
+  if (layout.gps_time >= 0) add("gps_time", gps_time, ScalarType::Float64, true);
+  add("scan_angle", scan_angle, ScalarType::Float32, false);
+  add("user_data", user_data, ScalarType::UInt8, false);
+  add("point_source_id", point_source_id, ScalarType::UInt16, false);
+  if (layout.nir >= 0) add("nir", nir, ScalarType::UInt16, false);
+
+  if (layout.rgb >= 0) {
+    // The standard says 16-bit colour, but many writers store 8-bit values unscaled; when no
+    // channel exceeds 255 the data is taken as 8-bit.
+    std::uint16_t max_channel = 0;
+    for (const auto& c : rgb) max_channel = std::max({max_channel, c[0], c[1], c[2]});
+    const float full = max_channel <= 255 ? 255.0f : 65535.0f;
+    if (max_channel <= 255 && max_channel > 0) raw.warnings.push_back(fmt::format("{}: RGB values are 8-bit (none above 255); read as 0..255", name));
+    cloud.colors.resize(n);
+    for (std::size_t i = 0; i < n; ++i) cloud.colors[i] = Vector3f(rgb[i][0] / full, rgb[i][1] / full, rgb[i][2] / full);
+  }
+  return raw;
+}
+
+namespace {
+
+// Values from a field, rounded and clamped to [lo, hi]; `fallback` when the field is absent or
+// the value is not finite.
+class FieldReader {
+public:
+  FieldReader(const PointCloud& cloud, std::string_view name, double fallback) : fallback_(fallback) {
+    if (const ScalarField* f = cloud.fields.find(name)) values_ = &f->values;
+  }
+  double raw(std::size_t i) const {
+    if (!values_) return fallback_;
+    const double v = (*values_)[i];
+    return std::isfinite(v) ? v : fallback_;
+  }
+  long long integer(std::size_t i, long long lo, long long hi) const {
+    return static_cast<long long>(std::clamp(std::round(raw(i)), static_cast<double>(lo), static_cast<double>(hi)));
+  }
+
+private:
+  const std::vector<double>* values_ = nullptr;
+  double fallback_;
+};
+
+template <typename T>
+void put(char* p, T value) {
+  if constexpr (std::endian::native == std::endian::big) value = byteswap_value(value);
+  std::memcpy(p, &value, sizeof(T));
+}
+
+// Writers get the temporary file that the dispatch renames afterwards
+// ("dir/.scan.las.tmp-1a2b3c4d"); messages name the file the user asked for.
+std::string target_name(const std::filesystem::path& tmp_path) {
+  std::string file = tmp_path.filename().string();
+  const std::size_t tmp = file.rfind(".tmp-");
+  if (file.size() > 1 && file.front() == '.' && tmp != std::string::npos && tmp > 1) file = file.substr(1, tmp - 1);
+  const std::filesystem::path dir = tmp_path.parent_path();
+  return display_name(dir.empty() || dir == "." ? std::filesystem::path(file) : dir / file);
+}
+
+void put_text(char* p, std::string_view text, std::size_t width) {
+  std::memcpy(p, text.data(), std::min(text.size(), width));
+}
+
+}  // namespace
+
+// Fields kept in a LAS point record: intensity, return_number, number_of_returns,
+// classification, user_data, scan_angle (degrees), point_source_id, gps_time. LAS has no slot
+// for any other field (nor for normals), so those are dropped; values outside a slot's range
+// are clamped. Points without a return_number field are written as return 1 of 1.
+void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
+  const std::string name = target_name(path);
+  const std::size_t n = cloud.size();
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite())
+      throw UsageError(fmt::format("{}: point {} has a non-finite coordinate; LAS stores integers and cannot hold it", name, i));
+
+  const BoundingBox box = bounding_box(cloud.positions);
+  const Vector3d lo = box.empty() ? Vector3d::Zero() : box.min;
+  const Vector3d hi = box.empty() ? Vector3d::Zero() : box.max;
+
+  std::array<double, 3> scale{}, offset{};
+  constexpr double kIntMax = std::numeric_limits<std::int32_t>::max();
+  for (int a = 0; a < 3; ++a) {
+    // A round offset keeps the stored integers easy to read; 1e-4 keeps 0.05 mm quantisation.
+    offset[a] = options.las_offset ? (*options.las_offset)[a] : std::floor(lo[a] / 1000.0) * 1000.0;
+    if (!std::isfinite(offset[a])) throw UsageError(fmt::format("{}: LAS offset {} is not finite", name, "xyz"[a]));
+    const double reach = std::max(std::abs(hi[a] - offset[a]), std::abs(lo[a] - offset[a]));
+    if (options.las_scale) {
+      scale[a] = *options.las_scale;
+      if (!std::isfinite(scale[a]) || scale[a] <= 0.0)
+        throw UsageError(fmt::format("{}: LAS scale {} must be a positive number", name, scale[a]));
+      if (reach / scale[a] > kIntMax - 1)
+        throw UsageError(fmt::format("{}: LAS scale {} with offset {} cannot hold {} = {} in 32 bits: use a scale of at least {:g}", name,
+                                     scale[a], offset[a], "xyz"[a], std::abs(hi[a] - offset[a]) >= std::abs(lo[a] - offset[a]) ? hi[a] : lo[a],
+                                     reach / (kIntMax - 1)));
+    } else {
+      scale[a] = 1e-4;
+      while (reach / scale[a] > kIntMax - 1) scale[a] *= 10.0;
+    }
+  }
+
+  const bool colors = cloud.has_colors();
+  const int format = colors ? 7 : 6;
+  const std::size_t record_length = colors ? 36 : 30;
+
+  const FieldReader intensity(cloud, "intensity", 0), return_number(cloud, "return_number", 1),
+      number_of_returns(cloud, "number_of_returns", 1), classification(cloud, "classification", 0), user_data(cloud, "user_data", 0),
+      scan_angle(cloud, "scan_angle", 0), point_source_id(cloud, "point_source_id", 0), gps_time(cloud, "gps_time", 0);
+
+  auto quantise = [&](std::size_t i, int a) {
+    return static_cast<std::int32_t>(std::llround((cloud.positions[i][a] - offset[a]) / scale[a]));
+  };
+
+  // The header comes first but holds the quantised bounds and the counts per return number:
+  // one pass gathers them, a second streams the records.
+  std::array<std::uint64_t, 15> by_return{};
+  std::array<std::int32_t, 3> qmin{}, qmax{};
+  qmin.fill(std::numeric_limits<std::int32_t>::max());
+  qmax.fill(std::numeric_limits<std::int32_t>::min());
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const std::int32_t q = quantise(i, a);
+      qmin[a] = std::min(qmin[a], q);
+      qmax[a] = std::max(qmax[a], q);
+    }
+    const long long ret = return_number.integer(i, 0, 15);
+    if (ret >= 1) ++by_return[static_cast<std::size_t>(ret - 1)];
+  }
+
+  std::string header(kHeaderSize14, '\0');
+  char* h = header.data();
+  put_text(h, "LASF", 4);
+  // Bit 4 (WKT) must be set for formats 6-10 even without a coordinate system (LAS 1.4 R15);
+  // PDAL refuses such files otherwise. Bit 0 stays clear: the GPS time type is unknown.
+  put<std::uint16_t>(h + 6, 0x10);
+  h[kVersionMajor] = 1;
+  h[kVersionMajor + 1] = 4;
+  put_text(h + 26, "OTHER", 32);
+  put_text(h + 58, "pointsurf", 32);
+  {
+    using namespace std::chrono;
+    const auto today = floor<days>(system_clock::now());
+    const year_month_day ymd(today);
+    const auto day_of_year = (today - sys_days(ymd.year() / January / 1)).count() + 1;
+    put<std::uint16_t>(h + 90, static_cast<std::uint16_t>(day_of_year));
+    put<std::uint16_t>(h + 92, static_cast<std::uint16_t>(static_cast<int>(ymd.year())));
+  }
+  put<std::uint16_t>(h + kHeaderSize, static_cast<std::uint16_t>(kHeaderSize14));
+  put<std::uint32_t>(h + kOffsetToPoints, static_cast<std::uint32_t>(kHeaderSize14));
+  put<std::uint32_t>(h + 100, 0);  // no VLRs
+  h[kPointFormat] = static_cast<char>(format);
+  put<std::uint16_t>(h + kRecordLength, static_cast<std::uint16_t>(record_length));
+  // Legacy counts (bytes 107-130) stay 0: LAS 1.4 requires that for formats 6-10.
+  for (int a = 0; a < 3; ++a) {
+    put<double>(h + kScale + 8 * a, scale[a]);
+    put<double>(h + kOffset + 8 * a, offset[a]);
+    const double top = n ? qmax[a] * scale[a] + offset[a] : 0.0;
+    const double bottom = n ? qmin[a] * scale[a] + offset[a] : 0.0;
+    put<double>(h + 179 + 16 * a, top);
+    put<double>(h + 187 + 16 * a, bottom);
+  }
+  // Bytes 227-246: waveform start, EVLR start and EVLR count, all 0.
+  put<std::uint64_t>(h + kCount64, n);
+  for (int r = 0; r < 15; ++r) put<std::uint64_t>(h + 255 + 8 * r, by_return[r]);
+
+  FileWriter out(path);
+  out.write(header);
+  std::array<char, 36> r{};
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) put<std::int32_t>(r.data() + 4 * a, quantise(i, a));
+    put<std::uint16_t>(r.data() + 12, static_cast<std::uint16_t>(intensity.integer(i, 0, 65535)));
+    const auto ret = static_cast<unsigned>(return_number.integer(i, 0, 15));
+    const auto rets = static_cast<unsigned>(number_of_returns.integer(i, 0, 15));
+    r[14] = static_cast<char>(ret | (rets << 4));
+    r[15] = 0;  // classification flags, scanner channel, scan direction, edge of flight line
+    r[16] = static_cast<char>(classification.integer(i, 0, 255));
+    r[17] = static_cast<char>(user_data.integer(i, 0, 255));
+    const double angle = std::round(scan_angle.raw(i) / kScanAngleStepDeg);
+    put<std::int16_t>(r.data() + 18, static_cast<std::int16_t>(std::clamp(angle, -32768.0, 32767.0)));
+    put<std::uint16_t>(r.data() + 20, static_cast<std::uint16_t>(point_source_id.integer(i, 0, 65535)));
+    put<double>(r.data() + 22, gps_time.raw(i));
+    if (colors)
+      for (int c = 0; c < 3; ++c)
+        put<std::uint16_t>(r.data() + 30 + 2 * c,
+                           static_cast<std::uint16_t>(std::lround(std::clamp(cloud.colors[i][c], 0.0f, 1.0f) * 65535.0f)));
+    out.write(r.data(), record_length);
+  }
+  out.close();
+}
+
 }  // namespace pointsurf::io::detail

@@ -17,12 +17,18 @@ std::string read_file_bytes(const std::filesystem::path& path) {
     throw InputError(fmt::format("{}: is a directory, expected a file", display_name(path)));
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(fmt::format("{}: cannot open: {}", display_name(path), std::strerror(errno)));
+  // Read straight into the final buffer: one copy less than chunked appends.
   std::string bytes;
+  long size = -1;
   if (std::fseek(f, 0, SEEK_END) == 0) {
-    long size = std::ftell(f);
-    if (size > 0) bytes.reserve(static_cast<std::size_t>(size));
+    size = std::ftell(f);
     std::fseek(f, 0, SEEK_SET);
   }
+  if (size > 0) {
+    bytes.resize(static_cast<std::size_t>(size));
+    bytes.resize(std::fread(bytes.data(), 1, bytes.size(), f));
+  }
+  // Streams whose size is unknown (pipes) or that grew: read the rest in chunks.
   char chunk[1 << 16];
   std::size_t got;
   while ((got = std::fread(chunk, 1, sizeof(chunk), f)) > 0) bytes.append(chunk, got);

@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# pointsurf set-up and entry point on Debian 12 (bookworm).
+#   ./pointsurf.sh demo    install missing packages, build (Release), run the demo pipeline
+#   ./pointsurf.sh test    install missing packages, build (Release), run the test suite
+#   ./pointsurf.sh build   install missing packages and build only
+#   ./pointsurf.sh bench   build, then run bench/run_bench.sh (needs python3-open3d, pcl-tools)
+# A second call rebuilds only what changed. Set BUILD_DIR to build elsewhere (default: build/).
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
+JOBS="$(nproc 2>/dev/null || echo 2)"
+
+BUILD_PACKAGES=(
+  cmake ninja-build g++ make
+  libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+BENCH_PACKAGES=(python3-open3d python3-numpy pcl-tools libcgal-demo time)
+
+log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
+
+# Installs the Debian packages of "$@" that are not installed yet, with apt-get.
+install_missing() {
+  local missing=()
+  for pkg in "$@"; do
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+      missing+=("$pkg")
+    fi
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  local sudo=()
+  if [ "$(id -u)" -ne 0 ]; then
+    if command -v sudo >/dev/null 2>&1; then sudo=(sudo); else
+      log "missing packages: ${missing[*]}; run as root or install sudo"; exit 1
+    fi
+  fi
+  log "installing: ${missing[*]}"
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+build() {
+  install_missing "${BUILD_PACKAGES[@]}"
+  local generator=()
+  if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
+    command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
+    cmake -S "$ROOT" -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
+      -DPOINTSURF_BUILD_TESTS=ON "$@"
+  elif [ $# -gt 0 ]; then
+    cmake -S "$ROOT" -B "$BUILD_DIR" "$@"
+  fi
+  cmake --build "$BUILD_DIR" --parallel "$JOBS"
+}
+
+demo() {
+  build
+  local cli="$BUILD_DIR/pointsurf" out="$ROOT/out"
+  mkdir -p "$out"
+  log "demo: aerial LiDAR tile data/b9_training.ply (22,300 points at x ~ 596,648 m)"
+  "$cli" info "$ROOT/data/b9_training.ply" --report "$out/b9_info.json"
+  "$cli" normals "$ROOT/data/b9_training.ply" "$out/b9_normals.ply" --orient mst --report "$out/b9_normals.json"
+  log "demo: kitten scan data/kitten.xyz"
+  "$cli" info "$ROOT/data/kitten.xyz" --report "$out/kitten_info.json"
+  "$cli" normals "$ROOT/data/kitten.xyz" "$out/kitten_normals.ply" --orient mst --report "$out/kitten_normals.json"
+  log "demo done. Results in $out/:"
+  ls -1 "$out" | sed "s|^|  $out/|" >&2
+}
+
+run_tests() {
+  build
+  cd "$BUILD_DIR"
+  ctest --output-on-failure --parallel "$JOBS" --timeout 900
+}
+
+case "${1:-}" in
+  demo) demo ;;
+  test) run_tests ;;
+  build) shift; build "$@" ;;
+  bench)
+    install_missing "${BENCH_PACKAGES[@]}"
+    build -DPOINTSURF_BUILD_BENCHMARKS=ON
+    shift; BUILD_DIR="$BUILD_DIR" bash "$ROOT/bench/run_bench.sh" "$@" ;;
+  *)
+    sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'
+    exit 1 ;;
+esac

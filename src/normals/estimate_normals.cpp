@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+
+namespace pointsurf {
+namespace {
+
+// A neighbourhood whose middle eigenvalue is below this fraction of the largest is a line (or
+// a single repeated point): its normal is undefined.
+constexpr double kRankTolerance = 1e-12;
+// computeDirect (closed form) loses accuracy in the smallest eigenvector when the two smallest
+// eigenvalues cluster; below this gap (relative to the largest) the iterative solver recomputes
+// it. That covers near-lines too, whose rank test needs accurate small eigenvalues. Rare on
+// real surfaces, where l0 << l1.
+constexpr double kDirectSolverGap = 1e-4;
+
+struct PointNormal {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // zero when degenerate
+  double variation = 0.0;
+  bool degenerate = true;
+};
+
+// PCA of the neighbourhood of `center`. Offsets are taken from the query point so that the
+// covariance of a georeferenced cloud is accumulated from small numbers, and the covariance
+// is centred on the neighbourhood centroid in a second pass (no E[x^2] - E[x]^2 cancellation).
+PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::span<const Neighbor> neighbors) {
+  PointNormal out;
+  const std::size_t m = neighbors.size();
+  if (m < 3) return out;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Neighbor& nb : neighbors) mean += tree.point(nb.index) - center;
+  mean /= double(m);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Neighbor& nb : neighbors) {
+    const Eigen::Vector3d d = tree.point(nb.index) - center - mean;
+    covariance.noalias() += d * d.transpose();
+  }
+  covariance /= double(m);
+  if (!(covariance.trace() > 0.0)) return out;
+
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  Eigen::Vector3d l = solver.eigenvalues();
+  if (solver.info() != Eigen::Success || !(l[1] - l[0] > kDirectSolverGap * l[2])) {
+    solver.compute(covariance);
+    if (solver.info() != Eigen::Success) return out;
+    l = solver.eigenvalues();
+  }
+  if (!(l[1] > kRankTolerance * l[2])) return out;
+  const Eigen::Vector3d normal = solver.eigenvectors().col(0).normalized();
+  if (!normal.allFinite()) return out;
+  out.normal = normal;
+  const double l0 = std::max(l[0], 0.0);
+  out.variation = std::clamp(l0 / (l0 + l[1] + l[2]), 0.0, 1.0 / 3.0);
+  out.degenerate = false;
+  return out;
+}
+
+}  // namespace
+
+NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, const KdTree* tree,
+                              const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  const bool uses_k = params.neighborhood != NeighborhoodKind::Radius;
+  const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
+  if (uses_k && params.k < 3) throw UsageError(fmt::format("estimate_normals: k must be >= 3, got {}", params.k));
+  if (uses_radius && !(params.radius >= 0.0))
+    throw UsageError(fmt::format("estimate_normals: radius must be >= 0, got {}", params.radius));
+  if (uses_radius && params.radius == 0.0 && !(params.radius_in_spacings > 0.0 && std::isfinite(params.radius_in_spacings)))
+    throw UsageError(
+        fmt::format("estimate_normals: radius_in_spacings must be > 0, got {}", params.radius_in_spacings));
+  if (n < 3) throw UsageError(fmt::format("estimate_normals: needs at least 3 points, got {}", n));
+  if (cloud.has_normals() && cloud.normals.size() != n)
+    throw UsageError(fmt::format("estimate_normals: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(
+        fmt::format("estimate_normals: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+
+  NormalResult result;
+  if (uses_radius) result.radius_used = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(*tree);
+
+  // Results go to fresh arrays, committed at the end, so a cancelled run leaves the cloud as
+  // it was. Existing normals keep their side: each new normal is flipped to agree with the old.
+  const bool had_normals = cloud.has_normals();
+  std::vector<Eigen::Vector3d> normals(n);
+  std::vector<double> variation(params.keep_variation ? n : 0);
+
+  const std::vector<std::uint32_t> order = morton_order(cloud.positions);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::enumerable_thread_specific<std::size_t> degenerate(0);
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
+    std::vector<Neighbor>& neighbors = buffers.local();
+    std::size_t& local_degenerate = degenerate.local();
+    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+      const std::uint32_t i = order[pos];
+      const Eigen::Vector3d& p = cloud.positions[i];
+      switch (params.neighborhood) {
+        case NeighborhoodKind::Knn: tree->knn(p, k, neighbors); break;
+        case NeighborhoodKind::Radius: tree->radius(p, result.radius_used, neighbors); break;
+        case NeighborhoodKind::Hybrid: tree->hybrid(p, k, result.radius_used, neighbors); break;
+      }
+      PointNormal fit = fit_normal(*tree, p, neighbors);
+      if (fit.degenerate) ++local_degenerate;
+      if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;
+      normals[i] = fit.normal;
+      if (params.keep_variation) variation[i] = fit.variation;
+    }
+    reporter.advance(r.size());
+  });
+  reporter.throw_if_cancelled();
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+  result.degenerate = degenerate.combine(std::plus<>());
+  cloud.normals = std::move(normals);
+  if (params.keep_variation) {
+    ScalarField& field = cloud.fields.add("variation", n, ScalarType::Float32);
+    field.type = ScalarType::Float32;
+    field.values = std::move(variation);
+  }
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,300 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <vector>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+
+namespace pointsurf {
+namespace {
+
+// A normal that carries no direction (degenerate neighbourhood, or NaN from a file).
+bool has_direction(const Eigen::Vector3d& n) { return n.squaredNorm() > 0.0; }
+
+// Marks every normal with a negative dot product with `towards(i)` to be flipped.
+template <class Towards>
+void mark_against(const PointCloud& cloud, Towards towards, std::vector<std::uint8_t>& flip) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cloud.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) flip[i] = cloud.normals[i].dot(towards(i)) < 0.0;
+  });
+}
+
+// Sort keys of graph edges: float weight bits above a 34-bit edge slot.
+constexpr int kSlotBits = 34;
+constexpr std::uint64_t kSlotMask = (std::uint64_t(1) << kSlotBits) - 1;
+constexpr std::uint64_t kNoEdge = ~std::uint64_t(0);
+
+// Union-find with path halving and union by rank, over uint32 to keep it at 5 bytes a point.
+class DisjointSets {
+public:
+  explicit DisjointSets(std::size_t n) : parent_(n), rank_(n, 0) { std::iota(parent_.begin(), parent_.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];
+      x = parent_[x];
+    }
+    return x;
+  }
+  bool unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return false;
+    if (rank_[a] < rank_[b]) std::swap(a, b);
+    parent_[b] = a;
+    if (rank_[a] == rank_[b]) ++rank_[a];
+    return true;
+  }
+
+private:
+  std::vector<std::uint32_t> parent_;
+  std::vector<std::uint8_t> rank_;
+};
+
+// Weight of the graph edge i-j: 1 - |cos| of the angle between the normals (Hoppe 1992), so
+// the spanning forest follows the smoothest paths and crosses sharp creases last. Normals
+// without direction get the maximal weight 1. The term 1e-6 * distance / (distance to i's
+// k-th neighbour), in [0, 1e-6], only breaks ties (on a plane all normals are parallel) in
+// favour of short edges; it is too small to override any real difference in angle.
+float edge_weight(const Eigen::Vector3d& ni, const Eigen::Vector3d& nj, double squared_distance,
+                  double farthest_squared_distance) {
+  double w = 1.0;
+  const double lengths = std::sqrt(ni.squaredNorm() * nj.squaredNorm());
+  if (lengths > 0.0) w = 1.0 - std::min(1.0, std::abs(ni.dot(nj)) / lengths);
+  if (farthest_squared_distance > 0.0) w += 1e-6 * std::sqrt(squared_distance / farthest_squared_distance);
+  return static_cast<float>(w);
+}
+
+// Marks the normals to flip for a consistent orientation; returns the number of components.
+std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const KdTree* tree,
+                     detail::ProgressReporter& steps, const ProgressCallback& progress, std::vector<std::uint8_t>& flip) {
+  const std::size_t n = cloud.size();
+  if (n == 0) return 0;
+  if (tree == nullptr && n > std::numeric_limits<std::uint32_t>::max())
+    throw UsageError(fmt::format("orient_normals: {} points exceed the limit of {}", n,
+                                 std::numeric_limits<std::uint32_t>::max()));
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  const std::vector<Eigen::Vector3d>& normals = cloud.normals;
+
+  // 1. The kNN graph: slot i * degree + t holds the t-th nearest other point of i and the
+  //    weight of that edge.
+  const std::size_t degree = std::min(static_cast<std::size_t>(params.k), n - 1);
+  const std::size_t slots = n * degree;
+  if (slots > kSlotMask)
+    throw UsageError(fmt::format("orient_normals: {} points with k = {} exceed the graph limit of {} edges", n,
+                                 params.k, kSlotMask));
+  std::vector<std::uint32_t> target(slots);
+  std::vector<float> weight(slots);
+  {
+    const std::vector<std::uint32_t> order = morton_order(cloud.positions);
+    detail::ProgressReporter reporter(progress, 0.0, 0.5, n);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+        const std::uint32_t i = order[pos];
+        tree->knn(cloud.positions[i], degree + 1, neighbors);
+        const double farthest = neighbors.back().squared_distance;
+        std::size_t slot = std::size_t(i) * degree;
+        const std::size_t end = slot + degree;
+        // The point itself is normally first, but among duplicates a lower index may precede
+        // it or push it out of the list: skip it wherever it is and keep `degree` others.
+        for (const Neighbor& nb : neighbors) {
+          if (nb.index == i) continue;
+          if (slot == end) break;
+          target[slot] = nb.index;
+          weight[slot++] = edge_weight(normals[i], normals[nb.index], nb.squared_distance, farthest);
+        }
+      }
+      reporter.advance(r.size());
+    });
+    reporter.throw_if_cancelled();
+  }
+
+  // 2. Sort keys: the weight's bits above the slot. Weights lie in [0, 2), whose float bit
+  //    patterns are below 2^30 and ordered like the values, so one uint64 sorts by (weight,
+  //    slot): deterministic, and cheaper to sort than (weight, a, b) records. An edge found
+  //    from both ends is kept once, from the end with the lower index.
+  std::vector<std::uint64_t> keys(slots);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      for (std::size_t slot = i * degree; slot < (i + 1) * degree; ++slot) {
+        const std::uint32_t j = target[slot];
+        const std::uint32_t* back = target.data() + std::size_t(j) * degree;
+        const bool mutual = std::find(back, back + degree, static_cast<std::uint32_t>(i)) != back + degree;
+        keys[slot] = (j < i && mutual) ? kNoEdge
+                                       : (std::uint64_t(std::bit_cast<std::uint32_t>(weight[slot])) << kSlotBits) | slot;
+      }
+    }
+  });
+  std::vector<float>().swap(weight);
+  keys.erase(std::remove(keys.begin(), keys.end(), kNoEdge), keys.end());
+  tbb::parallel_sort(keys.begin(), keys.end());
+  steps.report(0.75);
+  steps.throw_if_cancelled();
+
+  // 3. Minimum spanning forest (Kruskal).
+  DisjointSets sets(n);
+  std::vector<std::size_t> degree_of(n + 1, 0);  // becomes the CSR offsets
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> forest;
+  forest.reserve(n - 1);
+  for (const std::uint64_t key : keys) {
+    const std::size_t slot = key & kSlotMask;
+    const auto a = static_cast<std::uint32_t>(slot / degree);
+    const std::uint32_t b = target[slot];
+    if (!sets.unite(a, b)) continue;
+    forest.emplace_back(a, b);
+    ++degree_of[a + 1];
+    ++degree_of[b + 1];
+    if (forest.size() == n - 1) break;
+  }
+  std::vector<std::uint64_t>().swap(keys);
+  std::vector<std::uint32_t>().swap(target);
+  steps.report(0.85);
+  steps.throw_if_cancelled();
+
+  // Forest adjacency in compressed rows.
+  std::vector<std::size_t>& offsets = degree_of;
+  for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  std::vector<std::uint32_t> adjacency(offsets[n]);
+  {
+    std::vector<std::size_t> fill(offsets.begin(), offsets.end() - 1);
+    for (const auto& [a, b] : forest) {
+      adjacency[fill[a]++] = b;
+      adjacency[fill[b]++] = a;
+    }
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>>().swap(forest);
+
+  // 4. One seed per component: the point with a normal farthest from the component centroid;
+  //    on a closed surface its outward side faces away from the centroid. Positions are taken
+  //    relative to the first point to keep the sums small for georeferenced clouds.
+  const Eigen::Vector3d origin = cloud.positions[0];
+  std::vector<std::uint32_t> component(n);
+  std::vector<Eigen::Vector3d> sums;
+  std::vector<std::size_t> counts;
+  {
+    constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> id_of_root(n, kUnset);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t root = sets.find(static_cast<std::uint32_t>(i));
+      if (id_of_root[root] == kUnset) {
+        id_of_root[root] = static_cast<std::uint32_t>(sums.size());
+        sums.push_back(Eigen::Vector3d::Zero());
+        counts.push_back(0);
+      }
+      component[i] = id_of_root[root];
+      sums[component[i]] += cloud.positions[i] - origin;
+      ++counts[component[i]];
+    }
+  }
+  const std::size_t components = sums.size();
+  std::vector<std::uint32_t> seed(components, std::numeric_limits<std::uint32_t>::max());
+  std::vector<double> seed_distance(components, -1.0);
+  for (std::size_t c = 0; c < components; ++c) sums[c] /= double(counts[c]);  // now centroids
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!has_direction(normals[i])) continue;
+    const std::uint32_t c = component[i];
+    const double d = (cloud.positions[i] - origin - sums[c]).squaredNorm();
+    if (d > seed_distance[c]) {
+      seed_distance[c] = d;
+      seed[c] = static_cast<std::uint32_t>(i);
+    }
+  }
+
+  // 5. Propagation from each seed over its tree: a child is flipped when it disagrees with the
+  //    nearest ancestor that has a direction (a zero normal passes its parent's on). Flips are
+  //    only marked here; the caller applies them once the stage can no longer be cancelled.
+  std::vector<std::uint8_t> visited(n, 0);
+  std::vector<std::uint32_t> reference(n);
+  std::vector<std::uint32_t> queue;
+  const auto oriented = [&](std::uint32_t i) { return flip[i] ? Eigen::Vector3d(-normals[i]) : normals[i]; };
+  for (std::size_t c = 0; c < components; ++c) {
+    const std::uint32_t s = seed[c];
+    if (s == std::numeric_limits<std::uint32_t>::max()) continue;  // no normal to orient
+    flip[s] = normals[s].dot(cloud.positions[s] - origin - sums[c]) < 0.0;
+    queue.assign(1, s);
+    visited[s] = 1;
+    reference[s] = s;
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+      const std::uint32_t u = queue[head];
+      const Eigen::Vector3d parent_normal = oriented(reference[u]);
+      for (std::size_t e = offsets[u]; e < offsets[u + 1]; ++e) {
+        const std::uint32_t v = adjacency[e];
+        if (visited[v]) continue;
+        visited[v] = 1;
+        if (has_direction(normals[v])) {
+          flip[v] = parent_normal.dot(normals[v]) < 0.0;
+          reference[v] = v;
+        } else {
+          reference[v] = reference[u];
+        }
+        queue.push_back(v);
+      }
+    }
+  }
+  return components;
+}
+
+}  // namespace
+
+OrientResult orient_normals(PointCloud& cloud, const OrientParams& params, const KdTree* tree,
+                            const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  if (!cloud.has_normals()) throw UsageError("orient_normals: the cloud has no normals (estimate them first)");
+  if (cloud.normals.size() != n)
+    throw UsageError(fmt::format("orient_normals: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("orient_normals: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+
+  OrientResult result;
+  std::vector<std::uint8_t> flip(n, 0);
+  detail::ProgressReporter steps(progress, 0.0, 1.0, 1);
+  switch (params.method) {
+    case Orientation::None:
+      break;
+    case Orientation::Viewpoint: {
+      if (!params.viewpoint.allFinite()) throw UsageError("orient_normals: the viewpoint must be finite");
+      const Eigen::Vector3d v = params.viewpoint;
+      mark_against(cloud, [&](std::size_t i) { return Eigen::Vector3d(v - cloud.positions[i]); }, flip);
+      break;
+    }
+    case Orientation::Direction: {
+      const Eigen::Vector3d d = params.direction;
+      if (!d.allFinite() || d.squaredNorm() == 0.0)
+        throw UsageError(fmt::format("orient_normals: the direction must be a finite non-zero vector, got ({}, {}, {})",
+                                     d.x(), d.y(), d.z()));
+      mark_against(cloud, [&](std::size_t) { return d; }, flip);
+      break;
+    }
+    case Orientation::Mst:
+      if (params.k < 1) throw UsageError(fmt::format("orient_normals: k must be >= 1, got {}", params.k));
+      result.components = mark_mst(cloud, params, tree, steps, progress, flip);
+      break;
+  }
+  // The last chance to cancel comes before the cloud is touched, so a cancelled call leaves
+  // the normals as they were.
+  steps.report(1.0);
+  steps.throw_if_cancelled();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!flip[i]) continue;
+    cloud.normals[i] = -cloud.normals[i];
+    ++result.flipped;
+  }
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End-to-end tests of the pointsurf command line: exit codes, messages, reports, outputs.
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "pointsurf/io/io.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunResult run(const std::string& args, const std::filesystem::path& dir) {
+  const std::filesystem::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = std::string(POINTSURF_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(command.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+class Cli : public ::testing::Test {
+protected:
+  void SetUp() override { dir_ = test::temp_dir(::testing::UnitTest::GetInstance()->current_test_info()->name()); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::filesystem::path dir_;
+};
+
+TEST_F(Cli, HelpListsCommandsAndExitsZero) {
+  const RunResult r = run("--help", dir_);
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("normals"), std::string::npos);
+  EXPECT_NE(r.out.find("convert"), std::string::npos);
+  EXPECT_NE(r.out.find("Exit codes"), std::string::npos);
+}
+
+TEST_F(Cli, UsageErrorsExitOne) {
+  EXPECT_EQ(run("", dir_).exit_code, 1);
+  EXPECT_EQ(run("info", dir_).exit_code, 1);
+  EXPECT_EQ(run("info x.ply --no-such-option", dir_).exit_code, 1);
+  const std::string kitten = test::data_path("kitten.xyz").string();
+  RunResult r = run("normals " + kitten + " " + path("o.ply") + " --k 2", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--k: 2 must be at least 3"), std::string::npos) << r.err;
+  r = run("normals " + kitten + " " + path("o.ply") + " --orient sideways", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("sideways"), std::string::npos) << r.err;
+  r = run("normals " + kitten + " " + path("o.ply") + " --orient viewpoint --viewpoint 1,2", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  r = run("convert " + kitten + " " + path("o.unknown"), dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("unknown output format"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+}
+
+TEST_F(Cli, BadInputExitsTwoAndNamesTheFile) {
+  RunResult r = run("info " + path("missing.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.ply"), std::string::npos) << r.err;
+  {
+    std::ofstream f(path("broken.ply"));
+    f << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 1\n";
+  }
+  r = run("normals " + path("broken.ply") + " " + path("out.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("broken.ply"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("out.ply")));
+  { std::ofstream f(path("empty.xyz")); }
+  r = run("info " + path("empty.xyz"), dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("empty"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, InfoJsonDescribesTheGeoreferencedTile) {
+  const RunResult r = run("info " + test::data_path("b9_training.ply").string() + " --json --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_EQ(info["format"], "ply");
+  EXPECT_EQ(info["points"], 22300);
+  EXPECT_TRUE(info["colors"].get<bool>());
+  EXPECT_GT(info["bbox_min"][0].get<double>(), 5.9e5);
+  EXPECT_GT(info["mean_spacing"].get<double>(), 0.0);
+  bool has_label = false;
+  for (const auto& f : info["fields"]) has_label |= f["name"] == "label";
+  EXPECT_TRUE(has_label);
+  const nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+  for (const char* key : {"command", "version", "inputs", "outputs", "parameters", "stages", "total_seconds", "peak_rss_mb", "warnings"})
+    EXPECT_TRUE(report.contains(key)) << key;
+}
+
+TEST_F(Cli, NormalsAgreeWithTheScansOwnNormals) {
+  const RunResult r = run("normals " + test::data_path("kitten.xyz").string() + " " + path("kitten.ply") + " --report " +
+                              path("r.json") + " --quiet",
+                          dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+  EXPECT_EQ(report["command"], "normals");
+  bool found = false;
+  for (const auto& stage : report["stages"]) {
+    if (!stage["metrics"].contains("orientation_agreement_with_input")) continue;
+    found = true;
+    // kitten.xyz carries outward normals: MST orientation must agree almost everywhere.
+    EXPECT_GT(stage["metrics"]["orientation_agreement_with_input"].get<double>(), 0.98);
+    EXPECT_LT(stage["metrics"]["mean_angle_to_input_deg"].get<double>(), 10.0);
+  }
+  EXPECT_TRUE(found);
+  const CloudReadResult out = read_point_cloud(path("kitten.ply"));
+  EXPECT_EQ(out.cloud.size(), 5210u);
+  EXPECT_TRUE(out.cloud.has_normals());
+  EXPECT_TRUE(out.cloud.fields.contains("variation"));
+}
+
+TEST_F(Cli, ConvertKeepsGeoreferencedPrecisionThroughLasAndPly) {
+  const std::string b9 = test::data_path("b9_training.ply").string();
+  ASSERT_EQ(run("convert " + b9 + " " + path("b9.las") + " --quiet", dir_).exit_code, 0);
+  ASSERT_EQ(run("convert " + path("b9.las") + " " + path("b9.ply") + " --quiet", dir_).exit_code, 0);
+  const PointCloud a = read_point_cloud(b9).cloud;
+  const PointCloud b = read_point_cloud(path("b9.ply")).cloud;
+  ASSERT_EQ(a.size(), b.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a.positions[i] - b.positions[i]).cwiseAbs().maxCoeff());
+  EXPECT_LT(worst, 1e-4);
+  ASSERT_TRUE(b.has_colors());
+  EXPECT_NEAR(a.colors[100].x(), b.colors[100].x(), 1e-3);
+}
+
+TEST_F(Cli, FloatOutputOfGeoreferencedCloudIsRefusedAndLeavesNothing) {
+  const RunResult r = run("convert " + test::data_path("b9_training.ply").string() + " " + path("b9.ply") + " --float", dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("b9.ply")));
+  for (const auto& entry : std::filesystem::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST_F(Cli, ThreadsOptionAndDirectionOrientation) {
+  PointCloud plane = test::sample_plane(2000);
+  plane.normals.clear();
+  write_point_cloud(path("plane.xyz"), plane);
+  const RunResult r = run("normals " + path("plane.xyz") + " " + path("plane.ply") + " --orient direction --direction 0,0,-1 --threads 1 --quiet", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud out = read_point_cloud(path("plane.ply")).cloud;
+  for (const Vector3d& n : out.normals) EXPECT_LT(n.z(), -0.99);
+}
+
+}  // namespace
+}  // namespace pointsurf

@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The format dispatch: detection from content, non-finite points, face remapping, and
+// atomic writes.
+#include "pointsurf/io/io.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "pointsurf/core/error.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_bytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+template <typename E, typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// Names of the entries of `dir`, sorted.
+std::vector<std::string> list_dir(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A LAS 1.2 public header block (227 bytes) with no points; `point_format` byte at offset 104.
+std::string las_header(std::uint8_t point_format) {
+  std::string bytes(227, '\0');
+  std::memcpy(bytes.data(), "LASF", 4);
+  bytes[24] = 1;
+  bytes[25] = 2;
+  bytes[94] = static_cast<char>(227);
+  bytes[96] = static_cast<char>(227);
+  bytes[104] = static_cast<char>(point_format);
+  bytes[105] = 20;
+  return bytes;
+}
+
+TEST(DetectFormat, RecognisesEachFormatFromItsContent) {
+  const fs::path dir = test::temp_dir("detect_format");
+  struct Case {
+    std::string name;
+    std::string bytes;
+    std::string format;
+  };
+  std::string binary_stl(80, ' ');
+  std::memcpy(binary_stl.data(), "solid but binary", 16);  // as many exporters write it
+  const std::uint32_t one = 1;
+  binary_stl.append(reinterpret_cast<const char*>(&one), 4);
+  binary_stl.append(50, '\0');
+  const std::vector<Case> cases{
+      {"a.dat", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nend_header\n", "ply"},
+      {"b.dat", "ply\r\nformat ascii 1.0\r\n", "ply"},
+      {"c.dat", "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\n", "pcd"},
+      {"d.dat", "VERSION 0.7\nFIELDS x y z\n", "pcd"},
+      {"e.dat", las_header(0), "las"},
+      {"f.dat", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "off"},
+      {"g.dat", "# comment first\nCOFF\n", "off"},
+      {"h.dat", "solid cube\n  facet normal 0 0 1\n    outer loop\n", "stl"},
+      {"i.dat", binary_stl, "stl"},
+      {"j.dat", "# made by hand\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "obj"},
+      {"k.dat", "mtllib x.mtl\nv 0 0 0\n", "obj"},
+      {"l.xyz", "1 2 3\n4 5 6\n", "xyz"},
+      {"m.txt", "1.5,2.5,3.5\n", "xyz"},
+      {"n.dat", "0.1 0.2 0.3 0 0 1\n", "xyz"},
+  };
+  for (const Case& c : cases) {
+    write_bytes(dir / c.name, c.bytes);
+    EXPECT_EQ(detect_format(dir / c.name), c.format) << c.name;
+  }
+}
+
+TEST(DetectFormat, BinaryStlIsRecognisedByItsSize) {
+  const fs::path dir = test::temp_dir("detect_stl_size");
+  std::string bytes(80, '\0');
+  const std::uint32_t count = 3;
+  bytes.append(reinterpret_cast<const char*>(&count), 4);
+  bytes.append(3 * 50, '\x01');
+  write_bytes(dir / "part.bin", bytes);
+  EXPECT_EQ(detect_format(dir / "part.bin"), "stl");
+  bytes.push_back('\0');  // one byte too many: no longer a binary STL
+  write_bytes(dir / "part.stl", bytes);
+  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "part.stl"); }), "triangle count disagrees with the file size"));
+}
+
+TEST(DetectFormat, EmptyAndMissingFiles) {
+  const fs::path dir = test::temp_dir("detect_empty");
+  write_bytes(dir / "empty.ply", "");
+  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "empty.ply"); }), "empty.ply: file is empty"));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "empty.ply"); }), "empty.ply: file is empty"));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "missing.ply"); }), "missing.ply: no such file"));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_mesh(dir); }), "is a directory, expected a file"));
+}
+
+TEST(DetectFormat, HeaderlessTextWithAMeshExtensionIsAnError) {
+  const fs::path dir = test::temp_dir("detect_no_header");
+  write_bytes(dir / "numbers.ply", "1 2 3\n");
+  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "numbers.ply"); }), "numbers.ply: not a valid ply file"));
+}
+
+TEST(DetectFormat, LazIsRefusedWithAClearMessage) {
+  const fs::path dir = test::temp_dir("detect_laz");
+  write_bytes(dir / "tile.laz", las_header(0));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "tile.laz"); }), "compressed LAS (LAZ) is not supported"));
+  // A compressed point format (bit 7 set) inside a file named .las is LAZ too.
+  write_bytes(dir / "tile.las", las_header(0x80 | 3));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "tile.las"); }), "compressed LAS (LAZ) is not supported"));
+  EXPECT_TRUE(contains(error_of<UsageError>([&] { write_point_cloud(dir / "out.laz", test::sample_plane(3)); }),
+                       "compressed LAS (LAZ) is not supported"));
+}
+
+TEST(DetectFormat, ExtensionNamesTheOutputFormat) {
+  EXPECT_EQ(format_from_extension("a.PLY"), "ply");
+  EXPECT_EQ(format_from_extension("a.pts"), "xyz");
+  EXPECT_EQ(format_from_extension("a.csv"), "xyz");
+  EXPECT_EQ(format_from_extension("dir.v2/a.las"), "las");
+  EXPECT_TRUE(contains(error_of<UsageError>([] { format_from_extension("a.docx"); }), "unknown output format '.docx'"));
+  EXPECT_TRUE(contains(error_of<UsageError>([] { format_from_extension("noext"); }), "(no extension)"));
+}
+
+// Four points, the first with a NaN coordinate, and two faces: one uses the NaN point.
+const char* const kNanMesh =
+    "ply\nformat ascii 1.0\nelement vertex 4\n"
+    "property double x\nproperty double y\nproperty double z\nproperty uchar label\n"
+    "element face 3\nproperty list uchar int vertex_indices\nend_header\n"
+    "nan 0 0 10\n1 0 0 11\n0 1 0 12\n0 0 inf 13\n"
+    "3 1 2 0\n3 1 2 3\n4 0 1 2 3\n";
+
+TEST(ReadPointCloud, DropsAndCountsNonFinitePoints) {
+  const fs::path path = test::temp_dir("read_nan") / "nan.ply";
+  write_bytes(path, kNanMesh);
+  const CloudReadResult result = read_point_cloud(path);
+  EXPECT_EQ(result.dropped_nonfinite, 2u);
+  EXPECT_EQ(result.face_count, 3u);
+  ASSERT_EQ(result.cloud.size(), 2u);
+  EXPECT_EQ(result.cloud.positions[0], Vector3d(1, 0, 0));
+  EXPECT_EQ(result.cloud.positions[1], Vector3d(0, 1, 0));
+  EXPECT_EQ(result.cloud.fields.find("label")->values, (std::vector<double>{11, 12}));
+}
+
+TEST(ReadPointCloud, StrictRefusesNonFinitePoints) {
+  const fs::path path = test::temp_dir("read_nan_strict") / "nan.ply";
+  write_bytes(path, kNanMesh);
+  ReadOptions options;
+  options.strict = true;
+  const std::string message = error_of<InputError>([&] { read_point_cloud(path, options); });
+  EXPECT_TRUE(contains(message, "nan.ply: point 0: non-finite coordinate")) << message;
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_mesh(path, options); }), "nan.ply: point 0: non-finite coordinate"));
+}
+
+TEST(ReadMesh, DropsFacesOfDroppedVerticesAndRemapsTheRest) {
+  const fs::path path = test::temp_dir("read_mesh_nan") / "nan.ply";
+  std::string text = kNanMesh;
+  text.replace(text.find("0 0 inf"), 7, "0 0 1");  // only vertex 0 is non-finite
+  write_bytes(path, text);
+  const MeshReadResult result = read_mesh(path);
+  EXPECT_EQ(result.dropped_nonfinite, 1u);
+  ASSERT_EQ(result.mesh.vertex_count(), 3u);
+  EXPECT_EQ(result.mesh.vertices[2], Vector3d(0, 0, 1));
+  EXPECT_EQ(result.mesh.vertex_fields.find("label")->values, (std::vector<double>{11, 12, 13}));
+  // Face (1 2 0) uses vertex 0 and goes; face (1 2 3) becomes (0 1 2); the quad (0 1 2 3)
+  // fans into (0 1 2), which uses vertex 0, and (0 2 3), which does too.
+  EXPECT_EQ(result.mesh.triangles, (std::vector<Triangle>{Triangle(0, 1, 2)}));
+  EXPECT_EQ(result.dropped_faces, 3u);
+  EXPECT_EQ(result.polygons_triangulated, 1u);
+}
+
+TEST(ReadPointCloud, ForcedFormatOverridesDetection) {
+  const fs::path path = test::temp_dir("read_forced") / "cloud.dat";
+  write_bytes(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
+  ReadOptions options;
+  options.format = "PLY";
+  EXPECT_EQ(read_point_cloud(path, options).cloud.positions.at(0), Vector3d(1, 2, 3));
+  options.format = "vrml";
+  EXPECT_TRUE(contains(error_of<UsageError>([&] { read_point_cloud(path, options); }), "unknown format 'vrml'"));
+}
+
+TEST(Write, MissingDirectoryIsAnErrorAndLeavesNothing) {
+  const fs::path dir = test::temp_dir("write_missing_dir");
+  const fs::path target = dir / "not_here" / "cloud.ply";
+  const std::string message = error_of<Error>([&] { write_point_cloud(target, test::sample_plane(10)); });
+  EXPECT_TRUE(contains(message, "does not exist")) << message;
+  EXPECT_FALSE(fs::exists(dir / "not_here"));
+  EXPECT_TRUE(list_dir(dir).empty());
+}
+
+TEST(Write, SuccessLeavesOnlyTheTarget) {
+  const fs::path dir = test::temp_dir("write_atomic_ok");
+  const PointCloud cloud = test::sample_sphere(200);
+  write_point_cloud(dir / "sphere.ply", cloud);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"sphere.ply"}));
+  // Overwriting an existing file also leaves nothing else behind.
+  write_point_cloud(dir / "sphere.ply", test::sample_sphere(20));
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"sphere.ply"}));
+  EXPECT_EQ(read_point_cloud(dir / "sphere.ply").cloud.size(), 20u);
+}
+
+TEST(Write, FailingWriterLeavesNeitherTargetNorTemporary) {
+  const fs::path dir = test::temp_dir("write_atomic_fail");
+  PointCloud cloud = test::sample_plane(100, 10.0);
+  for (Vector3d& p : cloud.positions) p.x() += 6500000.0;
+  WriteOptions options;
+  options.single_precision = true;
+  EXPECT_THROW(write_point_cloud(dir / "geo.ply", cloud, options), UsageError);
+  EXPECT_TRUE(list_dir(dir).empty());
+
+  // An existing target stays as it was when the new write fails.
+  write_point_cloud(dir / "geo.ply", test::sample_plane(5));
+  EXPECT_THROW(write_point_cloud(dir / "geo.ply", cloud, options), UsageError);
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"geo.ply"}));
+  EXPECT_EQ(read_point_cloud(dir / "geo.ply").cloud.size(), 5u);
+}
+
+TEST(Write, UnknownExtensionIsAUsageError) {
+  const fs::path dir = test::temp_dir("write_unknown_ext");
+  const std::string message = error_of<UsageError>([&] { write_point_cloud(dir / "cloud.vrml", test::sample_plane(3)); });
+  EXPECT_TRUE(contains(message, "unknown output format '.vrml'")) << message;
+  WriteOptions options;
+  options.format = "ply";
+  write_point_cloud(dir / "cloud.vrml", test::sample_plane(3), options);  // a forced format needs no extension
+  EXPECT_EQ(detect_format(dir / "cloud.vrml"), "ply");
+  options.format = "vrml";
+  EXPECT_TRUE(contains(error_of<UsageError>([&] { write_point_cloud(dir / "x.ply", test::sample_plane(3), options); }), "unknown format 'vrml'"));
+  EXPECT_EQ(list_dir(dir), (std::vector<std::string>{"cloud.vrml"}));
+}
+
+TEST(Write, MismatchedAttributeSizesAreRefused) {
+  const fs::path dir = test::temp_dir("write_invalid");
+  PointCloud cloud = test::sample_plane(4);
+  cloud.colors.resize(3);
+  EXPECT_TRUE(contains(error_of<InputError>([&] { write_point_cloud(dir / "c.ply", cloud); }), "3 colours for 4 points"));
+  EXPECT_TRUE(list_dir(dir).empty());
+}
+
+}  // namespace
+}  // namespace pointsurf

@@ -1,0 +1,441 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// LAS: write-then-read of a georeferenced cloud, hand-built files of several versions and
+// point formats, and every malformed-header path.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the hand-built files below are assembled in host byte order");
+
+template <typename T>
+void put(std::string& s, std::size_t at, T value) {
+  std::memcpy(s.data() + at, &value, sizeof(T));
+}
+
+template <typename T>
+T get(const std::string& s, std::size_t at) {
+  T value;
+  std::memcpy(&value, s.data() + at, sizeof(T));
+  return value;
+}
+
+// A LAS file assembled byte by byte from the public header block layout of the specification.
+struct LasFile {
+  int major = 1;
+  int minor = 2;
+  int format = 0;
+  std::size_t record_length = 20;
+  std::uint32_t legacy_count = 0;
+  std::uint64_t count64 = 0;           // LAS 1.4 only
+  std::size_t header_size = 0;         // 0: the size the version defines
+  double scale[3] = {0.01, 0.01, 0.01};
+  double offset[3] = {0, 0, 0};
+  std::string vlrs;                    // bytes between the header and the points
+  std::string points;                  // the point records
+
+  std::string bytes() const {
+    const std::size_t size = header_size ? header_size : minor >= 4 ? 375 : minor == 3 ? 235 : 227;
+    std::string h(std::max<std::size_t>(size, 227), '\0');
+    std::memcpy(h.data(), "LASF", 4);
+    h[24] = static_cast<char>(major);
+    h[25] = static_cast<char>(minor);
+    std::memcpy(h.data() + 58, "handmade", 8);
+    put<std::uint16_t>(h, 94, static_cast<std::uint16_t>(size));
+    put<std::uint32_t>(h, 96, static_cast<std::uint32_t>(size + vlrs.size()));
+    put<std::uint32_t>(h, 100, vlrs.empty() ? 0 : 1);
+    h[104] = static_cast<char>(format);
+    put<std::uint16_t>(h, 105, static_cast<std::uint16_t>(record_length));
+    put<std::uint32_t>(h, 107, legacy_count);
+    for (int a = 0; a < 3; ++a) {
+      put<double>(h, 131 + 8 * a, scale[a]);
+      put<double>(h, 155 + 8 * a, offset[a]);
+    }
+    if (h.size() >= 375) put<std::uint64_t>(h, 247, count64);
+    return h + vlrs + points;
+  }
+};
+
+// A 54-byte VLR header plus a payload, filled with bytes a reader must skip.
+std::string projection_vlr() {
+  std::string v(54 + 16, '\x7f');
+  put<std::uint16_t>(v, 0, 0);
+  std::memcpy(v.data() + 2, "LASF_Projection\0", 16);
+  put<std::uint16_t>(v, 18, 34735);
+  put<std::uint16_t>(v, 20, 16);
+  return v;
+}
+
+// The 20-byte core of formats 0-5.
+std::string legacy_record(std::size_t length, std::int32_t x, std::int32_t y, std::int32_t z, std::uint16_t intensity,
+                          std::uint8_t returns_byte, std::uint8_t class_byte, std::int8_t scan_angle, std::uint8_t user_data,
+                          std::uint16_t source) {
+  std::string r(length, '\0');
+  put(r, 0, x);
+  put(r, 4, y);
+  put(r, 8, z);
+  put(r, 12, intensity);
+  put(r, 14, returns_byte);
+  put(r, 15, class_byte);
+  put(r, 16, scan_angle);
+  put(r, 17, user_data);
+  put(r, 18, source);
+  return r;
+}
+
+std::filesystem::path write_bytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return path;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+const std::vector<double>& field(const PointCloud& cloud, const char* name) {
+  const ScalarField* f = cloud.fields.find(name);
+  EXPECT_NE(f, nullptr) << "missing field " << name;
+  static const std::vector<double> none;
+  return f ? f->values : none;
+}
+
+// Expects `fn` to throw E with a message containing `part`.
+template <typename E, typename Fn>
+void expect_error(Fn fn, const std::string& part) {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception; expected one containing: " << part;
+  } catch (const E& e) {
+    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << "message: " << e.what() << "\nexpected to contain: " << part;
+  }
+}
+
+TEST(Las, WriteThenReadKeepsGeoreferencedPositionsAndFields) {
+  const auto dir = test::temp_dir("las_roundtrip");
+  const Vector3d origin(6'500'000.0, 5'200'000.0, 300.0);
+  PointCloud cloud = test::sample_sphere(2000, 50.0, origin, 3);
+  const std::size_t n = cloud.size();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  // Filled first and added afterwards: FieldSet::add may move the fields already added.
+  std::vector<double> intensity(n), classification(n), returns(n), return_number(n), gps_time(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    intensity[i] = static_cast<double>(rng() % 65536);
+    classification[i] = static_cast<double>(rng() % 256);
+    returns[i] = 1 + static_cast<double>(rng() % 5);
+    return_number[i] = 1 + static_cast<double>(rng() % static_cast<unsigned>(returns[i]));
+    gps_time[i] = 3.2e8 + 0.000123 * static_cast<double>(i);
+  }
+  cloud.fields.add("intensity", 0, ScalarType::UInt16).values = intensity;
+  cloud.fields.add("classification", 0, ScalarType::UInt8).values = classification;
+  cloud.fields.add("number_of_returns", 0, ScalarType::UInt8).values = returns;
+  cloud.fields.add("return_number", 0, ScalarType::UInt8).values = return_number;
+  cloud.fields.add("gps_time", 0, ScalarType::Float64).values = gps_time;
+  cloud.fields.add("curvature", n, ScalarType::Float32);  // LAS has no slot for it
+  cloud.colors.resize(n);
+  for (auto& c : cloud.colors) c = Vector3f(unit(rng), unit(rng), unit(rng));
+
+  const auto path = dir / "scan.las";
+  write_point_cloud(path, cloud);
+  const CloudReadResult result = read_point_cloud(path);
+  const PointCloud& back = result.cloud;
+  EXPECT_EQ(result.format, "las");
+  ASSERT_EQ(back.size(), n);
+  double worst = 0;
+  for (std::size_t i = 0; i < n; ++i) worst = std::max(worst, (back.positions[i] - cloud.positions[i]).cwiseAbs().maxCoeff());
+  EXPECT_LE(worst, 5.0001e-5);  // half the 1e-4 quantum
+  EXPECT_EQ(field(back, "intensity"), intensity);
+  EXPECT_EQ(field(back, "classification"), classification);
+  EXPECT_EQ(field(back, "return_number"), return_number);
+  EXPECT_EQ(field(back, "number_of_returns"), returns);
+  EXPECT_EQ(field(back, "gps_time"), gps_time);
+  EXPECT_EQ(back.fields.find("intensity")->type, ScalarType::UInt16);
+  EXPECT_EQ(back.fields.find("classification")->type, ScalarType::UInt8);
+  EXPECT_EQ(back.fields.find("gps_time")->type, ScalarType::Float64);
+  EXPECT_FALSE(back.fields.contains("curvature"));
+  EXPECT_FALSE(back.has_normals());
+  ASSERT_TRUE(back.has_colors());
+  for (std::size_t i = 0; i < n; ++i) EXPECT_LE((back.colors[i] - cloud.colors[i]).cwiseAbs().maxCoeff(), 0.51f / 65535.0f);
+
+  // The header: LAS 1.4, format 7 (colours), legacy counts 0 as formats 6-10 require, the
+  // 64-bit count and the counts per return number.
+  const std::string bytes = read_bytes(path);
+  EXPECT_EQ(bytes.size(), 375 + 36 * n);
+  EXPECT_EQ(bytes[24], 1);
+  EXPECT_EQ(bytes[25], 4);
+  EXPECT_EQ(get<std::uint16_t>(bytes, 6) & 0x10, 0x10);  // WKT bit, required for formats 6-10
+  EXPECT_EQ(get<std::uint16_t>(bytes, 94), 375);
+  EXPECT_EQ(get<std::uint32_t>(bytes, 96), 375u);
+  EXPECT_EQ(bytes[104], 7);
+  EXPECT_EQ(get<std::uint16_t>(bytes, 105), 36);
+  EXPECT_EQ(get<std::uint32_t>(bytes, 107), 0u);
+  EXPECT_EQ(get<std::uint64_t>(bytes, 247), n);
+  for (int r = 1; r <= 5; ++r)
+    EXPECT_EQ(get<std::uint64_t>(bytes, 255 + 8 * (r - 1)), static_cast<std::uint64_t>(std::count(return_number.begin(), return_number.end(), r)));
+  EXPECT_DOUBLE_EQ(get<double>(bytes, 131), 1e-4);
+  EXPECT_DOUBLE_EQ(get<double>(bytes, 155), 6'499'000.0);  // minimum rounded down to 1000
+  const BoundingBox box = bounding_box(back.positions);
+  EXPECT_EQ(get<double>(bytes, 179), box.max.x());
+  EXPECT_EQ(get<double>(bytes, 187), box.min.x());
+  EXPECT_EQ(get<double>(bytes, 219), box.min.z());
+}
+
+TEST(Las, WriteWithoutColoursUsesFormat6AndDefaultsToSingleReturns) {
+  const auto dir = test::temp_dir("las_format6");
+  PointCloud cloud = test::sample_plane(10, 2.0, 4);
+  write_point_cloud(dir / "plain.las", cloud);
+  const std::string bytes = read_bytes(dir / "plain.las");
+  EXPECT_EQ(bytes[104], 6);
+  EXPECT_EQ(bytes.size(), 375u + 30u * 10u);
+  EXPECT_EQ(get<std::uint64_t>(bytes, 255), 10u);  // every point is return 1
+  const PointCloud back = read_point_cloud(dir / "plain.las").cloud;
+  EXPECT_FALSE(back.has_colors());
+  EXPECT_EQ(field(back, "return_number"), std::vector<double>(10, 1.0));
+  EXPECT_EQ(field(back, "number_of_returns"), std::vector<double>(10, 1.0));
+  EXPECT_EQ(field(back, "intensity"), std::vector<double>(10, 0.0));
+}
+
+TEST(Las, WriteHonoursScaleAndOffsetAndWidensTheDefaultScaleForHugeExtents) {
+  const auto dir = test::temp_dir("las_scale");
+  PointCloud cloud;
+  cloud.positions = {Vector3d(-600'000.0, 0.25, 1.0), Vector3d(600'000.0, -0.25, 2.0)};
+  write_point_cloud(dir / "wide.las", cloud);
+  std::string bytes = read_bytes(dir / "wide.las");
+  EXPECT_DOUBLE_EQ(get<double>(bytes, 131), 1e-3);  // 1.2e6 m does not fit 32 bits at 1e-4
+  EXPECT_DOUBLE_EQ(get<double>(bytes, 139), 1e-4);
+  const PointCloud back = read_point_cloud(dir / "wide.las").cloud;
+  for (std::size_t i = 0; i < 2; ++i) EXPECT_LE((back.positions[i] - cloud.positions[i]).norm(), 1e-3);
+
+  WriteOptions options;
+  options.las_scale = 0.5;
+  options.las_offset = Vector3d(10, 20, 30);
+  write_point_cloud(dir / "coarse.las", cloud, options);
+  bytes = read_bytes(dir / "coarse.las");
+  EXPECT_EQ(get<double>(bytes, 131), 0.5);
+  EXPECT_EQ(get<double>(bytes, 163), 20.0);
+  EXPECT_EQ(get<std::int32_t>(bytes, 375 + 8), static_cast<std::int32_t>(std::lround((1.0 - 30.0) / 0.5)));
+
+  options.las_scale = 1e-5;
+  expect_error<UsageError>([&] { write_point_cloud(dir / "overflow.las", cloud, options); }, "cannot hold x = -600000 in 32 bits");
+  EXPECT_FALSE(std::filesystem::exists(dir / "overflow.las"));
+  options.las_scale = 0.0;
+  expect_error<UsageError>([&] { write_point_cloud(dir / "zero.las", cloud, options); }, "must be a positive number");
+}
+
+TEST(Las, EmptyCloudRoundTrips) {
+  const auto dir = test::temp_dir("las_empty");
+  write_point_cloud(dir / "empty.las", PointCloud{});
+  EXPECT_EQ(read_point_cloud(dir / "empty.las").cloud.size(), 0u);
+}
+
+TEST(Las, ReadsHandBuiltLas12Format3WithVlr) {
+  const auto dir = test::temp_dir("las12_format3");
+  LasFile las;
+  las.format = 3;
+  las.record_length = 34;
+  las.legacy_count = 2;
+  las.offset[0] = 1000;
+  las.offset[1] = 2000;
+  las.offset[2] = 3000;
+  las.vlrs = projection_vlr();
+  // Return 2 of 3 with the scan direction bit set; class 6 with the synthetic flag set.
+  std::string p0 = legacy_record(34, 100, -200, 300, 500, 2 | (3 << 3) | 0x40, 6 | 0x20, -15, 7, 42);
+  put<double>(p0, 20, 123456.789);
+  put<std::uint16_t>(p0, 28, 65535);
+  put<std::uint16_t>(p0, 30, 32768);
+  put<std::uint16_t>(p0, 32, 0);
+  std::string p1 = legacy_record(34, -1, 0, 1, 65535, 1 | (1 << 3), 2, 30, 0, 0);
+  put<double>(p1, 20, -1.5);
+  put<std::uint16_t>(p1, 28, 256);
+  las.points = p0 + p1;
+
+  const CloudReadResult result = read_point_cloud(write_bytes(dir / "f3.las", las.bytes()));
+  const PointCloud& c = result.cloud;
+  EXPECT_EQ(result.encoding, "LAS 1.2 point format 3");
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_NEAR((c.positions[0] - Vector3d(1001.0, 1998.0, 3003.0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((c.positions[1] - Vector3d(999.99, 2000.0, 3000.01)).norm(), 0.0, 1e-9);
+  EXPECT_EQ(field(c, "intensity"), (std::vector<double>{500, 65535}));
+  EXPECT_EQ(field(c, "return_number"), (std::vector<double>{2, 1}));
+  EXPECT_EQ(field(c, "number_of_returns"), (std::vector<double>{3, 1}));
+  EXPECT_EQ(field(c, "classification"), (std::vector<double>{6, 2}));
+  EXPECT_EQ(field(c, "gps_time"), (std::vector<double>{123456.789, -1.5}));
+  EXPECT_EQ(field(c, "scan_angle"), (std::vector<double>{-15, 30}));
+  EXPECT_EQ(field(c, "user_data"), (std::vector<double>{7, 0}));
+  EXPECT_EQ(field(c, "point_source_id"), (std::vector<double>{42, 0}));
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[0], Vector3f(1.0f, 32768 / 65535.0f, 0.0f));
+  EXPECT_EQ(c.colors[1], Vector3f(256 / 65535.0f, 0.0f, 0.0f));
+}
+
+TEST(Las, ReadsHandBuiltLas12Format1) {
+  const auto dir = test::temp_dir("las12_format1");
+  LasFile las;
+  las.format = 1;
+  las.record_length = 28;
+  las.legacy_count = 1;
+  las.scale[2] = 0.001;
+  std::string p = legacy_record(28, 12345, 67890, -5, 7, 1 | (2 << 3), 9, 0, 0, 0);
+  put<double>(p, 20, 42.25);
+  las.points = p;
+  const PointCloud c = read_point_cloud(write_bytes(dir / "f1.las", las.bytes())).cloud;
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_NEAR((c.positions[0] - Vector3d(123.45, 678.90, -0.005)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(field(c, "gps_time"), std::vector<double>{42.25});
+  EXPECT_EQ(field(c, "classification"), std::vector<double>{9});
+  EXPECT_FALSE(c.has_colors());
+  EXPECT_FALSE(c.fields.contains("scan_angle"));  // all zero: not kept
+}
+
+TEST(Las, ReadsHandBuiltLas13Format0WithExtraBytes) {
+  const auto dir = test::temp_dir("las13_format0");
+  LasFile las;
+  las.minor = 3;
+  las.format = 0;
+  las.record_length = 24;  // 4 extra bytes per record, skipped
+  las.legacy_count = 3;
+  for (int i = 0; i < 3; ++i) {
+    std::string r = legacy_record(24, i * 100, i * 200, i * 300, static_cast<std::uint16_t>(10 * i), 1 | (1 << 3), 2, 0, 0, 0);
+    put<std::int32_t>(r, 20, -1);
+    las.points += r;
+  }
+  const CloudReadResult result = read_point_cloud(write_bytes(dir / "f0.las", las.bytes()));
+  const PointCloud& c = result.cloud;
+  EXPECT_EQ(result.encoding, "LAS 1.3 point format 0");
+  ASSERT_EQ(c.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR((c.positions[i] - Vector3d(i * 1.0, i * 2.0, i * 3.0)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(field(c, "intensity"), (std::vector<double>{0, 10, 20}));
+  EXPECT_FALSE(c.fields.contains("gps_time"));
+}
+
+TEST(Las, ReadsLas14Format6WithOnlyThe64BitCount) {
+  const auto dir = test::temp_dir("las14_format6");
+  LasFile las;
+  las.minor = 4;
+  las.format = 6;
+  las.record_length = 30;
+  las.legacy_count = 0;
+  las.count64 = 2;
+  for (int i = 0; i < 2; ++i) {
+    std::string r(30, '\0');
+    put<std::int32_t>(r, 0, 1000 + i);
+    put<std::uint16_t>(r, 12, 77);
+    put<std::uint8_t>(r, 14, static_cast<std::uint8_t>(9 | (12 << 4)));  // return 9 of 12
+    put<std::uint8_t>(r, 15, 0xFF);                                       // flags, channel, direction, edge
+    put<std::uint8_t>(r, 16, 200);                                        // a class only 6-10 hold
+    put<std::int16_t>(r, 18, -2500);                                      // -15 degrees in 0.006 steps
+    put<std::uint16_t>(r, 20, 3);
+    put<double>(r, 22, 1e9 + i);
+    las.points += r;
+  }
+  const PointCloud c = read_point_cloud(write_bytes(dir / "f6.las", las.bytes())).cloud;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_NEAR(c.positions[1].x(), 10.01, 1e-12);
+  EXPECT_EQ(field(c, "return_number"), (std::vector<double>{9, 9}));
+  EXPECT_EQ(field(c, "number_of_returns"), (std::vector<double>{12, 12}));
+  EXPECT_EQ(field(c, "classification"), (std::vector<double>{200, 200}));
+  EXPECT_NEAR(field(c, "scan_angle")[0], -15.0, 1e-12);
+  EXPECT_EQ(field(c, "point_source_id"), (std::vector<double>{3, 3}));
+  EXPECT_EQ(field(c, "gps_time"), (std::vector<double>{1e9, 1e9 + 1}));
+}
+
+TEST(Las, EightBitColoursStoredUnscaledAreReadAsEightBit) {
+  const auto dir = test::temp_dir("las_rgb8");
+  LasFile las;
+  las.format = 2;
+  las.record_length = 26;
+  las.legacy_count = 1;
+  std::string p = legacy_record(26, 0, 0, 0, 0, 1 | (1 << 3), 0, 0, 0, 0);
+  put<std::uint16_t>(p, 20, 255);
+  put<std::uint16_t>(p, 22, 51);
+  put<std::uint16_t>(p, 24, 0);
+  las.points = p;
+  const CloudReadResult result = read_point_cloud(write_bytes(dir / "rgb8.las", las.bytes()));
+  ASSERT_TRUE(result.cloud.has_colors());
+  EXPECT_EQ(result.cloud.colors[0], Vector3f(1.0f, 51 / 255.0f, 0.0f));
+  ASSERT_EQ(result.warnings.size(), 1u);
+  EXPECT_NE(result.warnings[0].find("8-bit"), std::string::npos);
+}
+
+TEST(Las, TruncatedPointDataNamesThePointAndTheByte) {
+  const auto dir = test::temp_dir("las_truncated");
+  LasFile las;
+  las.legacy_count = 5;
+  for (int i = 0; i < 3; ++i) las.points += legacy_record(20, i, i, i, 0, 9, 0, 0, 0, 0);
+  las.points += std::string(7, '\0');  // a partial fourth record
+  const auto path = write_bytes(dir / "scan.las", las.bytes());
+  expect_error<InputError>([&] { read_point_cloud(path); }, "scan.las: point 3 of 5: file ends at byte 294");
+}
+
+TEST(Las, PointCountBeyondTheFileIsRejectedBeforeAllocating) {
+  const auto dir = test::temp_dir("las_huge_count");
+  LasFile las;
+  las.minor = 4;
+  las.format = 6;
+  las.record_length = 30;
+  las.count64 = 1'000'000'000'000ULL;
+  las.points = std::string(30, '\0');
+  expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "huge.las", las.bytes())); }, "point 1 of 1000000000000: file ends");
+  LasFile legacy;
+  legacy.legacy_count = 0xFFFFFFFFu;
+  expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "legacy.las", legacy.bytes())); }, "point 0 of 4294967295");
+}
+
+TEST(Las, MalformedHeadersAreInputErrors) {
+  const auto dir = test::temp_dir("las_bad_headers");
+  {
+    LasFile las;
+    las.format = 11;
+    las.record_length = 40;
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "f11.las", las.bytes())); },
+                             "f11.las: point data record format 11 is not supported: expected 0 to 10");
+  }
+  {
+    LasFile las;
+    las.format = 3;
+    las.record_length = 30;
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "short_record.las", las.bytes())); },
+                             "point record length 30 is shorter than the 34 bytes point format 3 needs");
+  }
+  {
+    LasFile las;
+    las.minor = 5;
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "v15.las", las.bytes())); }, "unsupported LAS version 1.5");
+  }
+  {
+    LasFile las;
+    las.minor = 4;
+    las.header_size = 227;  // a 1.4 header needs 375 bytes
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "short14.las", las.bytes())); }, "header too short");
+  }
+  {
+    const std::string cut = LasFile{}.bytes().substr(0, 100);
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "cut.las", cut)); },
+                             "cut.las: header too short: the file has 100 bytes");
+  }
+  {
+    LasFile las;
+    las.scale[1] = 0.0;
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "scale0.las", las.bytes())); }, "y scale factor is 0");
+  }
+  {
+    ReadOptions forced;
+    forced.format = "las";
+    expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "text.las", "1 2 3\n"), forced); }, "expected the signature 'LASF'");
+  }
+}
+
+}  // namespace
+}  // namespace pointsurf

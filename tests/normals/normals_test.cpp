@@ -1,0 +1,383 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/normals/normals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <random>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/error.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+// The cloud's normals are the exact ones from the sampler; `exact` keeps them aside.
+struct Shape {
+  PointCloud cloud;
+  std::vector<Vector3d> exact;
+};
+
+Shape make(PointCloud cloud) {
+  Shape s;
+  s.exact = std::move(cloud.normals);
+  cloud.normals.clear();
+  s.cloud = std::move(cloud);
+  return s;
+}
+
+double angle_unoriented(const Vector3d& a, const Vector3d& b) { return std::acos(std::min(1.0, std::abs(a.dot(b)))); }
+
+double mean_unoriented_error_deg(const std::vector<Vector3d>& normals, const std::vector<Vector3d>& exact) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < normals.size(); ++i) sum += angle_unoriented(normals[i], exact[i]);
+  return sum / double(normals.size()) / kDegree;
+}
+
+// Number of points with a normal whose side disagrees with the exact outward normal.
+std::size_t inward_count(const std::vector<Vector3d>& normals, const std::vector<Vector3d>& exact) {
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    if (normals[i].squaredNorm() > 0.0 && !(normals[i].dot(exact[i]) > 0.0)) ++bad;
+  return bad;
+}
+
+Shape permuted(const Shape& s, std::vector<std::size_t>& perm, std::uint64_t seed = 5) {
+  perm.resize(s.cloud.size());
+  std::iota(perm.begin(), perm.end(), std::size_t(0));
+  std::shuffle(perm.begin(), perm.end(), std::mt19937_64(seed));
+  Shape out;
+  out.cloud = s.cloud.select(perm);
+  for (std::size_t i : perm) out.exact.push_back(s.exact[i]);
+  return out;
+}
+
+Eigen::Isometry3d rigid_motion() {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.rotate(Eigen::AngleAxisd(0.7, Vector3d(1.0, -2.0, 0.5).normalized()));
+  t.pretranslate(Vector3d(12.0, -3.5, 100.0));
+  return t;
+}
+
+Shape moved(const Shape& s, const Eigen::Isometry3d& t) {
+  Shape out = s;
+  for (Vector3d& p : out.cloud.positions) p = t * p;
+  for (Vector3d& n : out.exact) n = t.linear() * n;
+  return out;
+}
+
+Shape shifted(const Shape& s, const Vector3d& offset) {
+  Shape out = s;
+  for (Vector3d& p : out.cloud.positions) p += offset;
+  return out;
+}
+
+template <class F>
+void expect_usage_error(F f, const std::string& message) {
+  try {
+    f();
+    FAIL() << "expected UsageError: " << message;
+  } catch (const UsageError& e) {
+    EXPECT_EQ(std::string(e.what()), message);
+  }
+}
+
+TEST(EstimateNormals, SphereNormalsAreAccurate) {
+  Shape s = make(test::sample_sphere(20000, 2.0));
+  const NormalResult r = estimate_normals(s.cloud, {.k = 30});
+  EXPECT_EQ(r.degenerate, 0u);
+  ASSERT_EQ(s.cloud.normals.size(), s.exact.size());
+  EXPECT_LT(mean_unoriented_error_deg(s.cloud.normals, s.exact), 1.0);
+  for (const Vector3d& n : s.cloud.normals) ASSERT_NEAR(n.norm(), 1.0, 1e-12);
+  const ScalarField* variation = s.cloud.fields.find("variation");
+  ASSERT_NE(variation, nullptr);
+  EXPECT_EQ(variation->type, ScalarType::Float32);
+  ASSERT_EQ(variation->values.size(), s.cloud.size());
+  for (double v : variation->values) ASSERT_TRUE(v >= 0.0 && v <= 1.0 / 3.0) << v;
+}
+
+TEST(EstimateNormals, RadiusAndHybridNeighbourhoods) {
+  Shape s = make(test::sample_sphere(20000));
+  const double spacing = mean_spacing(s.cloud.positions);
+  NormalResult r = estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Radius});
+  EXPECT_NEAR(r.radius_used, 3.0 * spacing, 1e-12);
+  EXPECT_LT(mean_unoriented_error_deg(s.cloud.normals, s.exact), 2.0);
+  r = estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .k = 20, .radius = 0.08});
+  EXPECT_EQ(r.radius_used, 0.08);
+  EXPECT_EQ(r.degenerate, 0u);
+  EXPECT_LT(mean_unoriented_error_deg(s.cloud.normals, s.exact), 1.0);
+}
+
+TEST(EstimateNormals, PlaneNormalsAreExactlyVertical) {
+  Shape s = make(test::sample_plane(3000));
+  const NormalResult r = estimate_normals(s.cloud, {.k = 12});
+  EXPECT_EQ(r.degenerate, 0u);
+  for (const Vector3d& n : s.cloud.normals) {
+    ASSERT_NEAR(std::abs(n.z()), 1.0, 1e-12);
+    ASSERT_NEAR(n.x(), 0.0, 1e-12);
+    ASSERT_NEAR(n.y(), 0.0, 1e-12);
+  }
+  for (double v : s.cloud.fields.find("variation")->values) ASSERT_NEAR(v, 0.0, 1e-12);
+}
+
+TEST(EstimateNormals, CubeFacesAreExactAwayFromEdges) {
+  Shape s = make(test::sample_cube(30000));
+  const KdTree tree(s.cloud.positions);
+  estimate_normals(s.cloud, {.k = 30}, &tree);
+  // A point whose 30 neighbours all lie on its own face has a planar neighbourhood: its normal
+  // is exact. Closer to an edge the neighbourhood bends round it and the normal blends.
+  std::vector<Neighbor> neighbors;
+  std::size_t interior = 0;
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+    const Vector3d& p = s.cloud.positions[i];
+    tree.knn(p, 30, neighbors);
+    const double reach = std::sqrt(neighbors.back().squared_distance);
+    double to_edge = 1e300;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(s.exact[i][a]) == 0.0) to_edge = std::min(to_edge, 1.0 - std::abs(p[a]));
+    if (to_edge <= reach) continue;
+    ++interior;
+    ASSERT_LT(angle_unoriented(s.cloud.normals[i], s.exact[i]), 1e-9) << "point " << i;
+  }
+  EXPECT_GT(interior, s.cloud.size() / 2);
+}
+
+TEST(EstimateNormals, InvariantUnderPermutationAndRigidMotion) {
+  const Shape s = make(test::sample_torus(8000));
+  PointCloud base = s.cloud;
+  estimate_normals(base, {.k = 20});
+
+  std::vector<std::size_t> perm;
+  Shape p = permuted(s, perm);
+  estimate_normals(p.cloud, {.k = 20});
+  for (std::size_t i = 0; i < perm.size(); ++i)
+    ASSERT_LT((p.cloud.normals[i] - base.normals[perm[i]]).norm(), 1e-9) << "point " << i;
+
+  const Eigen::Isometry3d t = rigid_motion();
+  Shape m = moved(s, t);
+  estimate_normals(m.cloud, {.k = 20});
+  for (std::size_t i = 0; i < s.cloud.size(); ++i)
+    ASSERT_LT(angle_unoriented(m.cloud.normals[i], t.linear() * base.normals[i]), 1e-6) << "point " << i;
+}
+
+TEST(EstimateNormals, GeoreferencedCloudGivesTheSameNormals) {
+  const Shape s = make(test::sample_sphere(5000, 10.0));
+  PointCloud base = s.cloud;
+  estimate_normals(base, {.k = 20});
+  Shape far = shifted(s, Vector3d(6.5e6, -1e6, 6.5e6));
+  estimate_normals(far.cloud, {.k = 20});
+  for (std::size_t i = 0; i < s.cloud.size(); ++i)
+    ASSERT_LT(angle_unoriented(far.cloud.normals[i], base.normals[i]), 1e-6) << "point " << i;
+}
+
+TEST(EstimateNormals, ExistingNormalsKeepTheirSide) {
+  Shape s = make(test::sample_sphere(5000));
+  s.cloud.normals = s.exact;
+  estimate_normals(s.cloud, {.k = 20});
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
+  for (std::size_t i = 0; i < s.exact.size(); ++i) s.cloud.normals[i] = -s.exact[i];
+  estimate_normals(s.cloud, {.k = 20});
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), s.exact.size());
+}
+
+TEST(EstimateNormals, CollinearNeighbourhoodsAreDegenerate) {
+  PointCloud line;
+  for (int i = 0; i < 200; ++i) line.positions.emplace_back(0.1 * i, 0.2 * i - 3.0, 0.05 * i);
+  NormalResult r = estimate_normals(line, {.k = 10});
+  EXPECT_EQ(r.degenerate, 200u);
+  for (const Vector3d& n : line.normals) EXPECT_EQ(n, Vector3d::Zero());
+  const OrientResult o = orient_normals(line);
+  EXPECT_EQ(o.flipped, 0u);
+
+  // A plane with a line far from it: only the line's points are degenerate; so are the points
+  // of a cloud that all coincide.
+  Shape s = make(test::sample_plane(2000));
+  for (int i = 0; i < 50; ++i) s.cloud.positions.emplace_back(10.0 + 0.01 * i, 10.0, 10.0);
+  r = estimate_normals(s.cloud, {.k = 10});
+  EXPECT_EQ(r.degenerate, 50u);
+  PointCloud same;
+  same.positions.assign(20, Vector3d(1, 2, 3));
+  r = estimate_normals(same, {.neighborhood = NeighborhoodKind::Hybrid});
+  EXPECT_EQ(r.degenerate, 20u);
+  EXPECT_EQ(r.radius_used, 0.0);
+}
+
+TEST(EstimateNormals, BadParametersThrowUsageError) {
+  Shape s = make(test::sample_sphere(100));
+  expect_usage_error([&] { estimate_normals(s.cloud, {.k = 2}); }, "estimate_normals: k must be >= 3, got 2");
+  expect_usage_error([&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Radius, .radius = -1.0}); },
+                     "estimate_normals: radius must be >= 0, got -1");
+  expect_usage_error(
+      [&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .radius_in_spacings = 0.0}); },
+      "estimate_normals: radius_in_spacings must be > 0, got 0");
+  PointCloud two;
+  two.positions = {Vector3d::Zero(), Vector3d::UnitX()};
+  expect_usage_error([&] { estimate_normals(two); }, "estimate_normals: needs at least 3 points, got 2");
+  const KdTree other(two.positions);
+  expect_usage_error([&] { estimate_normals(s.cloud, {}, &other); },
+                     "estimate_normals: the kd-tree holds 2 points but the cloud has 100");
+  EXPECT_TRUE(s.cloud.normals.empty());
+}
+
+TEST(EstimateNormals, ProgressIsReportedAndCanCancel) {
+  Shape s = make(test::sample_sphere(20000));
+  std::vector<double> fractions;
+  estimate_normals(s.cloud, {}, nullptr, [&](double f) {
+    fractions.push_back(f);
+    return true;
+  });
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_EQ(fractions.back(), 1.0);
+
+  PointCloud fresh = make(test::sample_sphere(20000)).cloud;
+  EXPECT_THROW(estimate_normals(fresh, {}, nullptr, [](double f) { return f < 0.3; }), CancelledError);
+  EXPECT_TRUE(fresh.normals.empty());  // a cancelled run leaves the cloud as it was
+  EXPECT_FALSE(fresh.fields.contains("variation"));
+}
+
+// MST orientation turns every normal outward on closed shapes, whatever the point order,
+// placement and far offset. On the sphere and the torus every estimated normal is within a
+// few degrees of the exact one, so outward means a positive dot product with it. At the
+// cube's corners a PCA normal can lean past 90 degrees from its face's normal while pointing
+// out of the cube, so there outward means pointing away from the centre (the cube is convex)
+// and, wherever the estimate is within 60 degrees of the face normal, agreeing with it.
+class OrientMst : public ::testing::TestWithParam<const char*> {
+protected:
+  bool is_cube() const { return std::string(GetParam()) == "cube"; }
+  Shape shape() const {
+    const std::string name = GetParam();
+    if (name == "sphere") return make(test::sample_sphere(20000, 1.5, Vector3d(0.3, -0.2, 0.1)));
+    if (name == "torus") return make(test::sample_torus(20000, 1.0, 0.3));
+    return make(test::sample_cube(20000, 1.0, 4));  // a seed with corner normals leaning past 90 degrees
+  }
+  // `center` is where the cube's centre went.
+  void expect_outward(Shape s, const Vector3d& center = Vector3d::Zero()) const {
+    const NormalResult r = estimate_normals(s.cloud, {.k = 30});
+    EXPECT_EQ(r.degenerate, 0u);
+    const OrientResult o = orient_normals(s.cloud);
+    EXPECT_EQ(o.components, 1u);
+    std::size_t inward = 0;
+    for (std::size_t i = 0; i < s.cloud.size(); ++i) {
+      const Vector3d& n = s.cloud.normals[i];
+      const double along_exact = n.dot(s.exact[i]);
+      if (!is_cube()) {
+        inward += !(along_exact > 0.0);
+      } else {
+        inward += !(n.dot(s.cloud.positions[i] - center) > 0.0) || along_exact < -0.5;
+      }
+    }
+    EXPECT_EQ(inward, 0u);
+  }
+};
+
+TEST_P(OrientMst, AllNormalsOutward) { expect_outward(shape()); }
+
+TEST_P(OrientMst, AllNormalsOutwardAfterPermutation) {
+  std::vector<std::size_t> perm;
+  expect_outward(permuted(shape(), perm));
+}
+
+TEST_P(OrientMst, AllNormalsOutwardAfterRigidMotion) {
+  const Eigen::Isometry3d t = rigid_motion();
+  expect_outward(moved(shape(), t), t.translation());
+}
+
+TEST_P(OrientMst, AllNormalsOutwardFarFromTheOrigin) {
+  const Vector3d offset(1e6, -1e6, 1e6);
+  expect_outward(shifted(shape(), offset), offset);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shapes, OrientMst, ::testing::Values("sphere", "torus", "cube"));
+
+TEST(OrientNormals, NoisyTorusIsOutward) {
+  Shape s = make(test::sample_torus(20000, 1.0, 0.3, 2));
+  test::add_noise(s.cloud, 0.01);
+  estimate_normals(s.cloud, {.k = 30});
+  orient_normals(s.cloud);
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
+}
+
+TEST(OrientNormals, CountsFlipsAndComponents) {
+  // Two spheres far apart, exact normals with a third of them reversed.
+  Shape a = make(test::sample_sphere(3000, 1.0, Vector3d::Zero(), 1));
+  Shape b = make(test::sample_sphere(3000, 1.0, Vector3d(10, 0, 0), 2));
+  PointCloud both = a.cloud;
+  both.append(b.cloud);
+  std::vector<Vector3d> exact = a.exact;
+  exact.insert(exact.end(), b.exact.begin(), b.exact.end());
+  both.normals = exact;
+  for (std::size_t i = 0; i < exact.size(); i += 3) both.normals[i] = -exact[i];
+  const OrientResult o = orient_normals(both, {.k = 8});
+  EXPECT_EQ(o.components, 2u);
+  EXPECT_EQ(o.flipped, 2000u);
+  EXPECT_EQ(inward_count(both.normals, exact), 0u);
+}
+
+TEST(OrientNormals, ZeroNormalsAreSkipped) {
+  Shape s = make(test::sample_sphere(5000));
+  s.cloud.normals = s.exact;
+  for (std::size_t i = 0; i < s.exact.size(); i += 4) s.cloud.normals[i] = -s.exact[i];
+  for (std::size_t i = 1; i < s.exact.size(); i += 10) s.cloud.normals[i] = Vector3d::Zero();
+  orient_normals(s.cloud);
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
+  for (std::size_t i = 1; i < s.exact.size(); i += 10) EXPECT_EQ(s.cloud.normals[i], Vector3d::Zero());
+}
+
+TEST(OrientNormals, ViewpointAndDirection) {
+  Shape s = make(test::sample_sphere(2000, 1.0, Vector3d(5, 5, 5)));
+  s.cloud.normals = s.exact;
+  // Seen from the centre every outward normal turns inward.
+  OrientResult o = orient_normals(s.cloud, {.method = Orientation::Viewpoint, .viewpoint = Vector3d(5, 5, 5)});
+  EXPECT_EQ(o.flipped, 2000u);
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 2000u);
+  o = orient_normals(s.cloud, {.method = Orientation::Viewpoint, .viewpoint = Vector3d(5, 5, 5)});
+  EXPECT_EQ(o.flipped, 0u);
+
+  Shape plane = make(test::sample_plane(500));
+  plane.cloud.normals = plane.exact;
+  o = orient_normals(plane.cloud, {.method = Orientation::Direction, .direction = Vector3d(0.1, 0, -3)});
+  EXPECT_EQ(o.flipped, 500u);
+  for (const Vector3d& n : plane.cloud.normals) EXPECT_EQ(n, Vector3d(0, 0, -1));
+  o = orient_normals(plane.cloud, {.method = Orientation::None});
+  EXPECT_EQ(o.flipped, 0u);
+}
+
+TEST(OrientNormals, BadParametersThrowUsageError) {
+  Shape s = make(test::sample_sphere(100));
+  expect_usage_error([&] { orient_normals(s.cloud); }, "orient_normals: the cloud has no normals (estimate them first)");
+  s.cloud.normals = s.exact;
+  expect_usage_error([&] { orient_normals(s.cloud, {.k = 0}); }, "orient_normals: k must be >= 1, got 0");
+  expect_usage_error([&] { orient_normals(s.cloud, {.method = Orientation::Direction, .direction = Vector3d::Zero()}); },
+                     "orient_normals: the direction must be a finite non-zero vector, got (0, 0, 0)");
+  s.cloud.normals.pop_back();
+  expect_usage_error([&] { orient_normals(s.cloud); }, "orient_normals: the cloud has 99 normals for 100 points");
+}
+
+TEST(OrientNormals, ProgressCanCancel) {
+  Shape s = make(test::sample_sphere(20000));
+  s.cloud.normals = s.exact;
+  std::vector<double> fractions;
+  orient_normals(s.cloud, {}, nullptr, [&](double f) {
+    fractions.push_back(f);
+    return true;
+  });
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_EQ(fractions.back(), 1.0);
+  for (std::size_t i = 0; i < s.exact.size(); i += 2) s.cloud.normals[i] = -s.exact[i];
+  const std::vector<Vector3d> before = s.cloud.normals;
+  EXPECT_THROW(orient_normals(s.cloud, {}, nullptr, [](double f) { return f < 0.5; }), CancelledError);
+  EXPECT_THROW(orient_normals(s.cloud, {}, nullptr, [](double f) { return f < 1.0; }), CancelledError);
+  EXPECT_EQ(s.cloud.normals, before);  // a cancelled run leaves the normals as they were
+}
+
+}  // namespace
+}  // namespace pointsurf
