@@ -112,7 +112,9 @@ std::string detect_format(const std::filesystem::path& path) {
   }
   if (looks_binary(head)) {
     const std::string ext = lower(path.extension().string());
-    if (ext == ".stl") throw InputError(fmt::format("{}: binary STL: triangle count disagrees with the file size ({} bytes)", display_name(path), size));
+    // A binary .stl whose size disagrees with its count: the STL reader says where it ends.
+    if (ext == ".stl" && size >= 84) return "stl";
+    if (ext == ".stl") throw InputError(fmt::format("{}: binary STL shorter than its 84-byte header ({} bytes)", display_name(path), size));
     throw InputError(fmt::format("{}: unknown format: binary content that is none of PLY, PCD, LAS or STL", display_name(path)));
   }
   // OBJ: keyword lines.

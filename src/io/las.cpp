@@ -64,7 +64,8 @@ constexpr double kScanAngleStepDeg = 0.006;
 
 RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
-  const std::string bytes = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view bytes = file_bytes.view();
   const std::size_t file_size = bytes.size();
   const char* data = bytes.data();
 
@@ -224,15 +225,6 @@ void put(char* p, T value) {
   std::memcpy(p, &value, sizeof(T));
 }
 
-// Writers get the temporary file that the dispatch renames afterwards
-// ("dir/.scan.las.tmp-1a2b3c4d"); messages name the file the user asked for.
-std::string target_name(const std::filesystem::path& tmp_path) {
-  std::string file = tmp_path.filename().string();
-  const std::size_t tmp = file.rfind(".tmp-");
-  if (file.size() > 1 && file.front() == '.' && tmp != std::string::npos && tmp > 1) file = file.substr(1, tmp - 1);
-  const std::filesystem::path dir = tmp_path.parent_path();
-  return display_name(dir.empty() || dir == "." ? std::filesystem::path(file) : dir / file);
-}
 
 void put_text(char* p, std::string_view text, std::size_t width) {
   std::memcpy(p, text.data(), std::min(text.size(), width));
@@ -245,7 +237,7 @@ void put_text(char* p, std::string_view text, std::size_t width) {
 // for any other field (nor for normals), so those are dropped; values outside a slot's range
 // are clamped. Points without a return_number field are written as return 1 of 1.
 void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
-  const std::string name = target_name(path);
+  const std::string name = display_name(path);
   const std::size_t n = cloud.size();
   for (std::size_t i = 0; i < n; ++i)
     if (!cloud.positions[i].allFinite())

@@ -34,7 +34,8 @@ std::size_t resolve_index(std::string_view token, std::size_t defined, const cha
 
 RawData read_obj(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
-  const std::string text = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view text = file_bytes.view();
   TextCursor cursor(text);
   std::vector<std::string_view> tokens;
   std::string_view line;

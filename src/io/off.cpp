@@ -54,7 +54,8 @@ bool integer_syntax(std::string_view token) { return token.find_first_of(".eE") 
 
 RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
-  const std::string text = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view text = file_bytes.view();
   TextCursor cursor(text);
   std::vector<std::string_view> tokens;
   std::string_view line;

@@ -420,7 +420,8 @@ void read_binary(const char* data, const PcdHeader& h, const Layout& layout, Poi
 
 RawData read_pcd(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
-  const std::string bytes = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view bytes = file_bytes.view();
   const PcdHeader h = parse_header(bytes, name);
   Layout layout = make_layout(h, name);
 

@@ -34,45 +34,6 @@
 namespace pointsurf::io::detail {
 namespace {
 
-// The bytes of a file, memory-mapped when possible. Mapping avoids copying a large binary body
-// into freshly allocated memory, whose first touch costs as much as decoding it.
-class FileBytes {
-public:
-  explicit FileBytes(const std::filesystem::path& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd >= 0) {
-      struct stat st {};
-      if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
-        int flags = MAP_PRIVATE;
-#ifdef MAP_POPULATE
-        flags |= MAP_POPULATE;
-#endif
-        void* map = ::mmap(nullptr, static_cast<std::size_t>(st.st_size), PROT_READ, flags, fd, 0);
-        if (map != MAP_FAILED) {
-          map_ = map;
-          size_ = static_cast<std::size_t>(st.st_size);
-        }
-      }
-      ::close(fd);
-    }
-    // Anything that could not be mapped (a pipe, an empty file, an open error) goes through
-    // the ordinary reader, which also words the error.
-    if (!map_) copy_ = read_file_bytes(path);
-  }
-  ~FileBytes() {
-    if (map_) ::munmap(map_, size_);
-  }
-  FileBytes(const FileBytes&) = delete;
-  FileBytes& operator=(const FileBytes&) = delete;
-
-  std::string_view view() const { return map_ ? std::string_view(static_cast<const char*>(map_), size_) : std::string_view(copy_); }
-
-private:
-  void* map_ = nullptr;
-  std::size_t size_ = 0;
-  std::string copy_;
-};
-
 enum class Encoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
 
 std::string_view encoding_name(Encoding e) {

@@ -61,7 +61,7 @@ bool starts_with_solid(std::string_view bytes) {
   return i != std::string_view::npos && bytes.substr(i, 5) == "solid";
 }
 
-RawData read_binary(const std::string& bytes, const std::string& name) {
+RawData read_binary(std::string_view bytes, const std::string& name) {
   if (bytes.size() < kBinaryHeader)
     throw InputError(fmt::format("{}: binary STL: file ends at byte {}, inside the 84-byte header", name, bytes.size()));
   const std::uint64_t count = load_value<std::uint32_t>(bytes.data() + 80);
@@ -85,7 +85,7 @@ RawData read_binary(const std::string& bytes, const std::string& name) {
   return raw;
 }
 
-RawData read_ascii(const std::string& text, const std::string& name) {
+RawData read_ascii(std::string_view text, const std::string& name) {
   RawData raw;
   raw.encoding = "ascii";
   // An ascii facet takes well over 100 bytes; this bounds the reservation by the file size.
@@ -156,15 +156,6 @@ RawData read_ascii(const std::string& text, const std::string& name) {
   return raw;
 }
 
-// Writers get the temporary file that the dispatch renames afterwards
-// ("dir/.scan.las.tmp-1a2b3c4d"); messages name the file the user asked for.
-std::string target_name(const std::filesystem::path& tmp_path) {
-  std::string file = tmp_path.filename().string();
-  const std::size_t tmp = file.rfind(".tmp-");
-  if (file.size() > 1 && file.front() == '.' && tmp != std::string::npos && tmp > 1) file = file.substr(1, tmp - 1);
-  const std::filesystem::path dir = tmp_path.parent_path();
-  return display_name(dir.empty() || dir == "." ? std::filesystem::path(file) : dir / file);
-}
 
 Vector3f facet_normal(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   const Vector3d n = (b - a).cross(c - a);
@@ -176,7 +167,8 @@ Vector3f facet_normal(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
 
 RawData read_stl(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
-  const std::string bytes = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view bytes = file_bytes.view();
   // The size test comes first: many binary exporters start their header with "solid" too.
   if (bytes.size() >= kBinaryHeader &&
       kBinaryHeader + kFacetBytes * static_cast<std::uint64_t>(load_value<std::uint32_t>(bytes.data() + 80)) == bytes.size())
@@ -189,7 +181,7 @@ RawData read_stl(const std::filesystem::path& path, const ReadOptions&) {
 // Binary STL stores float32 by definition; ascii coordinates keep full double precision.
 void write_stl(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
                const WriteOptions& options) {
-  const std::string name = target_name(path);
+  const std::string name = display_name(path);
   if (triangles.empty()) throw UsageError(fmt::format("{}: STL holds triangles only; this has no triangles", name));
   if (triangles.size() > std::numeric_limits<std::uint32_t>::max())
     throw UsageError(fmt::format("{}: binary STL holds at most 4294967295 triangles, this has {}", name, triangles.size()));

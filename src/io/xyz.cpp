@@ -237,7 +237,8 @@ std::vector<std::string> parse_option_columns(std::string_view text) {
 
 RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options) {
   const std::string name = display_name(path);
-  const std::string text = read_file_bytes(path);
+  const FileBytes file_bytes(path);
+  const std::string_view text = file_bytes.view();
   std::string_view body(text);
   if (body.starts_with("\xEF\xBB\xBF")) body.remove_prefix(3);  // UTF-8 byte order mark
 

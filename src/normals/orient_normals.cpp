@@ -31,6 +31,11 @@ void mark_against(const PointCloud& cloud, Towards towards, std::vector<std::uin
   });
 }
 
+// Share of agreeing votes (|sum| / sum of |terms|) above which the outward vote decides a
+// component's sign; below it the component counts as open and its normals are turned up (+z).
+// A sphere scores 1, a torus with tube/ring ratio 0.3 about 0.5, a flat terrain tile ~0.
+constexpr double kOutwardVoteThreshold = 0.05;
+
 // Sort keys of graph edges: float weight bits above a 34-bit edge slot.
 constexpr int kSlotBits = 34;
 constexpr std::uint64_t kSlotMask = (std::uint64_t(1) << kSlotBits) - 1;
@@ -180,8 +185,10 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
   std::vector<std::pair<std::uint32_t, std::uint32_t>>().swap(forest);
 
   // 4. One seed per component: the point with a normal farthest from the component centroid;
-  //    on a closed surface its outward side faces away from the centroid. Positions are taken
-  //    relative to the first point to keep the sums small for georeferenced clouds.
+  //    on a closed surface its outward side faces away from the centroid. The seed only starts
+  //    the propagation: step 6 settles each component's global sign by a vote over all of its
+  //    points. Positions are taken relative to the first point to keep the sums small for
+  //    georeferenced clouds.
   const Eigen::Vector3d origin = cloud.positions[0];
   std::vector<std::uint32_t> component(n);
   std::vector<Eigen::Vector3d> sums;
@@ -246,6 +253,35 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
       }
     }
   }
+
+  // 6. Global sign of each component. On a closed surface with outward normals,
+  //    sum n·(p - c) over area-uniform samples approximates 3 x volume > 0 (divergence theorem),
+  //    so it decides from every point rather than from one possibly noisy seed. It also settles
+  //    partial scans of convex-ish objects (a single view of a statue: outward). For surfaces
+  //    with no inside, such as a terrain tile, the sum nearly cancels; there the convention of
+  //    survey data applies: normals point up (+z).
+  std::vector<double> signed_sum(components, 0.0), absolute_sum(components, 0.0);
+  std::vector<double> up_sum(components, 0.0), up_absolute(components, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!has_direction(normals[i])) continue;
+    const std::uint32_t c = component[i];
+    const Eigen::Vector3d nrm = oriented(static_cast<std::uint32_t>(i)).normalized();
+    const double d = nrm.dot(cloud.positions[i] - origin - sums[c]);
+    signed_sum[c] += d;
+    absolute_sum[c] += std::abs(d);
+    up_sum[c] += nrm.z();
+    up_absolute[c] += std::abs(nrm.z());
+  }
+  std::vector<std::uint8_t> flip_component(components, 0);
+  for (std::size_t c = 0; c < components; ++c) {
+    if (absolute_sum[c] == 0.0) continue;
+    const double outward = signed_sum[c] / absolute_sum[c];
+    if (std::abs(outward) >= kOutwardVoteThreshold) flip_component[c] = outward < 0.0;
+    else if (up_absolute[c] > 0.0 && std::abs(up_sum[c]) / up_absolute[c] >= kOutwardVoteThreshold) flip_component[c] = up_sum[c] < 0.0;
+    else flip_component[c] = outward < 0.0;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (flip_component[component[i]] && has_direction(normals[i])) flip[i] = !flip[i];
   return components;
 }
 

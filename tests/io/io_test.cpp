@@ -106,9 +106,14 @@ TEST(DetectFormat, BinaryStlIsRecognisedByItsSize) {
   bytes.append(3 * 50, '\x01');
   write_bytes(dir / "part.bin", bytes);
   EXPECT_EQ(detect_format(dir / "part.bin"), "stl");
-  bytes.push_back('\0');  // one byte too many: no longer a binary STL
+  bytes.push_back('\0');  // one byte too many: no longer a binary STL by size...
+  write_bytes(dir / "part.bin", bytes);
+  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "part.bin"); }), "unknown format"));
+  // ...but named .stl it goes to the STL reader, which tolerates trailing padding (and words
+  // a truncation: see Io.TruncatedBinaryStlSaysWhereItEnds).
   write_bytes(dir / "part.stl", bytes);
-  EXPECT_TRUE(contains(error_of<InputError>([&] { detect_format(dir / "part.stl"); }), "triangle count disagrees with the file size"));
+  EXPECT_EQ(detect_format(dir / "part.stl"), "stl");
+  EXPECT_NO_THROW(read_mesh(dir / "part.stl"));
 }
 
 TEST(DetectFormat, EmptyAndMissingFiles) {
@@ -258,6 +263,45 @@ TEST(Write, MismatchedAttributeSizesAreRefused) {
   cloud.colors.resize(3);
   EXPECT_TRUE(contains(error_of<InputError>([&] { write_point_cloud(dir / "c.ply", cloud); }), "3 colours for 4 points"));
   EXPECT_TRUE(list_dir(dir).empty());
+}
+
+// Writers work on a temporary file; their messages must name the file the user asked for.
+TEST(Io, WriterErrorsNameTheTargetNotTheTemporaryFile) {
+  const std::filesystem::path dir = test::temp_dir("writer_error_name");
+  PointCloud cloud = test::sample_sphere(10);
+  try {
+    write_point_cloud(dir / "cloud.stl", cloud);
+    FAIL() << "expected UsageError";
+  } catch (const UsageError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("cloud.stl"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find(".tmp-"), std::string::npos) << msg;
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir));
+  std::filesystem::remove_all(dir);
+}
+
+// A truncated binary STL is reported by the STL reader with the facet where the file ends.
+TEST(Io, TruncatedBinaryStlSaysWhereItEnds) {
+  const std::filesystem::path dir = test::temp_dir("truncated_stl");
+  {
+    std::ofstream f(dir / "part.stl", std::ios::binary);
+    std::string header(80, ' ');
+    f.write(header.data(), 80);
+    const std::uint32_t count = 10;
+    f.write(reinterpret_cast<const char*>(&count), 4);
+    std::string facets(50 * 3 + 7, '\0');
+    f.write(facets.data(), static_cast<std::streamsize>(facets.size()));
+  }
+  try {
+    read_mesh(dir / "part.stl");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("part.stl"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("facet"), std::string::npos) << msg;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

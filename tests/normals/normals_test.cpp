@@ -305,6 +305,43 @@ TEST(OrientNormals, NoisyTorusIsOutward) {
   EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
 }
 
+// An open terrain-like height field has no inside: the vote falls back on "up" (+z), whatever
+// the PCA signs were, even far from the origin like a georeferenced tile.
+TEST(OrientNormals, OpenHeightFieldPointsUp) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  PointCloud cloud;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = u(rng), y = u(rng);
+    cloud.positions.emplace_back(596000.0 + x, 243000.0 + y, 80.0 + 3.0 * std::sin(0.1 * x) * std::cos(0.07 * y));
+  }
+  estimate_normals(cloud, {.k = 20});
+  std::mt19937_64 flips(3);
+  for (Vector3d& n : cloud.normals)
+    if (flips() & 1) n = -n;
+  orient_normals(cloud);
+  std::size_t down = 0;
+  for (const Vector3d& n : cloud.normals) down += n.z() <= 0.0;
+  EXPECT_EQ(down, 0u);
+}
+
+// A single view of a convex object (an open cap of a sphere) is oriented outward, not up: here
+// the cap faces down (-z), so "up" would be wrong everywhere.
+TEST(OrientNormals, OpenCapOfSphereIsOutward) {
+  const PointCloud sphere = test::sample_sphere(30000, 2.0, Vector3d(0, 0, 0), 5);
+  PointCloud cap;
+  for (std::size_t i = 0; i < sphere.size(); ++i)
+    if (sphere.positions[i].z() < -0.8) {
+      cap.positions.push_back(sphere.positions[i]);
+      cap.normals.push_back(sphere.normals[i]);
+    }
+  const std::vector<Vector3d> exact = cap.normals;
+  cap.normals.clear();
+  estimate_normals(cap, {.k = 20});
+  orient_normals(cap);
+  EXPECT_EQ(inward_count(cap.normals, exact), 0u);
+}
+
 TEST(OrientNormals, CountsFlipsAndComponents) {
   // Two spheres far apart, exact normals with a third of them reversed.
   Shape a = make(test::sample_sphere(3000, 1.0, Vector3d::Zero(), 1));

@@ -57,11 +57,13 @@ struct OrientResult {
 
 /// Orients `cloud.normals` (which must be present) consistently. Mst (Hoppe et al. 1992):
 /// builds the symmetric kNN graph with edge weights 1 - |ni·nj|, takes its minimum spanning
-/// forest, and propagates the sign along it from one seed per connected component: the point
-/// of the component farthest from the component's centroid, whose normal is turned outward
-/// (away from the centroid). Memory O(k N), no dense structure; graph construction parallel.
-/// Reuses `tree` if given (built over `cloud.positions`). Throws UsageError on missing normals
-/// or bad parameters; CancelledError when `progress` returns false.
+/// forest, and propagates the sign along it from one seed per connected component (the point
+/// farthest from the component's centroid). Each component's global sign is then decided by a
+/// vote over all its points: outward when sum n·(p - centroid) clearly says so (closed
+/// surfaces, single views of convex-ish objects), otherwise up (+z, the convention of terrain
+/// and other open survey data). Memory O(k N), no dense structure; graph construction
+/// parallel. Reuses `tree` if given (built over `cloud.positions`). Throws UsageError on
+/// missing normals or bad parameters; CancelledError when `progress` returns false.
 OrientResult orient_normals(PointCloud& cloud, const OrientParams& params = {}, const KdTree* tree = nullptr,
                             const ProgressCallback& progress = {});
 

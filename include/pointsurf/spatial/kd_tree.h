@@ -20,6 +20,10 @@ namespace pointsurf {
 
 /// One neighbour: its index into the tree's points and the squared distance to the query.
 struct Neighbor {
+  // Left uninitialised on purpose: batch queries allocate tens of millions of these and fill
+  // every one in parallel, so zero-filling them first would be a serial pass of page faults.
+  Neighbor() noexcept {}  // NOLINT(cppcoreguidelines-pro-type-member-init)
+  Neighbor(std::uint32_t i, double d) noexcept : index(i), squared_distance(d) {}
   std::uint32_t index;
   double squared_distance;
 };

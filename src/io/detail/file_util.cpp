@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "io/detail/file_util.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <limits>
@@ -9,7 +14,18 @@
 
 namespace pointsurf::io::detail {
 
-std::string display_name(const std::filesystem::path& path) { return path.string(); }
+std::string display_name(const std::filesystem::path& path) {
+  // Writers get the temporary file that the dispatch renames afterwards
+  // ("dir/.scan.las.tmp-1a2b3c4d"); messages name the file the user asked for.
+  std::string file = path.filename().string();
+  const std::size_t tmp = file.rfind(".tmp-");
+  if (file.size() > 1 && file.front() == '.' && tmp != std::string::npos && tmp > 1 && file.size() - tmp == 13) {
+    file = file.substr(1, tmp - 1);
+    const std::filesystem::path dir = path.parent_path();
+    return (dir.empty() ? std::filesystem::path(file) : dir / file).string();
+  }
+  return path.string();
+}
 
 std::string read_file_bytes(const std::filesystem::path& path) {
   std::error_code ec;
@@ -36,6 +52,32 @@ std::string read_file_bytes(const std::filesystem::path& path) {
   std::fclose(f);
   if (failed) throw InputError(fmt::format("{}: read error", display_name(path)));
   return bytes;
+}
+
+FileBytes::FileBytes(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd >= 0) {
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+      int flags = MAP_PRIVATE;
+#ifdef MAP_POPULATE
+      flags |= MAP_POPULATE;
+#endif
+      void* map = ::mmap(nullptr, static_cast<std::size_t>(st.st_size), PROT_READ, flags, fd, 0);
+      if (map != MAP_FAILED) {
+        map_ = map;
+        size_ = static_cast<std::size_t>(st.st_size);
+      }
+    }
+    ::close(fd);
+  }
+  // Anything that could not be mapped (a pipe, an empty file, an open error) goes through the
+  // ordinary reader, which also words the error.
+  if (!map_) copy_ = read_file_bytes(path);
+}
+
+FileBytes::~FileBytes() {
+  if (map_) ::munmap(map_, size_);
 }
 
 bool parse_number(std::string_view token, double& out) noexcept {

@@ -23,6 +23,23 @@ namespace pointsurf::io::detail {
 /// The whole file in memory. Throws InputError when it cannot be opened or read.
 std::string read_file_bytes(const std::filesystem::path& path);
 
+/// The bytes of a file, memory-mapped when possible (a copy otherwise: pipes, special files).
+/// Mapping avoids copying a large body into freshly allocated memory, whose first touch costs
+/// as much as decoding it. Throws InputError like read_file_bytes.
+class FileBytes {
+public:
+  explicit FileBytes(const std::filesystem::path& path);
+  ~FileBytes();
+  FileBytes(const FileBytes&) = delete;
+  FileBytes& operator=(const FileBytes&) = delete;
+  std::string_view view() const { return map_ ? std::string_view(static_cast<const char*>(map_), size_) : std::string_view(copy_); }
+
+private:
+  void* map_ = nullptr;
+  std::size_t size_ = 0;
+  std::string copy_;
+};
+
 /// Parses a whole token as a number; false when the token is not entirely a number.
 /// Accepts a leading '+', "nan", "inf" (any case) for floating types.
 bool parse_number(std::string_view token, double& out) noexcept;
