@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 

@@ -20,11 +20,7 @@ namespace pointsurf {
 namespace {
 
 using io::detail::display_name;
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
+using io::detail::lower;
 
 std::string read_head(const std::filesystem::path& path, std::size_t bytes, std::uintmax_t& file_size) {
   std::error_code ec;

@@ -60,19 +60,6 @@ struct ColumnSpec {
   }
 };
 
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string_view trim(std::string_view s) {
-  const std::size_t b = s.find_first_not_of(" \t\v\f");
-  if (b == std::string_view::npos) return {};
-  const std::size_t e = s.find_last_not_of(" \t\v\f");
-  return s.substr(b, e - b + 1);
-}
-
 // Spreadsheets quote header cells: "x","y","z".
 std::string_view unquote(std::string_view s) {
   if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) return s.substr(1, s.size() - 2);
@@ -85,12 +72,6 @@ bool is_number(std::string_view token) {
 }
 
 bool is_comment(std::string_view trimmed) { return trimmed.front() == '#' || trimmed.starts_with("//"); }
-
-// A token for an error message, cut short when it is long (binary junk, a wrong file).
-std::string shown(std::string_view token) {
-  if (token.size() <= 40) return std::string(token);
-  return std::string(token.substr(0, 37)) + "...";
-}
 
 Column classify(std::string_view name) {
   const std::string n = lower(name);

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/io/io.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
@@ -21,21 +22,14 @@ struct RunResult {
   std::string out, err;
 };
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 RunResult run(const std::string& args, const std::filesystem::path& dir) {
   const std::filesystem::path out = dir / "stdout.txt", err = dir / "stderr.txt";
   const std::string command = std::string(POINTSURF_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(command.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
+  r.out = test::read_bytes(out);
+  r.err = test::read_bytes(err);
   return r;
 }
 
@@ -104,7 +98,7 @@ TEST_F(Cli, InfoJsonDescribesTheGeoreferencedTile) {
   bool has_label = false;
   for (const auto& f : info["fields"]) has_label |= f["name"] == "label";
   EXPECT_TRUE(has_label);
-  const nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
   for (const char* key : {"command", "version", "inputs", "outputs", "parameters", "stages", "total_seconds", "peak_rss_mb", "warnings"})
     EXPECT_TRUE(report.contains(key)) << key;
 }
@@ -115,7 +109,7 @@ TEST_F(Cli, NormalsAgreeWithTheScansOwnNormals) {
                           dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(r.err.empty()) << r.err;
-  const nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
   EXPECT_EQ(report["command"], "normals");
   bool found = false;
   for (const auto& stage : report["stages"]) {

@@ -15,33 +15,17 @@
 #include <vector>
 
 #include "pointsurf/core/error.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
 
+using test::write_bytes;
+using test::error_of;
+using test::contains;
+
 namespace fs = std::filesystem;
-
-void write_bytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-template <typename E, typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // Names of the entries of `dir`, sorted.
 std::vector<std::string> list_dir(const fs::path& dir) {

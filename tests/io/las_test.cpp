@@ -12,10 +12,14 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
+
+using test::write_bytes;
+using test::read_bytes;
 
 static_assert(std::endian::native == std::endian::little, "the hand-built files below are assembled in host byte order");
 
@@ -92,16 +96,6 @@ std::string legacy_record(std::size_t length, std::int32_t x, std::int32_t y, st
   put(r, 17, user_data);
   put(r, 18, source);
   return r;
-}
-
-std::filesystem::path write_bytes(const std::filesystem::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  return path;
-}
-
-std::string read_bytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 const std::vector<double>& field(const PointCloud& cloud, const char* name) {

@@ -14,17 +14,17 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
 
-namespace fs = std::filesystem;
+using test::write_bytes;
+using test::error_of;
+using test::contains;
 
-void write_bytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+namespace fs = std::filesystem;
 
 // Appends `value` to `bytes` in the requested byte order.
 template <typename T>
@@ -37,20 +37,6 @@ void put(std::string& bytes, T value, bool big) {
 }
 
 // Runs `f`, expects an exception of type E, and returns its message.
-template <typename E, typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
-}
-
 // A small mesh with every attribute PLY can hold: normals, 8-bit colours and fields of
 // several types, with values each type stores exactly.
 TriangleMesh attributed_mesh() {
@@ -362,8 +348,6 @@ TEST(Ply, ReadsTheShippedAerialScan) {
 std::string read_error(const fs::path& path) {
   return error_of<InputError>([&] { read_point_cloud(path); });
 }
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 const char* const kXyzDoubleHeader =
     "ply\nformat binary_little_endian 1.0\nelement vertex 2000\n"

@@ -11,10 +11,14 @@
 #include <string>
 
 #include "pointsurf/core/error.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
+
+using test::error_of;
+using test::contains;
 
 namespace fs = std::filesystem;
 
@@ -30,22 +34,6 @@ std::string read_text(const fs::path& path) {
   s << in.rdbuf();
   return s.str();
 }
-
-template <typename E, typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
-}
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 CloudReadResult read_text_cloud(const fs::path& dir, const std::string& file, const std::string& text, const std::string& columns = {}) {
   ReadOptions options;

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <limits>
@@ -78,6 +79,24 @@ FileBytes::FileBytes(const std::filesystem::path& path) {
 
 FileBytes::~FileBytes() {
   if (map_) ::munmap(map_, size_);
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view trim(std::string_view s) {
+  const std::size_t b = s.find_first_not_of(" \t\v\f");
+  if (b == std::string_view::npos) return {};
+  const std::size_t e = s.find_last_not_of(" \t\v\f");
+  return s.substr(b, e - b + 1);
+}
+
+std::string shown(std::string_view token) {
+  if (token.size() <= 40) return std::string(token);
+  return std::string(token.substr(0, 37)) + "...";
 }
 
 bool parse_number(std::string_view token, double& out) noexcept {

@@ -40,6 +40,13 @@ private:
   std::string copy_;
 };
 
+/// ASCII lower case.
+std::string lower(std::string_view s);
+/// `s` without leading and trailing blanks (space, tab, vertical tab, form feed).
+std::string_view trim(std::string_view s);
+/// A token for an error message, cut short when it is long (binary junk, a wrong file).
+std::string shown(std::string_view token);
+
 /// Parses a whole token as a number; false when the token is not entirely a number.
 /// Accepts a leading '+', "nan", "inf" (any case) for floating types.
 bool parse_number(std::string_view token, double& out) noexcept;

@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// File and error helpers shared by the io and cli tests.
+#include <exception>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace pointsurf::test {
+
+/// Writes `bytes` to `path` (binary) and returns the path.
+std::filesystem::path write_bytes(const std::filesystem::path& path, const std::string& bytes);
+/// The whole content of `path` ("" when it cannot be read).
+std::string read_bytes(const std::filesystem::path& path);
+/// Whether `text` contains `part`.
+inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// Runs `f` and returns the message of the exception of type E it throws; records a test
+/// failure (and returns "") when it throws nothing or another type.
+template <typename E, typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
+}  // namespace pointsurf::test
