@@ -61,16 +61,17 @@ public:
   using DistanceType = double;
   using IndexType = std::uint32_t;
 
-  BoundedKnnResult(Neighbor* buffer, std::size_t k, double max_squared_distance)
-      : buffer_(buffer), k_(k), max_squared_(max_squared_distance), bound_(just_above(max_squared_distance)),
+  BoundedKnnResult(const std::uint32_t* original, Neighbor* buffer, std::size_t k, double max_squared_distance)
+      : original_(original), buffer_(buffer), k_(k), max_squared_(max_squared_distance), bound_(just_above(max_squared_distance)),
         worst_(k == 0 ? 0.0 : bound_) {}
 
   std::size_t size() const { return count_; }
   bool full() const { return count_ == k_; }
   double worstDist() const { return worst_; }
 
-  bool addPoint(double squared_distance, std::uint32_t index) {
+  bool addPoint(double squared_distance, std::uint32_t slot_in_tree) {
     if (k_ == 0 || squared_distance > max_squared_) return true;
+    const std::uint32_t index = original_[slot_in_tree];
     if (count_ == k_ && !precedes(squared_distance, index, buffer_[k_ - 1])) return true;
     std::size_t slot = count_ < k_ ? count_++ : k_ - 1;
     while (slot > 0 && precedes(squared_distance, index, buffer_[slot - 1])) {
@@ -83,6 +84,7 @@ public:
   }
 
 private:
+  const std::uint32_t* original_;
   Neighbor* buffer_;
   std::size_t k_;
   std::size_t count_ = 0;
@@ -97,19 +99,20 @@ public:
   using DistanceType = double;
   using IndexType = std::uint32_t;
 
-  RadiusResult(std::vector<Neighbor>& out, double max_squared_distance)
-      : out_(out), max_squared_(max_squared_distance), bound_(just_above(max_squared_distance)) {}
+  RadiusResult(const std::uint32_t* original, std::vector<Neighbor>& out, double max_squared_distance)
+      : original_(original), out_(out), max_squared_(max_squared_distance), bound_(just_above(max_squared_distance)) {}
 
   std::size_t size() const { return out_.size(); }
   bool full() const { return true; }
   double worstDist() const { return bound_; }
 
-  bool addPoint(double squared_distance, std::uint32_t index) {
-    if (squared_distance <= max_squared_) out_.push_back(Neighbor{index, squared_distance});
+  bool addPoint(double squared_distance, std::uint32_t slot_in_tree) {
+    if (squared_distance <= max_squared_) out_.push_back(Neighbor{original_[slot_in_tree], squared_distance});
     return true;
   }
 
 private:
+  const std::uint32_t* original_;
   std::vector<Neighbor>& out_;
   double max_squared_;
   double bound_;
@@ -139,7 +142,8 @@ constexpr std::size_t kChunk = 512;
 struct KdTree::Impl {
   std::vector<Eigen::Vector3d> points;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  ShiftedPoints data;
+  ShiftedPoints data;            // in leaf order once the tree is built
+  std::vector<std::uint32_t> original;  // original index of each slot of `data`
   std::unique_ptr<Index> index;  // refers to `data`, which lives as long as this Impl
 
   // Morton order of `points`, built on the first batch query over the tree's own points.
@@ -158,14 +162,14 @@ struct KdTree::Impl {
   }
 
   void knn(const Eigen::Vector3d& query, std::size_t k, Neighbor* out, std::size_t& count) const {
-    BoundedKnnResult result(out, k, kInfinity);
+    BoundedKnnResult result(original.data(), out, k, kInfinity);
     search(query, result);
     count = result.size();
   }
 
   void hybrid(const Eigen::Vector3d& query, std::size_t k, double squared_radius, Neighbor* out,
               std::size_t& count) const {
-    BoundedKnnResult result(out, k, squared_radius);
+    BoundedKnnResult result(original.data(), out, k, squared_radius);
     search(query, result);
     count = result.size();
   }
@@ -173,7 +177,7 @@ struct KdTree::Impl {
   // Appends the sorted radius neighbours of `query` to `out`.
   void radius_append(const Eigen::Vector3d& query, double squared_radius, std::vector<Neighbor>& out) const {
     const std::size_t first = out.size();
-    RadiusResult result(out, squared_radius);
+    RadiusResult result(original.data(), out, squared_radius);
     search(query, result);
     std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end(), by_distance_then_index);
   }
@@ -241,6 +245,20 @@ KdTree::KdTree(std::span<const Eigen::Vector3d> points, int leaf_size) : impl_(s
     for (std::size_t i = r.begin(); i != r.end(); ++i) impl_->data.shifted[i] = points[i] - impl_->center;
   });
   impl_->index = std::make_unique<Index>(3, impl_->data, nanoflann::KDTreeSingleIndexAdaptorParams(leaf_size));
+  // Store the points in the order the tree's leaves list them, and make the tree's index
+  // array the identity: a leaf scan then reads consecutive memory instead of jumping through
+  // the whole cloud (the search is most of the time of every neighbourhood stage). Results
+  // are mapped back to the caller's indices through `original`.
+  std::vector<std::uint32_t>& slots = impl_->index->vAcc;
+  impl_->original.assign(slots.begin(), slots.end());
+  std::vector<Eigen::Vector3d> leaf_order(points.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      leaf_order[i] = impl_->data.shifted[impl_->original[i]];
+      slots[i] = static_cast<std::uint32_t>(i);
+    }
+  });
+  impl_->data.shifted = std::move(leaf_order);
 }
 
 KdTree::~KdTree() = default;
