@@ -144,7 +144,7 @@ ProgressBar::ProgressBar(std::string label, bool enabled)
 
 ProgressBar::~ProgressBar() {
   if (shown_) {
-    update(1.0);
+    if (last_fraction_ < 1.0) update(1.0);
     std::fputc('\n', stderr);
   }
 }
@@ -166,6 +166,7 @@ void ProgressBar::update(double fraction) {
   last_ = now;
   shown_ = true;
   fraction = std::clamp(fraction, 0.0, 1.0);
+  last_fraction_ = fraction;
   constexpr int width = 30;
   const int filled = static_cast<int>(fraction * width);
   fmt::print(stderr, "\r{:<10} [{}{}] {:3.0f}%  {:.1f} s", label_, std::string(filled, '#'), std::string(width - filled, '.'),

@@ -90,6 +90,7 @@ private:
   std::string label_;
   bool enabled_;
   bool shown_ = false;
+  double last_fraction_ = 0.0;
   std::chrono::steady_clock::time_point start_, last_;
 };
 

@@ -3,6 +3,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <optional>
 #include <vector>
@@ -31,10 +32,20 @@ void mark_against(const PointCloud& cloud, Towards towards, std::vector<std::uin
   });
 }
 
-// Share of agreeing votes (|sum| / sum of |terms|) above which the outward vote decides a
-// component's sign; below it the component counts as open and its normals are turned up (+z).
-// A sphere scores 1, a torus with tube/ring ratio 0.3 about 0.5, a flat terrain tile ~0.
+// Global sign of a component (step 6 of the MST orientation):
+// - mean |n_z| above which a component is made of mostly horizontal surfaces (a plane 1,
+//   terrain with trees and buildings about 0.8, a sphere 0.5, a cube 1/3);
+constexpr double kHorizontalShare = 0.7;
+// - length of the mean unit normal above which it is an open sheet (closed surfaces ~0, a
+//   hemisphere 0.5, a plane 1); a terrain tile whose roofs are still upside down scores ~0.7;
+constexpr double kSheetThreshold = 0.5;
+// - in step 7, share of a region's mean normal along z above which it faces up or down;
+constexpr double kVerticalShare = 0.5;
+// - share of agreeing votes (|sum| / sum of |terms|) above which the outward vote decides:
+//   a sphere scores 1, a torus with tube/ring ratio 0.3 about 0.5.
 constexpr double kOutwardVoteThreshold = 0.05;
+// Angle between neighbouring normals above which the forest edge crosses a crease (step 7).
+constexpr double kCreaseAngleDeg = 45.0;
 
 // Sort keys of graph edges: float weight bits above a 34-bit edge slot.
 constexpr int kSlotBits = 34;
@@ -254,14 +265,17 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
     }
   }
 
-  // 6. Global sign of each component. On a closed surface with outward normals,
-  //    sum n·(p - c) over area-uniform samples approximates 3 x volume > 0 (divergence theorem),
-  //    so it decides from every point rather than from one possibly noisy seed. It also settles
-  //    partial scans of convex-ish objects (a single view of a statue: outward). For surfaces
-  //    with no inside, such as a terrain tile, the sum nearly cancels; there the convention of
-  //    survey data applies: normals point up (+z).
-  std::vector<double> signed_sum(components, 0.0), absolute_sum(components, 0.0);
-  std::vector<double> up_sum(components, 0.0), up_absolute(components, 0.0);
+  // 6. Global sign of each component, decided by all of its points rather than by one possibly
+  //    noisy seed.
+  //    - Terrain-like: mostly horizontal surfaces (mean |n_z| high) forming an open sheet (the
+  //      mean unit normal is long; a closed surface, even a flat closed plate, scores ~0).
+  //      Such data is scanned from above (aerial and ground LiDAR): normals point up (+z).
+  //    - Otherwise, on a closed surface with outward normals, sum n·(p - c) over area-uniform
+  //      samples approximates 3 x volume > 0 (divergence theorem); the same vote settles
+  //      single views of convex-ish objects seen from the side (outward).
+  std::vector<double> signed_sum(components, 0.0), absolute_sum(components, 0.0), horizontal_sum(components, 0.0);
+  std::vector<Eigen::Vector3d> normal_sum(components, Eigen::Vector3d::Zero());
+  std::vector<std::size_t> directed(components, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (!has_direction(normals[i])) continue;
     const std::uint32_t c = component[i];
@@ -269,19 +283,55 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
     const double d = nrm.dot(cloud.positions[i] - origin - sums[c]);
     signed_sum[c] += d;
     absolute_sum[c] += std::abs(d);
-    up_sum[c] += nrm.z();
-    up_absolute[c] += std::abs(nrm.z());
+    horizontal_sum[c] += std::abs(nrm.z());
+    normal_sum[c] += nrm;
+    ++directed[c];
   }
-  std::vector<std::uint8_t> flip_component(components, 0);
+  std::vector<std::uint8_t> flip_component(components, 0), terrain(components, 0);
   for (std::size_t c = 0; c < components; ++c) {
-    if (absolute_sum[c] == 0.0) continue;
-    const double outward = signed_sum[c] / absolute_sum[c];
-    if (std::abs(outward) >= kOutwardVoteThreshold) flip_component[c] = outward < 0.0;
-    else if (up_absolute[c] > 0.0 && std::abs(up_sum[c]) / up_absolute[c] >= kOutwardVoteThreshold) flip_component[c] = up_sum[c] < 0.0;
-    else flip_component[c] = outward < 0.0;
+    if (directed[c] == 0) continue;
+    const double count = double(directed[c]);
+    const Eigen::Vector3d mean_normal = normal_sum[c] / count;
+    const double sheet = mean_normal.norm();  // ~0 closed, 0.5 hemisphere, 1 flat patch
+    terrain[c] = horizontal_sum[c] / count >= kHorizontalShare && sheet >= kSheetThreshold;
+    if (terrain[c]) {
+      flip_component[c] = mean_normal.z() < 0.0;
+    } else if (absolute_sum[c] > 0.0 && std::abs(signed_sum[c]) >= kOutwardVoteThreshold * absolute_sum[c]) {
+      flip_component[c] = signed_sum[c] < 0.0;
+    } else if (std::abs(mean_normal.z()) >= 0.5 * sheet && sheet > 0.0) {
+      flip_component[c] = mean_normal.z() < 0.0;
+    } else {
+      flip_component[c] = signed_sum[c] < 0.0;
+    }
   }
   for (std::size_t i = 0; i < n; ++i)
     if (flip_component[component[i]] && has_direction(normals[i])) flip[i] = !flip[i];
+
+  // 7. Inside terrain (ground with buildings), the propagation must cross creases
+  //    such as the walls between ground and a roof, where the sign of nearly perpendicular
+  //    normals is a guess. Cut the forest at creases into smooth regions, and turn up every
+  //    region that faces up or down: a flat roof is as much "terrain" as the ground.
+  if (std::none_of(terrain.begin(), terrain.end(), [](std::uint8_t u) { return u != 0; })) return components;
+  DisjointSets regions(n);
+  const double crease_cos = std::cos(kCreaseAngleDeg * std::numbers::pi / 180.0);
+  for (std::size_t u = 0; u < n; ++u) {
+    if (!terrain[component[u]] || !has_direction(normals[u])) continue;
+    for (std::size_t e = offsets[u]; e < offsets[u + 1]; ++e) {
+      const std::uint32_t v = adjacency[e];
+      if (v > u && has_direction(normals[v]) &&
+          std::abs(normals[u].normalized().dot(normals[v].normalized())) >= crease_cos)
+        regions.unite(static_cast<std::uint32_t>(u), v);
+    }
+  }
+  std::vector<Eigen::Vector3d> region_sum(n, Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < n; ++i)
+    if (terrain[component[i]] && has_direction(normals[i]))
+      region_sum[regions.find(static_cast<std::uint32_t>(i))] += oriented(static_cast<std::uint32_t>(i)).normalized();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!terrain[component[i]] || !has_direction(normals[i])) continue;
+    const Eigen::Vector3d& mean = region_sum[regions.find(static_cast<std::uint32_t>(i))];
+    if (mean.z() < 0.0 && std::abs(mean.z()) >= kVerticalShare * mean.norm()) flip[i] = !flip[i];
+  }
   return components;
 }
 

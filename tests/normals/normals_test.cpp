@@ -1,4 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 
 #include <algorithm>
@@ -325,13 +326,13 @@ TEST(OrientNormals, OpenHeightFieldPointsUp) {
   EXPECT_EQ(down, 0u);
 }
 
-// A single view of a convex object (an open cap of a sphere) is oriented outward, not up: here
-// the cap faces down (-z), so "up" would be wrong everywhere.
-TEST(OrientNormals, OpenCapOfSphereIsOutward) {
+// A single view of a convex object seen from the side (an open cap of a sphere facing -x) is
+// oriented outward. (Mostly horizontal open sheets follow the survey convention instead: up.)
+TEST(OrientNormals, SideViewOfSphereIsOutward) {
   const PointCloud sphere = test::sample_sphere(30000, 2.0, Vector3d(0, 0, 0), 5);
   PointCloud cap;
   for (std::size_t i = 0; i < sphere.size(); ++i)
-    if (sphere.positions[i].z() < -0.8) {
+    if (sphere.positions[i].x() < -0.8) {
       cap.positions.push_back(sphere.positions[i]);
       cap.normals.push_back(sphere.normals[i]);
     }
@@ -340,6 +341,60 @@ TEST(OrientNormals, OpenCapOfSphereIsOutward) {
   estimate_normals(cap, {.k = 20});
   orient_normals(cap);
   EXPECT_EQ(inward_count(cap.normals, exact), 0u);
+}
+
+// Terrain with a building: ground and a flat roof 15 m higher, joined only through the walls.
+// Propagation has to cross the 90-degree creases; every horizontal surface must still face up.
+TEST(OrientNormals, RoofAndGroundOfTerrainBothFaceUp) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud cloud;
+  const Vector3d offset(596000.0, 243000.0, 70.0);
+  auto inside_building = [](double x, double y) { return x > 30 && x < 50 && y > 30 && y < 50; };
+  for (int i = 0; i < 40000; ++i) {  // ground around the building, 80 m x 80 m
+    const double x = 80 * u(rng), y = 80 * u(rng);
+    if (!inside_building(x, y)) cloud.positions.push_back(offset + Vector3d(x, y, 0.02 * std::sin(x)));
+  }
+  for (int i = 0; i < 2500; ++i) {  // roof
+    const double x = 30 + 20 * u(rng), y = 30 + 20 * u(rng);
+    cloud.positions.push_back(offset + Vector3d(x, y, 15.0));
+  }
+  for (int i = 0; i < 6000; ++i) {  // four walls
+    const double t = 20 * u(rng), z = 15 * u(rng);
+    switch (i % 4) {
+      case 0: cloud.positions.push_back(offset + Vector3d(30 + t, 30, z)); break;
+      case 1: cloud.positions.push_back(offset + Vector3d(30 + t, 50, z)); break;
+      case 2: cloud.positions.push_back(offset + Vector3d(30, 30 + t, z)); break;
+      default: cloud.positions.push_back(offset + Vector3d(50, 30 + t, z)); break;
+    }
+  }
+  estimate_normals(cloud, {.k = 20});
+  orient_normals(cloud);
+  std::size_t horizontal = 0, down = 0;
+  for (const Vector3d& n : cloud.normals) {
+    if (std::abs(n.z()) < 0.9) continue;
+    ++horizontal;
+    down += n.z() < 0.0;
+  }
+  EXPECT_GT(horizontal, 30000u);
+  EXPECT_EQ(down, 0u);
+}
+
+// The shipped aerial LiDAR tile (ground, trees, a building whose roof is joined to the
+// ground only through sparse walls): horizontal surfaces must face up. Before the crease
+// regions of step 7, the roof came out upside down (89 % of horizontal points up).
+TEST(OrientNormals, AerialTileHorizontalSurfacesFaceUp) {
+  PointCloud cloud = read_point_cloud(test::data_path("b9_training.ply")).cloud;
+  estimate_normals(cloud, {.k = 30});
+  orient_normals(cloud);
+  std::size_t horizontal = 0, up = 0;
+  for (const Vector3d& n : cloud.normals) {
+    if (std::abs(n.z()) < 0.9) continue;
+    ++horizontal;
+    up += n.z() > 0.0;
+  }
+  ASSERT_GT(horizontal, 10000u);
+  EXPECT_GT(double(up) / double(horizontal), 0.95);
 }
 
 TEST(OrientNormals, CountsFlipsAndComponents) {
