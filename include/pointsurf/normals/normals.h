@@ -57,13 +57,18 @@ struct OrientResult {
 
 /// Orients `cloud.normals` (which must be present) consistently. Mst (Hoppe et al. 1992):
 /// builds the symmetric kNN graph with edge weights 1 - |ni·nj|, takes its minimum spanning
-/// forest, and propagates the sign along it from one seed per connected component (the point
-/// farthest from the component's centroid). Each component's global sign is then decided by a
-/// vote over all its points: outward when sum n·(p - centroid) clearly says so (closed
-/// surfaces, single views of convex-ish objects), otherwise up (+z, the convention of terrain
-/// and other open survey data). Memory O(k N), no dense structure; graph construction
-/// parallel. Reuses `tree` if given (built over `cloud.positions`). Throws UsageError on
-/// missing normals or bad parameters; CancelledError when `progress` returns false.
+/// forest, and propagates the sign along it from one seed per connected component. Each
+/// component's global sign is then decided by all its points:
+///  - terrain-like components (mostly horizontal surfaces, mean |n_z| >= 0.7, forming an open
+///    sheet) face up (+z), the convention of aerial and ground LiDAR; inside them, smooth
+///    regions cut at creases (> 45 degrees) that face down are turned up (roofs joined to the
+///    ground only through walls);
+///  - other components face outward: sum n·(p - centroid) > 0, which holds for closed surfaces
+///    and for single views of convex objects.
+/// For a scan whose sensor position is known, Viewpoint is the safer choice.
+/// Memory O(k N), no dense structure; graph construction parallel. Reuses `tree` if given
+/// (built over `cloud.positions`). Throws UsageError on missing normals or bad parameters;
+/// CancelledError when `progress` returns false.
 OrientResult orient_normals(PointCloud& cloud, const OrientParams& params = {}, const KdTree* tree = nullptr,
                             const ProgressCallback& progress = {});
 
