@@ -186,6 +186,12 @@ nlohmann::json describe_cloud(const std::filesystem::path& path, const std::stri
 
 }  // namespace
 
+std::string with_file(const std::filesystem::path& path, const std::string& message) {
+  // Some readers name the file in their warnings already.
+  if (message.rfind(path.string(), 0) == 0) return message;
+  return fmt::format("{}: {}", path.string(), message);
+}
+
 CloudReadResult read_cloud_reported(const std::filesystem::path& path, const CommonOptions& common, Report& report) {
   const std::size_t stage = report.begin_stage("read");
   ReadOptions options;
@@ -202,7 +208,7 @@ CloudReadResult read_cloud_reported(const std::filesystem::path& path, const Com
   input["faces"] = result.face_count;
   input["dropped_nonfinite"] = result.dropped_nonfinite;
   report.add_input(input);
-  for (const std::string& w : result.warnings) report.warn(fmt::format("{}: {}", path.string(), w), common.quiet);
+  for (const std::string& w : result.warnings) report.warn(with_file(path, w), common.quiet);
   if (result.dropped_nonfinite > 0)
     report.warn(fmt::format("{}: {} points with NaN/Inf coordinates dropped (--strict makes this an error)", path.string(),
                             result.dropped_nonfinite),

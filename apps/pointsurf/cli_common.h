@@ -94,6 +94,9 @@ private:
   std::chrono::steady_clock::time_point start_, last_;
 };
 
+/// "path: message", unless the message already starts with the path.
+std::string with_file(const std::filesystem::path& path, const std::string& message);
+
 /// Reads a cloud (or a mesh's vertices) with the common options and records input, read stage
 /// and warnings in the report.
 CloudReadResult read_cloud_reported(const std::filesystem::path& path, const CommonOptions& common, Report& report);

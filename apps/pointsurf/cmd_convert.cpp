@@ -52,7 +52,7 @@ void run_convert(const ConvertState& s) {
   report.stage(read_stage)["counts"] = {{"points", mesh.vertex_count()}, {"faces", mesh.triangle_count()}, {"dropped_nonfinite", dropped}};
   report.add_input({{"path", s.input}, {"format", format}, {"points", mesh.vertex_count()}, {"faces", mesh.triangle_count()},
                     {"dropped_nonfinite", dropped}});
-  for (const std::string& w : warnings) report.warn(fmt::format("{}: {}", s.input, w), s.common.quiet);
+  for (const std::string& w : warnings) report.warn(with_file(s.input, w), s.common.quiet);
   if (dropped > 0)
     report.warn(fmt::format("{}: {} points with NaN/Inf coordinates dropped (--strict makes this an error)", s.input, dropped),
                 s.common.quiet);

@@ -43,13 +43,13 @@ void run_info(const InfoState& s) {
       info["dropped_nonfinite"] = r.dropped_nonfinite;
       info["dropped_faces"] = r.dropped_faces;
       info["polygons_triangulated"] = r.polygons_triangulated;
-      for (const std::string& w : r.warnings) report.warn(w, true);
+      for (const std::string& w : r.warnings) report.warn(with_file(s.input, w), true);
       cloud = r.mesh.vertex_cloud();
     } else {
       CloudReadResult r = read_point_cloud(s.input, options);
       info["encoding"] = r.encoding;
       info["dropped_nonfinite"] = r.dropped_nonfinite;
-      for (const std::string& w : r.warnings) report.warn(w, true);
+      for (const std::string& w : r.warnings) report.warn(with_file(s.input, w), true);
       cloud = std::move(r.cloud);
     }
     report.end_stage(stage);

@@ -250,8 +250,9 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
   std::array<double, 3> scale{}, offset{};
   constexpr double kIntMax = std::numeric_limits<std::int32_t>::max();
   for (int a = 0; a < 3; ++a) {
-    // A round offset keeps the stored integers easy to read; 1e-4 keeps 0.05 mm quantisation.
-    offset[a] = options.las_offset ? (*options.las_offset)[a] : std::floor(lo[a] / 1000.0) * 1000.0;
+    // A round offset keeps the stored integers easy to read (truncated towards zero, so data
+    // near the origin keeps offset 0); 1e-4 keeps 0.05 mm quantisation.
+    offset[a] = options.las_offset ? (*options.las_offset)[a] : std::trunc(lo[a] / 1000.0) * 1000.0;
     if (!std::isfinite(offset[a])) throw UsageError(fmt::format("{}: LAS offset {} is not finite", name, "xyz"[a]));
     const double reach = std::max(std::abs(hi[a] - offset[a]), std::abs(lo[a] - offset[a]));
     if (options.las_scale) {

@@ -255,7 +255,9 @@ public:
         seen_face = true;
         read_faces(e);
       } else {
-        if (e.name == "face" && !seen_face)
+        // PCL's PLY writer always declares "element face 0" with no properties for a point
+        // cloud; an empty face element loses nothing, so it earns no warning.
+        if (e.name == "face" && !seen_face && e.count > 0)
           raw_.warnings.push_back(fmt::format("element face has no vertex_indices list; {} faces skipped", e.count));
         skip_element(e);
       }

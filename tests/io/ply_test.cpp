@@ -191,6 +191,43 @@ TEST(Ply, AsciiWithOddOrderSpellingsAndExtraElements) {
   EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{Triangle(0, 1, 2), Triangle(1, 2, 3)}));
 }
 
+// What pcl_pcd2ply / pcl::PLYWriter writes for a point cloud: an empty "element face 0" with
+// no properties, then a "camera" element of floats and ints. Nothing is lost, so no warning.
+TEST(Ply, PclStyleEmptyFaceElementAndCameraGiveNoWarning) {
+  const fs::path path = test::temp_dir("ply_pcl_style") / "pcl.ply";
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\ncomment PCL generated\n"
+      "element vertex 2\nproperty double x\nproperty double y\nproperty double z\n"
+      "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int label\n"
+      "element face 0\n"
+      "element camera 1\n";
+  for (const char* p : {"view_px", "view_py", "view_pz", "x_axisx", "x_axisy", "x_axisz", "y_axisx", "y_axisy", "y_axisz",
+                        "z_axisx", "z_axisy", "z_axisz", "focal", "scalex", "scaley", "centerx", "centery"})
+    bytes += std::string("property float ") + p + "\n";
+  bytes += "property int viewportx\nproperty int viewporty\nproperty float k1\nproperty float k2\nend_header\n";
+  const double xyz[2][3] = {{596648.0625, 243620.015625, 73.5}, {596738.9375, 243731.984375, 97.25}};
+  for (int i = 0; i < 2; ++i) {
+    for (double v : xyz[i]) put<double>(bytes, v, false);
+    for (int c = 0; c < 3; ++c) put<std::uint8_t>(bytes, static_cast<std::uint8_t>(10 * i + c), false);
+    put<std::int32_t>(bytes, i - 1, false);
+  }
+  for (int k = 0; k < 17; ++k) put<float>(bytes, 0.0f, false);
+  put<std::int32_t>(bytes, 2, false);
+  put<std::int32_t>(bytes, 1, false);
+  put<float>(bytes, 0.0f, false);
+  put<float>(bytes, 0.0f, false);
+  write_bytes(path, bytes);
+
+  const CloudReadResult result = read_point_cloud(path);
+  EXPECT_TRUE(result.warnings.empty()) << result.warnings.front();
+  EXPECT_EQ(result.face_count, 0u);
+  ASSERT_EQ(result.cloud.size(), 2u);
+  EXPECT_EQ(result.cloud.positions[1], Vector3d(xyz[1][0], xyz[1][1], xyz[1][2]));
+  EXPECT_EQ(result.cloud.colors[1], Vector3f(10 / 255.0f, 11 / 255.0f, 12 / 255.0f));
+  ASSERT_NE(result.cloud.fields.find("label"), nullptr);
+  EXPECT_EQ(result.cloud.fields.find("label")->values, (std::vector<double>{-1, 0}));
+}
+
 TEST(Ply, DiffuseColoursUshortColoursAndAlpha) {
   const fs::path path = test::temp_dir("ply_diffuse") / "c.ply";
   write_bytes(path,
