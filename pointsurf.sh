@@ -14,9 +14,9 @@ JOBS="$(nproc 2>/dev/null || echo 2)"
 BUILD_PACKAGES=(
   cmake ninja-build g++ make
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev
 )
-BENCH_PACKAGES=(python3-open3d python3-numpy pcl-tools libcgal-demo time)
+BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
 

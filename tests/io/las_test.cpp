@@ -18,6 +18,8 @@
 namespace pointsurf {
 namespace {
 
+using test::expect_error;
+
 using test::write_bytes;
 using test::read_bytes;
 
@@ -103,17 +105,6 @@ const std::vector<double>& field(const PointCloud& cloud, const char* name) {
   EXPECT_NE(f, nullptr) << "missing field " << name;
   static const std::vector<double> none;
   return f ? f->values : none;
-}
-
-// Expects `fn` to throw E with a message containing `part`.
-template <typename E, typename Fn>
-void expect_error(Fn fn, const std::string& part) {
-  try {
-    fn();
-    ADD_FAILURE() << "no exception; expected one containing: " << part;
-  } catch (const E& e) {
-    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << "message: " << e.what() << "\nexpected to contain: " << part;
-  }
 }
 
 TEST(Las, WriteThenReadKeepsGeoreferencedPositionsAndFields) {

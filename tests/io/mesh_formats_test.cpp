@@ -10,10 +10,13 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
+
+using test::expect_error;
 
 std::filesystem::path write_text(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary).write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -23,16 +26,6 @@ std::filesystem::path write_text(const std::filesystem::path& path, const std::s
 std::string read_text(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-template <typename E, typename Fn>
-void expect_error(Fn fn, const std::string& part) {
-  try {
-    fn();
-    ADD_FAILURE() << "no exception; expected one containing: " << part;
-  } catch (const E& e) {
-    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << "message: " << e.what() << "\nexpected to contain: " << part;
-  }
 }
 
 // Unit cube with corner i at (i & 1, i >> 1 & 1, i >> 2 & 1), shifted and scaled so that the

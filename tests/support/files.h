@@ -32,4 +32,15 @@ std::string error_of(F&& f) {
   return {};
 }
 
+/// Expects `fn` to throw E with a message containing `part`.
+template <typename E, typename Fn>
+void expect_error(Fn fn, const std::string& part) {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception; expected one containing: " << part;
+  } catch (const E& e) {
+    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << "message: " << e.what() << "\nexpected to contain: " << part;
+  }
+}
+
 }  // namespace pointsurf::test
