@@ -102,7 +102,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   std::vector<Eigen::Vector3d> normals(n);
   std::vector<double> variation(params.keep_variation ? n : 0);
 
-  const std::vector<std::uint32_t> order = morton_order(cloud.positions);
+  const std::span<const std::uint32_t> order = tree->spatial_order();
   detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
   tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
   tbb::enumerable_thread_specific<std::size_t> degenerate(0);

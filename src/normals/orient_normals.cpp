@@ -114,7 +114,7 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
   std::vector<std::uint32_t> target(slots);
   std::vector<float> weight(slots);
   {
-    const std::vector<std::uint32_t> order = morton_order(cloud.positions);
+    const std::span<const std::uint32_t> order = tree->spatial_order();
     detail::ProgressReporter reporter(progress, 0.0, 0.5, n);
     tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {

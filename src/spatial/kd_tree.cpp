@@ -124,7 +124,7 @@ double checked_squared_radius(const char* where, double radius) {
 }
 
 // Query positions handed out in parallel chunks: the caller's queries in their order, or the
-// tree's own points in Morton order (neighbouring queries then share cache lines).
+// tree's own points in leaf order (neighbouring queries then share cache lines).
 // `slot(pos)` is the query's index in the output, `query(pos)` its position.
 struct QuerySchedule {
   std::span<const Eigen::Vector3d> queries;
@@ -145,15 +145,6 @@ struct KdTree::Impl {
   ShiftedPoints data;            // in leaf order once the tree is built
   std::vector<std::uint32_t> original;  // original index of each slot of `data`
   std::unique_ptr<Index> index;  // refers to `data`, which lives as long as this Impl
-
-  // Morton order of `points`, built on the first batch query over the tree's own points.
-  mutable std::once_flag order_once;
-  mutable std::vector<std::uint32_t> order;
-
-  std::span<const std::uint32_t> morton() const {
-    std::call_once(order_once, [this] { order = morton_order(points); });
-    return order;
-  }
 
   template <class ResultSet>
   void search(const Eigen::Vector3d& query, ResultSet& result) const {
@@ -183,7 +174,7 @@ struct KdTree::Impl {
   }
 
   QuerySchedule schedule(std::span<const Eigen::Vector3d> queries) const {
-    if (queries.empty()) return {points, morton()};
+    if (queries.empty()) return {points, original};
     return {queries, {}};
   }
 
@@ -268,6 +259,8 @@ KdTree& KdTree::operator=(KdTree&&) noexcept = default;
 std::size_t KdTree::size() const noexcept { return impl_->points.size(); }
 
 const Eigen::Vector3d& KdTree::point(std::size_t i) const noexcept { return impl_->points[i]; }
+
+std::span<const std::uint32_t> KdTree::spatial_order() const noexcept { return impl_->original; }
 
 void KdTree::knn(const Eigen::Vector3d& query, std::size_t k, std::vector<Neighbor>& out) const {
   out.resize(std::min(k, size()));

@@ -53,6 +53,11 @@ public:
   std::size_t size() const noexcept;
   const Eigen::Vector3d& point(std::size_t i) const noexcept;
 
+  /// The tree's points in the order its leaves list them: a spatial order (like a Morton
+  /// order) that per-point stages should visit points in, so that neighbouring queries share
+  /// cache lines. A permutation of 0..N-1, computed once when the tree is built.
+  std::span<const std::uint32_t> spatial_order() const noexcept;
+
   /// The k nearest points to `query`, nearest first, into `out` (cleared first; min(k, N)
   /// entries). Ties are broken by index. A query point that is in the tree finds itself.
   void knn(const Eigen::Vector3d& query, std::size_t k, std::vector<Neighbor>& out) const;
@@ -62,7 +67,7 @@ public:
   void hybrid(const Eigen::Vector3d& query, std::size_t k, double radius, std::vector<Neighbor>& out) const;
 
   /// Batch versions over many queries, in parallel. For the tree's own points pass
-  /// `queries = {}`, which uses the tree's points and visits them in spatial order.
+  /// `queries = {}`, which uses the tree's points and visits them in spatial_order().
   NeighborLists knn_all(std::span<const Eigen::Vector3d> queries, std::size_t k) const;
   NeighborLists radius_all(std::span<const Eigen::Vector3d> queries, double radius) const;
   NeighborLists hybrid_all(std::span<const Eigen::Vector3d> queries, std::size_t k, double radius) const;
