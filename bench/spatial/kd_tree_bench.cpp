@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Micro-benchmarks of the kd-tree: build, and batch kNN in Morton order vs input order.
+// Micro-benchmarks of the kd-tree: build, and batch kNN in the tree's spatial order vs input order.
 #include <random>
 #include <vector>
 
@@ -30,13 +30,13 @@ void build(benchmark::State& state) {
 }
 BENCHMARK(build)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 
-void knn_all_morton(benchmark::State& state) {
+void knn_all_spatial_order(benchmark::State& state) {
   const auto pts = random_sphere(static_cast<std::size_t>(state.range(0)));
   const pointsurf::KdTree tree(pts);
   for (auto _ : state) benchmark::DoNotOptimize(tree.knn_all({}, 30).neighbors.data());
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
-BENCHMARK(knn_all_morton)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(knn_all_spatial_order)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 
 void knn_all_input_order(benchmark::State& state) {
   const auto pts = random_sphere(static_cast<std::size_t>(state.range(0)));

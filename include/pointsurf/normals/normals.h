@@ -31,7 +31,7 @@ struct NormalResult {
 /// neighbourhood covariance (Hoppe et al. 1992). Writes `cloud.normals` (N×3) and, when asked,
 /// the field "variation". Sign is arbitrary (call orient_normals afterwards) except that
 /// existing normals, if any, keep their side. Reuses `tree` if given (it must be built over
-/// `cloud.positions`). Parallel (oneTBB) in Morton order; throws UsageError for k < 3, a
+/// `cloud.positions`). Parallel (oneTBB) in the tree's spatial order; throws UsageError for k < 3, a
 /// negative radius or fewer than 3 points; CancelledError when `progress` returns false.
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params = {}, const KdTree* tree = nullptr,
                               const ProgressCallback& progress = {});
