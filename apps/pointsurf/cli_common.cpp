@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -186,6 +187,11 @@ nlohmann::json describe_cloud(const std::filesystem::path& path, const std::stri
 
 }  // namespace
 
+std::string ascii_lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
 std::string with_file(const std::filesystem::path& path, const std::string& message) {
   // Some readers name the file in their warnings already.
   if (message.rfind(path.string(), 0) == 0) return message;
@@ -197,7 +203,7 @@ CloudReadResult read_cloud_reported(const std::filesystem::path& path, const Com
   ReadOptions options;
   options.strict = common.strict;
   options.columns = common.columns;
-  options.format = common.input_format;
+  options.format = ascii_lower(common.input_format);
   CloudReadResult result = read_point_cloud(path, options);
   report.end_stage(stage);
   nlohmann::json& s = report.stage(stage);
@@ -217,25 +223,25 @@ CloudReadResult read_cloud_reported(const std::filesystem::path& path, const Com
   return result;
 }
 
-void warn_lost_attributes(const std::filesystem::path& path, const PointCloud& cloud, std::size_t faces,
+void warn_lost_attributes(const std::filesystem::path& path, bool normals, bool colors, const FieldSet& fields, std::size_t faces,
                           const WriteOptions& options, const CommonOptions& common, Report& report) {
   const std::string format = options.format.empty() ? format_from_extension(path) : options.format;
   std::vector<std::string> lost;
   const bool holds_faces = format == "ply" || format == "off" || format == "obj" || format == "stl";
   if (faces > 0 && !holds_faces) lost.push_back(fmt::format("{} faces", faces));
   if (format == "stl") {
-    if (cloud.has_normals()) lost.push_back("normals");
-    if (cloud.has_colors()) lost.push_back("colours");
+    if (normals) lost.push_back("normals");
+    if (colors) lost.push_back("colours");
   }
-  if (format == "las" && cloud.has_normals()) lost.push_back("normals");
-  if (format == "xyz" && path.extension() != ".csv" && !cloud.fields.empty()) lost.push_back("field names (values are kept as columns)");
+  if (format == "las" && normals) lost.push_back("normals");
+  if (format == "xyz" && ascii_lower(path.extension().string()) != ".csv" && !fields.empty()) lost.push_back("field names (values are kept as columns)");
   if (format == "off" || format == "obj" || format == "stl") {
-    for (const ScalarField& f : cloud.fields) lost.push_back(fmt::format("field '{}'", f.name));
+    for (const ScalarField& f : fields) lost.push_back(fmt::format("field '{}'", f.name));
   } else if (format == "las") {
-    static const char* const las_fields[] = {"intensity",       "return_number", "number_of_returns", "classification",
-                                             "gps_time",        "user_data",     "scan_angle",        "point_source_id",
-                                             "scan_direction",  "edge_of_flight_line", "scanner_channel", "classification_flags", "nir"};
-    for (const ScalarField& f : cloud.fields) {
+    // The slots write_las fills (formats 6 and 7 have no NIR).
+    static const char* const las_fields[] = {"intensity", "return_number", "number_of_returns", "classification",
+                                             "gps_time",  "user_data",     "scan_angle",        "point_source_id"};
+    for (const ScalarField& f : fields) {
       const bool known = std::any_of(std::begin(las_fields), std::end(las_fields), [&](const char* n) { return f.name == n; });
       if (!known) lost.push_back(fmt::format("field '{}'", f.name));
     }
@@ -250,7 +256,7 @@ void warn_lost_attributes(const std::filesystem::path& path, const PointCloud& c
 void write_cloud_reported(const std::filesystem::path& path, const PointCloud& cloud, const OutputOptions& out,
                           const CommonOptions& common, Report& report) {
   const WriteOptions options = out.to_write_options();
-  warn_lost_attributes(path, cloud, 0, options, common, report);
+  warn_lost_attributes(path, cloud.has_normals(), cloud.has_colors(), cloud.fields, 0, options, common, report);
   const std::size_t stage = report.begin_stage("write");
   write_point_cloud(path, cloud, options);
   report.end_stage(stage);

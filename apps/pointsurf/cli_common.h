@@ -94,6 +94,9 @@ private:
   std::chrono::steady_clock::time_point start_, last_;
 };
 
+/// ASCII lower case (format names and extensions are matched case-insensitively).
+std::string ascii_lower(std::string text);
+
 /// "path: message", unless the message already starts with the path.
 std::string with_file(const std::filesystem::path& path, const std::string& message);
 
@@ -105,7 +108,7 @@ void write_cloud_reported(const std::filesystem::path& path, const PointCloud& c
                           const CommonOptions& common, Report& report);
 
 /// Adds the warnings about attributes the output format cannot hold.
-void warn_lost_attributes(const std::filesystem::path& path, const PointCloud& cloud, std::size_t faces,
+void warn_lost_attributes(const std::filesystem::path& path, bool normals, bool colors, const FieldSet& fields, std::size_t faces,
                           const WriteOptions& options, const CommonOptions& common, Report& report);
 
 /// A registered subcommand: its CLI11 app and the function that runs it after parsing.

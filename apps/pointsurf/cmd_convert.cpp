@@ -24,12 +24,12 @@ void run_convert(const ConvertState& s) {
                          {"compressed", s.output.compressed}};
   const WriteOptions write_options = s.output.to_write_options();
   format_from_extension(s.output_path);  // a bad output extension is a usage error before any reading
-  const std::string format = s.common.input_format.empty() ? detect_format(s.input) : s.common.input_format;
+  const std::string format = s.common.input_format.empty() ? detect_format(s.input) : ascii_lower(s.common.input_format);
   const bool mesh_format = format == "ply" || format == "off" || format == "obj" || format == "stl";
   ReadOptions options;
   options.strict = s.common.strict;
   options.columns = s.common.columns;
-  options.format = s.common.input_format;
+  options.format = format;  // detected once here, not again by the reader
 
   TriangleMesh mesh;
   const std::size_t read_stage = report.begin_stage("read");
@@ -58,7 +58,8 @@ void run_convert(const ConvertState& s) {
                 s.common.quiet);
   if (mesh.vertices.empty()) throw InputError(fmt::format("{}: no points", s.input));
 
-  warn_lost_attributes(s.output_path, mesh.vertex_cloud(), mesh.triangle_count(), write_options, s.common, report);
+  warn_lost_attributes(s.output_path, !mesh.vertex_normals.empty(), !mesh.vertex_colors.empty(), mesh.vertex_fields, mesh.triangle_count(),
+                       write_options, s.common, report);
   const std::size_t write_stage = report.begin_stage("write");
   write_mesh(s.output_path, mesh, write_options);
   report.end_stage(write_stage);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -24,7 +25,7 @@ std::string scalar_type_name(ScalarType t) { return std::string(scalar_type_ply_
 void run_info(const InfoState& s) {
   Report report("info");
   report.parameters() = {{"input", s.input}};
-  const std::string format = s.common.input_format.empty() ? detect_format(s.input) : s.common.input_format;
+  const std::string format = s.common.input_format.empty() ? detect_format(s.input) : ascii_lower(s.common.input_format);
   const bool mesh_format = format == "ply" || format == "off" || format == "obj" || format == "stl";
 
   PointCloud cloud;
@@ -35,7 +36,7 @@ void run_info(const InfoState& s) {
     ReadOptions options;
     options.strict = s.common.strict;
     options.columns = s.common.columns;
-    options.format = s.common.input_format;
+    options.format = format;  // detected once above, not again by the reader
     if (mesh_format) {
       MeshReadResult r = read_mesh(s.input, options);
       faces = r.mesh.triangle_count();
@@ -44,7 +45,11 @@ void run_info(const InfoState& s) {
       info["dropped_faces"] = r.dropped_faces;
       info["polygons_triangulated"] = r.polygons_triangulated;
       for (const std::string& w : r.warnings) report.warn(with_file(s.input, w), true);
-      cloud = r.mesh.vertex_cloud();
+      // The mesh is not used again: its vertex data moves into the cloud instead of being copied.
+      cloud.positions = std::move(r.mesh.vertices);
+      cloud.normals = std::move(r.mesh.vertex_normals);
+      cloud.colors = std::move(r.mesh.vertex_colors);
+      cloud.fields = std::move(r.mesh.vertex_fields);
     } else {
       CloudReadResult r = read_point_cloud(s.input, options);
       info["encoding"] = r.encoding;

@@ -73,7 +73,7 @@ void run_normals(const NormalsState& s) {
   params.radius = s.radius;
   // --radius alone: radius neighbourhoods; with an explicit --k as well: hybrid (at most k within r).
   if (s.radius > 0.0) params.neighborhood = s.k_option->count() > 0 ? NeighborhoodKind::Hybrid : NeighborhoodKind::Radius;
-  format_from_extension(s.output_path);
+  format_from_extension(s.output_path);  // an unknown output extension fails now, not after the work
 
   Report report("normals");
   report.parameters() = {{"input", s.input},

@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   using namespace pointsurf;
   CLI::App app{"pointsurf " POINTSURF_VERSION
                ": from a raw 3D scan (point cloud) to a verified surface.\n"
-               "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.2-1.4, OFF, OBJ, STL.\n"
+               "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.0-1.4, OFF, OBJ, STL.\n"
                "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.",
                "pointsurf"};
   app.require_subcommand(1);

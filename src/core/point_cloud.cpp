@@ -41,6 +41,11 @@ PointCloud PointCloud::select(std::span<const std::size_t> indices) const {
 }
 
 void PointCloud::append(const PointCloud& other) {
+  if (&other == this) {  // inserting a vector's own range into itself is undefined
+    const PointCloud copy = other;
+    append(copy);
+    return;
+  }
   const std::size_t n0 = size(), n1 = other.size();
   const bool normals_out = has_normals() || other.has_normals();
   const bool colors_out = has_colors() || other.has_colors();

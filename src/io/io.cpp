@@ -4,7 +4,6 @@
 #include "pointsurf/io/io.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -33,13 +32,6 @@ std::string read_head(const std::filesystem::path& path, std::size_t bytes, std:
   head.resize(std::fread(head.data(), 1, bytes, f));
   std::fclose(f);
   return head;
-}
-
-bool starts_with_ci(std::string_view s, std::string_view prefix) {
-  if (s.size() < prefix.size()) return false;
-  for (std::size_t i = 0; i < prefix.size(); ++i)
-    if (std::tolower(static_cast<unsigned char>(s[i])) != std::tolower(static_cast<unsigned char>(prefix[i]))) return false;
-  return true;
 }
 
 // First non-blank, non-comment line of `head`.
@@ -98,7 +90,7 @@ std::string detect_format(const std::filesystem::path& path) {
     const auto count = io::detail::load_value<std::uint32_t>(head.data() + 80);
     if (84 + 50 * static_cast<std::uintmax_t>(count) == size) return "stl";
   }
-  if (starts_with_ci(head, "# .PCD") || head.rfind("VERSION", 0) == 0 || head.rfind("FIELDS", 0) == 0) return "pcd";
+  if (lower(std::string_view(head).substr(0, 6)) == "# .pcd" || head.rfind("VERSION", 0) == 0 || head.rfind("FIELDS", 0) == 0) return "pcd";
   const std::string_view first = first_content_line(head, '#');
   if (first.rfind("solid", 0) == 0 && head.find("facet") != std::string::npos) return "stl";
   if (first.rfind("solid", 0) == 0 && size < 200) return "stl";
@@ -151,9 +143,10 @@ io::detail::RawData read_raw(const std::filesystem::path& path, const ReadOption
 
 bool finite(const Vector3d& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
 
-// Drops points with NaN/Inf coordinates; returns old index -> new index (-1 dropped), or an
-// empty vector when nothing was dropped.
-std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& path, bool strict, std::size_t& dropped) {
+// Drops points with NaN/Inf coordinates; returns old index -> new index (-1 dropped) when
+// `want_remap` (meshes, whose faces need it), or an empty vector when nothing was dropped.
+std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& path, bool strict, std::size_t& dropped,
+                                bool want_remap) {
   std::size_t first_bad = cloud.size();
   for (std::size_t i = 0; i < cloud.size(); ++i)
     if (!finite(cloud.positions[i])) { first_bad = i; break; }
@@ -162,11 +155,14 @@ std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& 
     throw InputError(fmt::format("{}: point {}: non-finite coordinate ({}, {}, {}); without --strict such points are dropped and counted",
                                  display_name(path), first_bad, cloud.positions[first_bad].x(), cloud.positions[first_bad].y(),
                                  cloud.positions[first_bad].z()));
-  std::vector<int> remap(cloud.size(), -1);
+  std::vector<int> remap(want_remap ? cloud.size() : 0, -1);
   std::vector<std::size_t> keep;
   keep.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    if (finite(cloud.positions[i])) { remap[i] = static_cast<int>(keep.size()); keep.push_back(i); }
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!finite(cloud.positions[i])) continue;
+    if (want_remap) remap[i] = static_cast<int>(keep.size());
+    keep.push_back(i);
+  }
   dropped += cloud.size() - keep.size();
   cloud = cloud.select(keep);
   return remap;
@@ -184,7 +180,7 @@ CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOp
   if (options.strict && raw.dropped_nonfinite > 0)
     throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
                                  display_name(path), raw.dropped_nonfinite));
-  drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite);
+  drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, false);
   raw.cloud.validate();
   result.cloud = std::move(raw.cloud);
   return result;
@@ -196,7 +192,7 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
   result.encoding = raw.encoding;
   result.warnings = std::move(raw.warnings);
   result.dropped_nonfinite = raw.dropped_nonfinite;
-  const std::vector<int> remap = drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite);
+  const std::vector<int> remap = drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, true);
   const int n = static_cast<int>(raw.cloud.size());
   std::vector<Triangle> triangles;
   triangles.reserve(raw.triangles.size() + raw.polygons.size());

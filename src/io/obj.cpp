@@ -22,7 +22,7 @@ std::size_t resolve_index(std::string_view token, std::size_t defined, const cha
                           std::size_t line) {
   long long index = 0;
   if (!parse_number(token, index))
-    throw InputError(fmt::format("{}: line {}: expected a {} index, got '{}'", name, line, what, token));
+    throw InputError(fmt::format("{}: line {}: expected a {} index, got '{}'", name, line, what, shown(token)));
   if (index == 0) throw InputError(fmt::format("{}: line {}: {} index 0: OBJ indices start at 1", name, line, what));
   const long long resolved = index > 0 ? index - 1 : static_cast<long long>(defined) + index;
   if (resolved < 0 || resolved >= static_cast<long long>(defined))
@@ -69,7 +69,7 @@ RawData read_obj(const std::filesystem::path& path, const ReadOptions&) {
       double v[7];
       for (std::size_t k = 0; k < values; ++k)
         if (!parse_number(tokens[k + 1], v[k]))
-          throw InputError(fmt::format("{}: line {}: vertex: expected a number, got '{}'", name, cursor.line_number(), tokens[k + 1]));
+          throw InputError(fmt::format("{}: line {}: vertex: expected a number, got '{}'", name, cursor.line_number(), shown(tokens[k + 1])));
       cloud.positions.emplace_back(v[0], v[1], v[2]);
       if (values >= 6) {
         const std::size_t c = values - 3;
@@ -85,7 +85,7 @@ RawData read_obj(const std::filesystem::path& path, const ReadOptions&) {
       double v[3];
       for (std::size_t k = 0; k < 3; ++k)
         if (!parse_number(tokens[k + 1], v[k]))
-          throw InputError(fmt::format("{}: line {}: vertex normal: expected a number, got '{}'", name, cursor.line_number(), tokens[k + 1]));
+          throw InputError(fmt::format("{}: line {}: vertex normal: expected a number, got '{}'", name, cursor.line_number(), shown(tokens[k + 1])));
       file_normals.emplace_back(v[0], v[1], v[2]);
     } else if (key == "f") {
       if (values < 3)
@@ -180,8 +180,8 @@ void write_obj(const std::filesystem::path& path, const PointCloud& cloud, const
       out.write("\n");
     }
   for (const Triangle& t : triangles) {
-    if (normals) out.write(fmt::format("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1));
-    else out.write(fmt::format("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1));
+    if (normals) out.print("f {0}//{0} {1}//{1} {2}//{2}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    else out.print("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
   }
   out.close();
 }

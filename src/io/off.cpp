@@ -64,7 +64,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
   split_tokens(line, tokens);
   OffKind kind;
   if (!parse_keyword(tokens[0], kind))
-    throw InputError(fmt::format("{}: line {}: expected the keyword OFF, COFF, NOFF or CNOFF, got '{}'", name, cursor.line_number(), tokens[0]));
+    throw InputError(fmt::format("{}: line {}: expected the keyword OFF, COFF, NOFF or CNOFF, got '{}'", name, cursor.line_number(), shown(tokens[0])));
   // The counts may follow the keyword on the same line.
   tokens.erase(tokens.begin());
   if (tokens.empty()) {
@@ -76,7 +76,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
     throw InputError(fmt::format("{}: line {}: expected the vertex, face and edge counts, got {} values", name, cursor.line_number(), tokens.size()));
   for (std::size_t i = 0; i < tokens.size(); ++i)
     if (!parse_number(tokens[i], counts[i]) || counts[i] < 0)
-      throw InputError(fmt::format("{}: line {}: expected a non-negative count, got '{}'", name, cursor.line_number(), tokens[i]));
+      throw InputError(fmt::format("{}: line {}: expected a non-negative count, got '{}'", name, cursor.line_number(), shown(tokens[i])));
   const auto vertex_count = static_cast<std::size_t>(counts[0]);
   const auto face_count = static_cast<std::size_t>(counts[1]);
 
@@ -104,7 +104,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
                                    kind.normals ? "values (x y z nx ny nz)" : "coordinates", tokens.size()));
     for (std::size_t k = 0; k < coords; ++k)
       if (!parse_number(tokens[k], values[k]))
-        throw InputError(fmt::format("{}: line {} (vertex {}): expected a number, got '{}'", name, cursor.line_number(), v, tokens[k]));
+        throw InputError(fmt::format("{}: line {} (vertex {}): expected a number, got '{}'", name, cursor.line_number(), v, shown(tokens[k])));
     cloud.positions.emplace_back(values[0], values[1], values[2]);
     if (kind.normals) cloud.normals.emplace_back(values[3], values[4], values[5]);
     if (kind.colors) {
@@ -116,7 +116,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
       for (std::size_t k = 0; k < 3; ++k) {
         const std::string_view t = tokens[coords + k];
         if (!parse_number(t, c[static_cast<int>(k)]))
-          throw InputError(fmt::format("{}: line {} (vertex {}): expected a colour value, got '{}'", name, cursor.line_number(), v, t));
+          throw InputError(fmt::format("{}: line {} (vertex {}): expected a colour value, got '{}'", name, cursor.line_number(), v, shown(t)));
         colors_are_integers = colors_are_integers && integer_syntax(t);
         max_color = std::max(max_color, c[static_cast<int>(k)]);
       }
@@ -138,7 +138,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
     split_tokens(line, tokens);
     long long corners = 0;
     if (!parse_number(tokens[0], corners) || corners < 0)
-      throw InputError(fmt::format("{}: line {} (face {}): expected the number of indices, got '{}'", name, cursor.line_number(), f, tokens[0]));
+      throw InputError(fmt::format("{}: line {} (face {}): expected the number of indices, got '{}'", name, cursor.line_number(), f, shown(tokens[0])));
     if (tokens.size() - 1 < static_cast<std::size_t>(corners))
       throw InputError(fmt::format("{}: line {} (face {}): {} indices announced, {} given", name, cursor.line_number(), f, corners,
                                    tokens.size() - 1));
@@ -148,7 +148,7 @@ RawData read_off(const std::filesystem::path& path, const ReadOptions&) {
       long long index = 0;
       if (!parse_number(tokens[static_cast<std::size_t>(k)], index))
         throw InputError(fmt::format("{}: line {} (face {}): expected a vertex index, got '{}'", name, cursor.line_number(), f,
-                                     tokens[static_cast<std::size_t>(k)]));
+                                     shown(tokens[static_cast<std::size_t>(k)])));
       if (index < 0 || static_cast<std::size_t>(index) >= vertex_count)
         throw InputError(fmt::format("{}: line {} (face {}): vertex index {} out of range [0, {})", name, cursor.line_number(), f, index,
                                      vertex_count));
@@ -184,11 +184,11 @@ void write_off(const std::filesystem::path& path, const PointCloud& cloud, const
     if (colors) {
       const Vector3f& c = cloud.colors[i];
       auto byte = [](float v) { return static_cast<int>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
-      out.write(fmt::format(" {} {} {} 255", byte(c.x()), byte(c.y()), byte(c.z())));
+      out.print(" {} {} {} 255", byte(c.x()), byte(c.y()), byte(c.z()));
     }
     out.write("\n");
   }
-  for (const Triangle& t : triangles) out.write(fmt::format("3 {} {} {}\n", t[0], t[1], t[2]));
+  for (const Triangle& t : triangles) out.print("3 {} {} {}\n", t[0], t[1], t[2]);
   out.close();
 }
 

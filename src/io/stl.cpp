@@ -100,7 +100,7 @@ RawData read_ascii(std::string_view text, const std::string& name) {
   Triangle t;
   int corner = 0;
   auto fail = [&](std::string_view expected) {
-    const std::string got = tokens.empty() ? std::string("an empty line") : fmt::format("'{}'", tokens[0]);
+    const std::string got = tokens.empty() ? std::string("an empty line") : fmt::format("'{}'", shown(tokens[0]));
     throw InputError(fmt::format("{}: line {}: expected {}, got {}", name, cursor.line_number(), expected, got));
   };
   auto parse_vertex = [&]() {
@@ -108,7 +108,7 @@ RawData read_ascii(std::string_view text, const std::string& name) {
     double v[3];
     for (int k = 0; k < 3; ++k)
       if (!parse_number(tokens[static_cast<std::size_t>(k) + 1], v[k]))
-        throw InputError(fmt::format("{}: line {}: vertex: expected a number, got '{}'", name, cursor.line_number(), tokens[static_cast<std::size_t>(k) + 1]));
+        throw InputError(fmt::format("{}: line {}: vertex: expected a number, got '{}'", name, cursor.line_number(), shown(tokens[static_cast<std::size_t>(k) + 1])));
     return Vector3d(v[0], v[1], v[2]);
   };
 
@@ -191,7 +191,7 @@ void write_stl(const std::filesystem::path& path, const PointCloud& cloud, const
     out.write("solid pointsurf\n");
     for (const Triangle& t : triangles) {
       const Vector3f n = facet_normal(p[t[0]], p[t[1]], p[t[2]]);
-      out.write(fmt::format("  facet normal {} {} {}\n    outer loop\n", n.x(), n.y(), n.z()));
+      out.print("  facet normal {} {} {}\n    outer loop\n", n.x(), n.y(), n.z());
       for (int c = 0; c < 3; ++c) {
         out.write("      vertex");
         for (int k = 0; k < 3; ++k) {

@@ -133,7 +133,9 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   result.degenerate = degenerate.combine(std::plus<>());
   cloud.normals = std::move(normals);
   if (params.keep_variation) {
-    ScalarField& field = cloud.fields.add("variation", n, ScalarType::Float32);
+    // Count 0: the values are moved in next. A "variation" field already there keeps its old
+    // type through add(), hence the explicit type.
+    ScalarField& field = cloud.fields.add("variation", 0, ScalarType::Float32);
     field.type = ScalarType::Float32;
     field.values = std::move(variation);
   }

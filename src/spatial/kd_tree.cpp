@@ -5,7 +5,6 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <mutex>
 
 #include <fmt/format.h>
 #include <nanoflann.hpp>

@@ -48,6 +48,16 @@ TEST(PointCloud, AppendFillsMissingAttributes) {
   EXPECT_EQ(a.fields.find("label")->values, (std::vector<double>{0, 0, 0, 5}));
 }
 
+TEST(PointCloud, AppendToItselfDoubles) {
+  PointCloud a = test::sample_sphere(4);
+  a.fields.add("label", 4).values = {1, 2, 3, 4};
+  a.append(a);
+  a.validate();
+  ASSERT_EQ(a.size(), 8u);
+  EXPECT_EQ(a.positions[5], a.positions[1]);
+  EXPECT_EQ(a.fields.find("label")->values, (std::vector<double>{1, 2, 3, 4, 1, 2, 3, 4}));
+}
+
 TEST(BoundingBox, OfPointsAndEmpty) {
   EXPECT_TRUE(bounding_box({}).empty());
   std::vector<Vector3d> pts{{1, -2, 3}, {-1, 5, 0}, {6.5e6, 0, 0}};

@@ -8,10 +8,12 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iterator>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -103,6 +105,13 @@ public:
 
   void write(const void* data, std::size_t size);
   void write(std::string_view text) { write(text.data(), text.size()); }
+  /// Appends formatted text; per-record lines go through fmt's inline buffer, not a std::string.
+  template <typename... Args>
+  void print(fmt::format_string<Args...> format, Args&&... args) {
+    fmt::memory_buffer text;
+    fmt::format_to(std::back_inserter(text), format, std::forward<Args>(args)...);
+    write(text.data(), text.size());
+  }
   template <typename T>
   void write_value(T value, bool big = false) {
     if (big != (std::endian::native == std::endian::big)) value = byteswap_value(value);
