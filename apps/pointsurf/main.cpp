@@ -22,6 +22,12 @@ int main(int argc, char** argv) {
                "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.0-1.4, OFF, OBJ, STL.\n"
                "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.",
                "pointsurf"};
+  app.footer(
+      "Examples:\n"
+      "  pointsurf info scan.las --json\n"
+      "  pointsurf convert scan.pcd scan.ply\n"
+      "  pointsurf normals scan.xyz oriented.ply --k 30 --orient mst --report run.json\n"
+      "Every command takes --report FILE.json, --threads N, --quiet, --strict; see 'pointsurf COMMAND --help'.");
   app.require_subcommand(1);
   app.set_version_flag("--version", POINTSURF_VERSION);
   std::vector<cli::Command> commands;
