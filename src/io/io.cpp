@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <unistd.h>
 
@@ -192,6 +193,10 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
   result.encoding = raw.encoding;
   result.warnings = std::move(raw.warnings);
   result.dropped_nonfinite = raw.dropped_nonfinite;
+  // Triangles index vertices with int (as every mesh format in the field does).
+  if (raw.cloud.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw InputError(fmt::format("{}: {} vertices: meshes of more than {} vertices are not supported", display_name(path),
+                                 raw.cloud.size(), std::numeric_limits<int>::max()));
   const std::vector<int> remap = drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, true);
   const int n = static_cast<int>(raw.cloud.size());
   std::vector<Triangle> triangles;
