@@ -479,18 +479,6 @@ char pcd_type_letter(ScalarType t) {
   }
 }
 
-// Nearest representable integer; NaN becomes 0.
-template <typename T>
-T to_integer(double v) {
-  if (std::isnan(v)) return 0;
-  constexpr double lo = static_cast<double>(std::numeric_limits<T>::min());
-  constexpr double hi = static_cast<double>(std::numeric_limits<T>::max());
-  const double r = std::round(v);
-  if (r <= lo) return std::numeric_limits<T>::min();
-  if (r >= hi) return std::numeric_limits<T>::max();  // hi may round up to 2^63 or 2^64
-  return static_cast<T>(r);
-}
-
 std::uint32_t packed_rgb(const Vector3f& c) {
   auto byte = [](float v) { return static_cast<std::uint32_t>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0)); };
   return (byte(c.x()) << 16) | (byte(c.y()) << 8) | byte(c.z());
@@ -519,17 +507,17 @@ void store(char* dst, const OutColumn& col, const PointCloud& cloud, std::size_t
     else put(v);
   } else if (col.type == 'I') {
     switch (col.size) {
-      case 1: put(to_integer<std::int8_t>(v)); break;
-      case 2: put(to_integer<std::int16_t>(v)); break;
-      case 4: put(to_integer<std::int32_t>(v)); break;
-      default: put(to_integer<std::int64_t>(v)); break;
+      case 1: put(to_stored<std::int8_t>(v)); break;
+      case 2: put(to_stored<std::int16_t>(v)); break;
+      case 4: put(to_stored<std::int32_t>(v)); break;
+      default: put(to_stored<std::int64_t>(v)); break;
     }
   } else {
     switch (col.size) {
-      case 1: put(to_integer<std::uint8_t>(v)); break;
-      case 2: put(to_integer<std::uint16_t>(v)); break;
-      case 4: put(to_integer<std::uint32_t>(v)); break;
-      default: put(to_integer<std::uint64_t>(v)); break;
+      case 1: put(to_stored<std::uint8_t>(v)); break;
+      case 2: put(to_stored<std::uint16_t>(v)); break;
+      case 4: put(to_stored<std::uint32_t>(v)); break;
+      default: put(to_stored<std::uint64_t>(v)); break;
     }
   }
 }
@@ -546,8 +534,8 @@ void write_text_value(FileWriter& out, const OutColumn& col, const PointCloud& c
       return;
     }
     if (col.type == 'F') r = std::to_chars(text, text + sizeof(text), static_cast<float>(v));
-    else if (col.type == 'I') r = std::to_chars(text, text + sizeof(text), to_integer<std::int64_t>(v));
-    else r = std::to_chars(text, text + sizeof(text), to_integer<std::uint64_t>(v));
+    else if (col.type == 'I') r = std::to_chars(text, text + sizeof(text), to_stored<std::int64_t>(v));
+    else r = std::to_chars(text, text + sizeof(text), to_stored<std::uint64_t>(v));
   }
   out.write(text, static_cast<std::size_t>(r.ptr - text));
 }

@@ -580,20 +580,6 @@ private:
 
 // ---- Encoding -------------------------------------------------------------------------------
 
-template <typename T>
-T to_stored(double v) {
-  if constexpr (std::is_floating_point_v<T>) {
-    return static_cast<T>(v);
-  } else {
-    // Integer types saturate: a value outside the type's range is clamped, NaN becomes 0.
-    if (!(v == v)) return 0;
-    const double r = std::round(v);
-    if (r <= static_cast<double>(std::numeric_limits<T>::min())) return std::numeric_limits<T>::min();
-    if (r >= static_cast<double>(std::numeric_limits<T>::max())) return std::numeric_limits<T>::max();
-    return static_cast<T>(r);
-  }
-}
-
 using Encoder = char* (*)(double, char*);
 
 template <typename T, bool Big>

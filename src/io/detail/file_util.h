@@ -4,6 +4,8 @@
 // with line numbers, number parsing with std::from_chars, byte swapping and a buffered writer.
 #include <bit>
 #include <charconv>
+#include <cmath>
+#include <limits>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -62,6 +64,23 @@ T byteswap_value(T value) noexcept {
   for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
   std::memcpy(&value, bytes, sizeof(T));
   return value;
+}
+
+/// A field value (held as double) in a file's storage type T. Floating types convert; integer
+/// types round and saturate (a value outside T's range is clamped, NaN becomes 0), since a
+/// writer cannot refuse one odd value of a field.
+template <typename T>
+T to_stored(double v) noexcept {
+  if constexpr (std::is_floating_point_v<T>) {
+    return static_cast<T>(v);
+  } else {
+    if (!(v == v)) return 0;
+    const double r = std::round(v);
+    if (r <= static_cast<double>(std::numeric_limits<T>::min())) return std::numeric_limits<T>::min();
+    // The max of a 64-bit type rounds up to 2^63 or 2^64 as a double: compare with >=.
+    if (r >= static_cast<double>(std::numeric_limits<T>::max())) return std::numeric_limits<T>::max();
+    return static_cast<T>(r);
+  }
 }
 
 /// Reads a T stored little endian (big endian when `big`) at `p`.
