@@ -63,12 +63,15 @@ void run_convert(const ConvertState& s) {
   const std::size_t write_stage = report.begin_stage("write");
   write_mesh(s.output_path, mesh, write_options);
   report.end_stage(write_stage);
-  report.stage(write_stage)["counts"] = {{"points", mesh.vertex_count()}, {"faces", mesh.triangle_count()}};
-  report.add_output({{"path", s.output_path}, {"format", format_from_extension(s.output_path)}, {"points", mesh.vertex_count()}});
+  const std::string out_format = write_options.format.empty() ? format_from_extension(s.output_path) : write_options.format;
+  const bool holds_faces = out_format == "ply" || out_format == "off" || out_format == "obj" || out_format == "stl";
+  const std::size_t faces_written = holds_faces ? mesh.triangle_count() : 0;
+  report.stage(write_stage)["counts"] = {{"points", mesh.vertex_count()}, {"faces", faces_written}};
+  report.add_output({{"path", s.output_path}, {"format", out_format}, {"points", mesh.vertex_count()}, {"faces", faces_written}});
   report.finish();
   if (!s.common.report_path.empty()) report.write(s.common.report_path);
   if (!s.common.quiet)
-    fmt::print(stderr, "{} -> {}: {} points, {} faces\n", s.input, s.output_path, mesh.vertex_count(), mesh.triangle_count());
+    fmt::print(stderr, "{} -> {}: {} points, {} faces\n", s.input, s.output_path, mesh.vertex_count(), faces_written);
 }
 
 }  // namespace

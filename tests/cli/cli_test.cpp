@@ -140,6 +140,21 @@ TEST_F(Cli, ConvertKeepsGeoreferencedPrecisionThroughLasAndPly) {
   EXPECT_NEAR(a.colors[100].x(), b.colors[100].x(), 1e-3);
 }
 
+TEST_F(Cli, ConvertCarriesFacesAndWarnsWhereTheFormatCannotHoldThem) {
+  TriangleMesh mesh;
+  mesh.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  mesh.triangles = {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)};
+  write_mesh(path("tet.off"), mesh);
+  ASSERT_EQ(run("convert " + path("tet.off") + " " + path("tet.ply") + " --quiet", dir_).exit_code, 0);
+  EXPECT_EQ(read_mesh(path("tet.ply")).mesh.triangles, mesh.triangles);
+  const RunResult r = run("convert " + path("tet.ply") + " " + path("tet.xyz") + " --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("cannot hold: 4 faces"), std::string::npos) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["outputs"][0]["faces"], 0);
+  EXPECT_EQ(report["warnings"].size(), 1u);
+}
+
 TEST_F(Cli, FloatOutputOfGeoreferencedCloudIsRefusedAndLeavesNothing) {
   const RunResult r = run("convert " + test::data_path("b9_training.ply").string() + " " + path("b9.ply") + " --float", dir_);
   EXPECT_EQ(r.exit_code, 1) << r.err;
