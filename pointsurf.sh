@@ -15,6 +15,7 @@ BUILD_PACKAGES=(
   cmake ninja-build g++ make
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
   libgtest-dev libgmock-dev
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev
 )
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -262,6 +263,23 @@ void write_cloud_reported(const std::filesystem::path& path, const PointCloud& c
   report.end_stage(stage);
   report.stage(stage)["counts"]["points"] = cloud.size();
   report.add_output(describe_cloud(path, format_from_extension(path), cloud));
+}
+
+namespace {
+std::vector<std::pair<int, CommandFactory>>& command_registry() {
+  static std::vector<std::pair<int, CommandFactory>> registry;  // built during static initialisation
+  return registry;
+}
+}  // namespace
+
+CommandRegistration::CommandRegistration(int order, CommandFactory factory) { command_registry().emplace_back(order, factory); }
+
+std::vector<CommandFactory> registered_commands() {
+  auto entries = command_registry();
+  std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<CommandFactory> factories;
+  for (const auto& entry : entries) factories.push_back(entry.second);
+  return factories;
 }
 
 }  // namespace pointsurf::cli

@@ -118,8 +118,16 @@ struct Command {
   CommonOptions* common = nullptr;
 };
 
-Command register_info(CLI::App& app);
-Command register_convert(CLI::App& app);
-Command register_normals(CLI::App& app);
+/// Subcommands register themselves: each cmd_*.cpp holds one
+///   `const CommandRegistration registration{order, register_X};`
+/// at namespace scope, and main() adds them in ascending `order` (the order of `--help`, which
+/// follows the data flow: 10 info, 20 convert, 30 clean, 40 simplify, 50 normals, 60 curvature,
+/// 70 features, ..., 120 reconstruct).
+using CommandFactory = Command (*)(CLI::App& app);
+struct CommandRegistration {
+  CommandRegistration(int order, CommandFactory factory);
+};
+/// The registered factories sorted by order.
+std::vector<CommandFactory> registered_commands();
 
 }  // namespace pointsurf::cli

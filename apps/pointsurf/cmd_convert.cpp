@@ -86,4 +86,6 @@ Command register_convert(CLI::App& app) {
   return {cmd, [state] { run_convert(*state); }, &state->common};
 }
 
+const CommandRegistration convert_registration{20, register_convert};
+
 }  // namespace pointsurf::cli

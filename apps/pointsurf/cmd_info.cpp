@@ -127,4 +127,6 @@ Command register_info(CLI::App& app) {
   return {cmd, [state] { run_info(*state); }, &state->common};
 }
 
+const CommandRegistration info_registration{10, register_info};
+
 }  // namespace pointsurf::cli

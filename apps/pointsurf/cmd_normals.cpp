@@ -154,4 +154,6 @@ Command register_normals(CLI::App& app) {
   return {cmd, [state] { run_normals(*state); }, &state->common};
 }
 
+const CommandRegistration normals_registration{50, register_normals};
+
 }  // namespace pointsurf::cli

@@ -31,9 +31,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", POINTSURF_VERSION);
   std::vector<cli::Command> commands;
-  commands.push_back(cli::register_info(app));
-  commands.push_back(cli::register_convert(app));
-  commands.push_back(cli::register_normals(app));
+  for (cli::CommandFactory factory : cli::registered_commands()) commands.push_back(factory(app));
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Combinatorial structure of a triangle mesh: edges, boundary loops (holes), manifoldness,
+// orientation consistency, connected components and the Euler characteristic. Every
+// reconstruction reports it, and the tests check it.
+#include <cstddef>
+#include <vector>
+
+#include "pointsurf/core/triangle_mesh.h"
+
+namespace pointsurf {
+
+/// One closed chain of boundary edges (a hole, or the rim of an open surface).
+struct BoundaryLoop {
+  std::vector<int> vertices;  // vertex indices in order along the loop (first not repeated)
+  double length = 0.0;        // perimeter, cloud units
+};
+
+struct MeshTopology {
+  std::size_t vertices = 0;               // V: vertices used by at least one triangle
+  std::size_t isolated_vertices = 0;      // vertices used by no triangle
+  std::size_t triangles = 0;              // F: non-degenerate triangles
+  std::size_t degenerate_triangles = 0;   // triangles with a repeated vertex index (ignored above)
+  std::size_t edges = 0;                  // E: distinct undirected edges
+  std::size_t boundary_edges = 0;         // edges with exactly one triangle
+  std::size_t non_manifold_edges = 0;     // edges with three or more triangles (0 is better)
+  std::size_t non_manifold_vertices = 0;  // vertices whose triangle fan is not one disc or half-disc
+  std::size_t inconsistent_edges = 0;     // two-triangle edges traversed in the same direction by
+                                          // both (0: consistently oriented)
+  std::size_t components = 0;             // connected components (triangles sharing edges)
+  long euler_characteristic = 0;          // V - E + F
+  std::vector<BoundaryLoop> boundary_loops;  // only where the boundary is edge-manifold; longest first
+
+  bool edge_manifold() const noexcept { return non_manifold_edges == 0; }
+  bool closed() const noexcept { return boundary_edges == 0; }
+  bool oriented() const noexcept { return inconsistent_edges == 0; }
+  /// Closed, edge- and vertex-manifold, consistently oriented.
+  bool watertight() const noexcept {
+    return closed() && edge_manifold() && non_manifold_vertices == 0 && oriented() && triangles > 0;
+  }
+  /// Genus of a closed, connected, orientable manifold: (2 - chi) / 2; -1 when that is not the case.
+  long genus() const noexcept {
+    if (!watertight() || components != 1) return -1;
+    return (2 - euler_characteristic) / 2;
+  }
+};
+
+/// Analyses the combinatorics of `mesh` (indices must be valid: see TriangleMesh::validate).
+/// O(F log F) time, O(F) memory. Thread-safe (reads only).
+MeshTopology analyze_topology(const TriangleMesh& mesh);
+
+}  // namespace pointsurf
