@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <random>
 
+#include <Eigen/Geometry>
+
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::test {
