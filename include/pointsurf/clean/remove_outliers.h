@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Outlier removal: statistical (mean kNN distance), radius (too few neighbours within r) and
+// local RANSAC planes (too far from every well-supported plane through the neighbourhood).
+// Each function only decides which points to keep; keep_points() applies the decision.
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/spatial/kd_tree.h"
+
+namespace pointsurf {
+
+/// Which points an outlier filter keeps.
+struct OutlierResult {
+  std::vector<std::uint32_t> kept;  // indices of the kept points, ascending (K <= N)
+  std::size_t removed = 0;          // N - K: points judged outliers
+  double threshold = 0.0;           // the cut actually used, cloud units: statistical: mean kNN
+                                    // distance above which a point is dropped; radius: the
+                                    // search radius; RANSAC: the plane distance
+};
+
+struct StatisticalOutlierParams {
+  int k = 20;              // neighbours per point, the point itself included (Open3D's
+                           // nb_neighbors), >= 1
+  double std_ratio = 2.0;  // drop a point whose mean distance is >= mean + std_ratio * std, > 0
+};
+
+/// Statistical outlier removal (Rusu et al. 2008), defined exactly as Open3D 0.16's
+/// PointCloud::remove_statistical_outlier so that both keep the same points:
+///   d_i  = mean of the Euclidean distances from p_i to its k nearest points (p_i included,
+///          distance 0), over all N points;
+///   mean = sum_i d_i / N;  std = sqrt(sum_{i: d_i > 0} (d_i - mean)^2 / (N - 1))  (sample std);
+///   p_i is kept iff 0 < d_i < mean + std_ratio * std.
+/// Like Open3D, a point whose k nearest points all coincide with it (d_i = 0, a stack of at
+/// least k exact duplicates) is dropped: run remove_duplicates first on such data.
+/// `tree` (optional) must be built over `cloud.positions`. One parallel pass (oneTBB) in the
+/// tree's spatial order, no neighbour lists stored; memory O(N). Thread-safe for distinct
+/// calls. Throws UsageError for k < 1, std_ratio <= 0, fewer than 2 points or a tree of
+/// another size; CancelledError when `progress` returns false.
+OutlierResult remove_statistical_outliers(const PointCloud& cloud, const StatisticalOutlierParams& params = {},
+                                          const KdTree* tree = nullptr, const ProgressCallback& progress = {});
+
+struct RadiusOutlierParams {
+  int min_neighbours = 4;           // keep a point with at least this many other points
+                                    // within the radius, >= 1
+  double radius = 0.0;              // cloud units, >= 0; 0: radius_in_spacings * mean spacing
+  double radius_in_spacings = 4.0;  // used when radius == 0, > 0
+};
+
+/// Radius outlier removal: drops points with fewer than `min_neighbours` other points within
+/// `radius` (inclusive) -- isolated "drift" points floating above a surface. Same decision as
+/// Open3D's remove_radius_outlier(nb_points = min_neighbours, radius) (which counts the point
+/// itself and keeps count > nb_points). On an evenly sampled surface a disc of radius 4
+/// spacings holds about 12 points, so the default keeps sparse borders. Parallel (oneTBB);
+/// stops counting at min_neighbours + 1. Throws UsageError for min_neighbours < 1, a negative
+/// or non-finite radius, radius_in_spacings <= 0, fewer than 2 points; CancelledError on cancel.
+OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlierParams& params = {},
+                                     const KdTree* tree = nullptr, const ProgressCallback& progress = {});
+
+struct RansacOutlierParams {
+  int k = 24;                         // neighbourhood size (point included), >= 4
+  double distance = 0.0;              // plane distance, cloud units, >= 0; 0: distance_in_spacings * mean spacing
+  double distance_in_spacings = 1.0;  // used when distance == 0, > 0
+  int iterations = 50;                // random planes tried per point, >= 1
+  double min_support = 0.3;           // a plane counts when at least this fraction of the
+                                      // neighbourhood lies within `distance` of it, in (0, 1]
+  std::uint64_t seed = 1;             // random planes depend only on the seed, the point's
+                                      // coordinates and its neighbours (not on point order)
+};
+
+/// Local RANSAC outlier removal: for each point, planes through 3 random points among its k
+/// nearest neighbours (the point itself excluded) are tried (Fischler & Bolles 1981); the point
+/// is kept iff some plane supported by at least min_support of those neighbours (within
+/// `distance` of it) passes within `distance` of the point. Points
+/// off the surface (drift, multipath echoes) fit no supported plane; points near a crease
+/// still fit the plane of their own face. Per-point random streams are seeded from `seed` and
+/// the point's coordinates, so the result is reproducible and independent of point order and
+/// thread count. Parallel (oneTBB), O(N k iterations). Throws UsageError for k < 4,
+/// iterations < 1, a negative distance, min_support outside (0, 1], fewer than 4 points;
+/// CancelledError on cancel.
+OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlierParams& params = {},
+                                     const KdTree* tree = nullptr, const ProgressCallback& progress = {});
+
+/// The points at `kept` with every attribute and field (a PointCloud::select for uint32
+/// indices). Throws UsageError for an index out of range.
+PointCloud keep_points(const PointCloud& cloud, std::span<const std::uint32_t> kept);
+
+}  // namespace pointsurf

@@ -1,0 +1,106 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Local shape: principal curvatures, mean and Gaussian curvature by a jet (Monge form) fit,
+// surface variation, and the HK surface type of every point.
+//
+// Sign convention (the whole project): curvature is positive where the surface bends away from
+// the outward normal. A sphere of radius r with outward normals has k1 = k2 = H = +1/r and
+// K = 1/r^2; H > 0, K > 0 is a peak.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/spatial/kd_tree.h"
+
+namespace pointsurf {
+
+/// Surface type from the signs of H and K (Besl and Jain 1988), in the project's sign
+/// convention. The integer codes are the values of the "surface_type" field.
+enum class SurfaceType : std::uint8_t {
+  Undefined = 0,     // no curvature (degenerate neighbourhood or missing normal)
+  Peak = 1,          // H > 0, K > 0: bends away from the normal in every direction (convex cap)
+  Pit = 2,           // H < 0, K > 0: bends towards the normal in every direction (concave cup)
+  Ridge = 3,         // H > 0, K = 0: convex in one direction, straight in the other (outside of a cylinder)
+  Valley = 4,        // H < 0, K = 0: concave in one direction, straight in the other (inside of a cylinder)
+  SaddleRidge = 5,   // H > 0, K < 0: saddle, mostly convex
+  SaddleValley = 6,  // H < 0, K < 0: saddle, mostly concave
+  Flat = 7,          // H = 0, K = 0: plane
+  Minimal = 8,       // H = 0, K < 0: symmetric saddle (minimal surface)
+};
+inline constexpr int kSurfaceTypeCount = 9;
+
+/// Name of a surface type in lower case ("peak", "saddle_ridge", ...).
+const char* surface_type_name(SurfaceType type) noexcept;
+
+/// Classifies one point from its mean curvature `H` (1/length) and Gaussian curvature `K`
+/// (1/length^2): H counts as zero when |H| <= h_zero and K when |K| <= k_zero (both >= 0).
+/// K > 0 with H = 0 cannot happen on a surface (H^2 >= K); it is reported as Flat. Non-finite
+/// H or K give Undefined. Pure function; thread-safe.
+SurfaceType classify_surface_type(double H, double K, double h_zero, double k_zero) noexcept;
+
+struct CurvatureParams {
+  NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
+  int degree = 2;                   // jet degree, 2 or 3
+  int k = 0;                        // neighbours per point (Knn, Hybrid); 0: 24 for degree 2, 40 for
+                                    // degree 3; at least 6 (degree 2) or 10 (degree 3)
+  double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
+  double radius_in_spacings = 6.0;  // used when radius == 0
+  double zero_curvature = 0.0;      // 1/cloud units: a principal curvature, or H, of magnitude at most
+                                    // this counts as zero in the surface type; 0: derived from the
+                                    // data (see estimate_curvature)
+  double zero_in_noise = 3.0;       // derived zero_curvature = zero_in_noise * median over points of
+                                    // the standard error of the fitted curvature, > 0
+  bool keep_directions = false;     // fill CurvatureResult::d1, d2, normals
+  bool update_normals = false;      // replace cloud.normals by the jet (Monge) normals, same side
+};
+
+struct CurvatureResult {
+  std::array<std::size_t, kSurfaceTypeCount> type_counts{};  // points per SurfaceType code
+  std::size_t degenerate = 0;          // points with no curvature: zero normal, too few neighbours for
+                                       // the jet or a singular fit; fields 0, type Undefined (smaller is better)
+  double zero_curvature = 0.0;         // zero threshold used for the surface type, 1/cloud units
+  double radius_used = 0.0;            // search radius used (Radius, Hybrid), cloud units
+  double median_residual = 0.0;        // median over points of the RMS distance of the neighbours to the
+                                       // fitted jet, cloud units (smaller: the jet fits better)
+  int k_used = 0;                      // neighbours per point (Knn, Hybrid)
+  std::vector<Vector3d> d1, d2;        // N unit principal directions of k1 and k2 (empty unless keep_directions;
+                                       // zero where degenerate)
+  std::vector<Vector3d> normals;       // N unit jet normals on the side of the input normals (same condition)
+};
+
+/// Estimates curvature by fitting a jet (a polynomial height function of degree 2 or 3, the
+/// Monge form) to each point's neighbourhood in a local frame, after Cazals and Pouget,
+/// "Estimating differential quantities using polynomial fitting of osculating jets" (2005).
+/// For each point p: the frame is centred at p (georeferenced clouds keep precision) with its
+/// z axis the PCA normal of the neighbourhood, turned to the side of p's input normal; the jet
+/// z = f(x, y) is fitted by unweighted least squares (coordinates scaled by the neighbourhood
+/// radius); the first and second fundamental forms of the graph at the origin give the shape
+/// operator, whose eigenvalues, negated so that bending away from the normal is positive,
+/// are k1 >= k2 (1/cloud units), with H = (k1 + k2) / 2 and K = k1 k2.
+///
+/// Writes float32 fields "k1", "k2", "mean", "gauss", "variation" (l0 / (l0 + l1 + l2) of the
+/// neighbourhood covariance, in [0, 1/3]) and the uint8 field "surface_type" (SurfaceType
+/// codes), each of N values. The surface type uses h_zero = z and k_zero = z * max(|k1|, |k2|, z)
+/// with z = params.zero_curvature, or, when that is 0, z derived from the data:
+///   z = max(zero_in_noise * median_i(sigma_i), 1e-4 / median_i(h_i)),
+/// where h_i is point i's neighbourhood radius and sigma_i the standard error of its principal
+/// curvatures: the fit residual taken as noise (unbiased variance s^2), carried through the
+/// least-squares covariance s^2 (A^T A)^-1 to the Hessian of the jet,
+///   sigma_i = sqrt((4 G33 + 2 G44 + 4 G55) s^2 / 2) / h_i  (G = (A^T A)^-1 in scaled units),
+/// i.e. the curvature the fit cannot tell from noise, with a floor at a radius of curvature of
+/// 10^4 neighbourhood radii for noise-free data. So K counts as zero when the smaller principal
+/// curvature is below z in magnitude.
+///
+/// Requires oriented normals (`cloud.normals`, N×3): they give the sign. Reuses `tree` if given
+/// (built over `cloud.positions`). Parallel (oneTBB) in the tree's spatial order; no per-point
+/// allocation. Throws UsageError for a bad parameter, missing normals or fewer points than
+/// the jet needs; CancelledError when `progress` returns false (the cloud is then unchanged).
+/// Not safe to call concurrently on the same cloud.
+CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params = {}, const KdTree* tree = nullptr,
+                                   const ProgressCallback& progress = {});
+
+}  // namespace pointsurf

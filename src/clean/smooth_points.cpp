@@ -1,0 +1,292 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/clean/smooth_points.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "clean/detail/clean_common.h"
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+
+namespace pointsurf {
+namespace {
+
+constexpr std::size_t kGrain = 128;
+// Normal correction: about this many candidate normals per point, taken from neighbours within
+// kCandidateRadiusFactor times the smoothing radius (at most kWideNeighbours of them).
+constexpr std::size_t kCandidates = 16;
+constexpr double kCandidateRadiusFactor = 2.5;
+constexpr std::size_t kWideNeighbours = 64;
+// A candidate this close in angle to the best so far (weight above this) is not scored again.
+constexpr double kSameCandidate = 0.999;
+
+struct Resolved {
+  double radius = 0.0;
+  double height_sigma = 0.0;
+  std::size_t max_neighbours = 0;
+};
+
+Resolved check_and_resolve(std::string_view fn, const PointCloud& cloud, const BilateralParams& params, const KdTree* tree) {
+  detail::check_length(fn, "radius", params.radius, false);
+  if (params.radius == 0.0) detail::check_positive(fn, "radius_in_spacings", params.radius_in_spacings);
+  detail::check_length(fn, "height_sigma", params.height_sigma, false);
+  if (params.height_sigma == 0.0) detail::check_positive(fn, "height_sigma_in_spacings", params.height_sigma_in_spacings);
+  if (params.max_neighbours < 3) throw UsageError(fmt::format("{}: max_neighbours must be >= 3, got {}", fn, params.max_neighbours));
+  if (params.iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, params.iterations));
+  detail::check_cloud(fn, cloud, 3, tree);
+  if (!cloud.has_normals())
+    throw UsageError(fmt::format("{}: the cloud has no normals; estimate and orient them first (estimate_normals)", fn));
+  if (cloud.normals.size() != cloud.size())
+    throw UsageError(fmt::format("{}: the cloud has {} normals for {} points", fn, cloud.normals.size(), cloud.size()));
+  return {};
+}
+
+// Unit copies of the normals; zero (undefined) normals stay zero.
+std::vector<Vector3d> unit_normals(const std::vector<Vector3d>& normals) {
+  std::vector<Vector3d> out(normals.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, normals.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const double length = normals[i].norm();
+      out[i] = length > 0.0 && std::isfinite(length) ? Vector3d(normals[i] / length) : Vector3d::Zero();
+    }
+  });
+  return out;
+}
+
+// Runs `visit(i, neighbours)` over all points in spatial order, in parallel, with the
+// neighbourhood of the point's input position.
+template <typename Visit>
+void for_each_neighbourhood(const PointCloud& input, const KdTree& tree, const Resolved& r, detail::ProgressReporter& reporter,
+                            Visit&& visit) {
+  const std::span<const std::uint32_t> order = tree.spatial_order();
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+    if (reporter.cancelled()) return;
+    std::vector<Neighbor>& neighbors = buffers.local();
+    for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {
+      const std::uint32_t i = order[pos];
+      tree.hybrid(input.positions[i], r.max_neighbours, r.radius, neighbors);
+      visit(i, std::span<const Neighbor>(neighbors));
+    }
+    reporter.advance(range.size());
+  });
+  reporter.throw_if_cancelled();
+}
+
+// Position passes: each point moves along normals[i] by the weighted mean height of its
+// neighbours. `angle_weight(i, j)` adds the trilateral term (1 for plain bilateral).
+template <typename AngleWeight>
+std::vector<Vector3d> move_positions(const PointCloud& input, const std::vector<Vector3d>& normals, const KdTree& tree,
+                                     const Resolved& r, int iterations, detail::ProgressReporter& reporter, AngleWeight&& angle_weight) {
+  const double spatial_factor = -1.0 / (2.0 * (0.5 * r.radius) * (0.5 * r.radius));
+  const double height_factor = -1.0 / (2.0 * r.height_sigma * r.height_sigma);
+  std::vector<Vector3d> current = input.positions, next(input.size());
+  for (int it = 0; it < iterations; ++it) {
+    for_each_neighbourhood(input, tree, r, reporter, [&](std::uint32_t i, std::span<const Neighbor> neighbors) {
+      const Vector3d& n = normals[i];
+      const Vector3d& p = current[i];
+      double sum_w = 0.0, sum_wh = 0.0;
+      for (const Neighbor& nb : neighbors) {
+        // Offsets between current positions: small numbers even for georeferenced clouds.
+        const Vector3d d = current[nb.index] - p;
+        const double h = n.dot(d);
+        const double w = std::exp(spatial_factor * d.squaredNorm() + height_factor * h * h) * angle_weight(i, nb.index);
+        sum_w += w;
+        sum_wh += w * h;
+      }
+      next[i] = sum_w > 0.0 ? Vector3d(p + n * (sum_wh / sum_w)) : p;
+    });
+    std::swap(current, next);
+  }
+  return current;
+}
+
+void fill_displacements(const std::vector<Vector3d>& before, const std::vector<Vector3d>& after, SmoothResult& result) {
+  double sum = 0.0, squares = 0.0, largest = 0.0;
+  std::size_t moved = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    const double d = (after[i] - before[i]).norm();
+    moved += d > 0.0;
+    sum += d;
+    squares += d * d;
+    largest = std::max(largest, d);
+  }
+  const double n = double(before.size());
+  result.moved = moved;
+  result.mean_displacement = sum / n;
+  result.rms_displacement = std::sqrt(squares / n);
+  result.max_displacement = largest;
+}
+
+}  // namespace
+
+SmoothResult smooth_bilateral(PointCloud& cloud, const BilateralParams& params, const KdTree* tree, const ProgressCallback& progress) {
+  constexpr std::string_view fn = "smooth_bilateral";
+  Resolved r = check_and_resolve(fn, cloud, params, tree);
+  std::optional<KdTree> own;
+  const KdTree& t = detail::tree_for(cloud, tree, own);
+  const double spacing = params.radius > 0.0 && params.height_sigma > 0.0 ? 0.0 : mean_spacing(t);
+  r.radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * spacing;
+  r.height_sigma = params.height_sigma > 0.0 ? params.height_sigma : params.height_sigma_in_spacings * spacing;
+  r.max_neighbours = static_cast<std::size_t>(params.max_neighbours);
+
+  SmoothResult result;
+  result.radius_used = r.radius;
+  result.height_sigma_used = r.height_sigma;
+  if (!(r.radius > 0.0 && r.height_sigma > 0.0)) return result;  // all points coincide: nothing to smooth
+
+  const std::vector<Vector3d> normals = unit_normals(cloud.normals);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size() * std::size_t(params.iterations));
+  std::vector<Vector3d> moved =
+      move_positions(cloud, normals, t, r, params.iterations, reporter, [](std::uint32_t, std::uint32_t) { return 1.0; });
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+  fill_displacements(cloud.positions, moved, result);
+  cloud.positions = std::move(moved);
+  return result;
+}
+
+SmoothResult smooth_trilateral(PointCloud& cloud, const TrilateralParams& params, const KdTree* tree, const ProgressCallback& progress) {
+  constexpr std::string_view fn = "smooth_trilateral";
+  if (!(params.sharpness_angle_deg > 0.0 && params.sharpness_angle_deg <= 90.0))
+    throw UsageError(fmt::format("{}: sharpness_angle_deg must be in (0, 90] degrees, got {}", fn, params.sharpness_angle_deg));
+  if (params.normal_iterations < 1)
+    throw UsageError(fmt::format("{}: normal_iterations must be >= 1, got {}", fn, params.normal_iterations));
+  const BilateralParams& bp = params.position;
+  Resolved r = check_and_resolve(fn, cloud, bp, tree);
+  std::optional<KdTree> own;
+  const KdTree& t = detail::tree_for(cloud, tree, own);
+  const double spacing = bp.radius > 0.0 && bp.height_sigma > 0.0 ? 0.0 : mean_spacing(t);
+  r.radius = bp.radius > 0.0 ? bp.radius : bp.radius_in_spacings * spacing;
+  r.height_sigma = bp.height_sigma > 0.0 ? bp.height_sigma : bp.height_sigma_in_spacings * spacing;
+  r.max_neighbours = static_cast<std::size_t>(bp.max_neighbours);
+
+  SmoothResult result;
+  result.radius_used = r.radius;
+  result.height_sigma_used = r.height_sigma;
+  if (!(r.radius > 0.0 && r.height_sigma > 0.0)) return result;
+
+  const std::size_t n = cloud.size();
+  // Feature points (1 edge, 2 corner) from the features stage lend no normal: theirs mix faces.
+  std::vector<std::uint8_t> lends(n, 1);
+  if (params.use_feature_field) {
+    if (const ScalarField* feature = cloud.fields.find("feature"); feature != nullptr && feature->values.size() == n)
+      for (std::size_t i = 0; i < n; ++i) lends[i] = !(feature->values[i] == 1.0 || feature->values[i] == 2.0);
+  }
+
+  const double height_factor = -1.0 / (2.0 * r.height_sigma * r.height_sigma);
+  const double sigma_angle = params.sharpness_angle_deg * std::numbers::pi / 180.0;
+  const double angle_factor = -1.0 / (2.0 * sigma_angle * sigma_angle);
+  // Gaussian of the unoriented angle between two unit normals (PCA signs are arbitrary).
+  auto angle_weight = [angle_factor](const Vector3d& a, const Vector3d& b) {
+    const double angle = std::acos(std::min(1.0, std::abs(a.dot(b))));
+    return std::exp(angle_factor * angle * angle);
+  };
+
+  const std::vector<Vector3d> input_normals = unit_normals(cloud.normals);
+  std::vector<Vector3d> normals = input_normals, next(n);
+  const std::size_t work = n * std::size_t(params.normal_iterations + bp.iterations);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, work);
+  // The normal pass looks farther than the position pass: near a crease every normal within
+  // the smoothing radius is blended, but clean face normals lie a few radii away.
+  Resolved wide = r;
+  wide.radius = kCandidateRadiusFactor * r.radius;
+  wide.max_neighbours = std::max<std::size_t>(r.max_neighbours, kWideNeighbours);
+  const double fit_factor = -1.0 / (2.0 * r.radius * r.radius);
+  tbb::enumerable_thread_specific<std::vector<Vector3d>> offset_buffers;
+  for (int it = 0; it < params.normal_iterations; ++it) {
+    for_each_neighbourhood(cloud, t, wide, reporter, [&](std::uint32_t i, std::span<const Neighbor> neighbors) {
+      const Vector3d& p = cloud.positions[i];
+      if (normals[i].squaredNorm() == 0.0 || neighbors.size() < 3) {
+        next[i] = normals[i];
+        return;
+      }
+      std::vector<Vector3d>& q = offset_buffers.local();
+      q.clear();
+      for (const Neighbor& nb : neighbors) q.push_back(cloud.positions[nb.index] - p);
+      // Support of the plane through p with normal c: neighbours near it, nearer ones more.
+      auto support = [&](const Vector3d& c) {
+        double score = 0.0;
+        for (std::size_t j = 0; j < q.size(); ++j) {
+          const double h = c.dot(q[j]);
+          score += std::exp(fit_factor * neighbors[j].squared_distance + height_factor * h * h);
+        }
+        return score;
+      };
+      // Candidates: the point's own normal and those of neighbours spread over the wide
+      // neighbourhood; the plane holding the most neighbours wins (on a face near a crease,
+      // that face's normal beats the blended normals of the crease band).
+      Vector3d best = normals[i];
+      double best_score = support(best);
+      const std::size_t stride = std::max<std::size_t>(1, neighbors.size() / kCandidates);
+      for (std::size_t c = stride; c < neighbors.size(); c += stride) {
+        const std::uint32_t j = neighbors[c].index;
+        const Vector3d& candidate = normals[j];
+        if (!lends[j] || candidate.squaredNorm() == 0.0 || angle_weight(candidate, best) > kSameCandidate) continue;
+        const double score = support(candidate);
+        if (score > best_score) {
+          best_score = score;
+          best = candidate;
+        }
+      }
+      // Refit: weighted PCA of the neighbours on the chosen plane (two reweighting steps),
+      // which turns the candidate into this point's own face normal.
+      for (int step = 0; step < 2; ++step) {
+        double total = 0.0;
+        Vector3d mean = Vector3d::Zero();
+        for (std::size_t j = 0; j < q.size(); ++j) {
+          const double h = best.dot(q[j]);
+          const double w = std::exp(fit_factor * neighbors[j].squared_distance + height_factor * h * h);
+          total += w;
+          mean += w * q[j];
+        }
+        if (!(total > 0.0)) break;
+        mean /= total;
+        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+        for (std::size_t j = 0; j < q.size(); ++j) {
+          const double h = best.dot(q[j]);
+          const double w = std::exp(fit_factor * neighbors[j].squared_distance + height_factor * h * h);
+          const Vector3d d = q[j] - mean;
+          covariance.noalias() += w * d * d.transpose();
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+        const Vector3d fitted = solver.eigenvectors().col(0);
+        if (solver.info() != Eigen::Success || !fitted.allFinite() || !(solver.eigenvalues()[1] > 0.0)) break;
+        best = fitted.dot(best) < 0.0 ? Vector3d(-fitted) : fitted;
+      }
+      if (best.dot(input_normals[i]) < 0.0) best = -best;
+      next[i] = best.normalized();
+    });
+    std::swap(normals, next);
+  }
+
+  std::vector<Vector3d> moved = move_positions(cloud, normals, t, r, bp.iterations, reporter, [&](std::uint32_t i, std::uint32_t j) {
+    return angle_weight(normals[i], normals[j]);
+  });
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+
+  fill_displacements(cloud.positions, moved, result);
+  double angle_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double angle = std::acos(std::clamp(normals[i].dot(input_normals[i]), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    angle_sum += angle;
+    result.normals_changed += angle > 1.0;
+  }
+  result.mean_normal_change_deg = angle_sum / double(n);
+  cloud.positions = std::move(moved);
+  cloud.normals = std::move(normals);
+  return result;
+}
+
+}  // namespace pointsurf

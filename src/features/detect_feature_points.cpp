@@ -1,0 +1,326 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/features/feature_points.h"
+
+namespace pointsurf {
+namespace {
+
+// Floor of the derived candidate threshold and multiple of the median variation (see the header).
+constexpr double kVariationFloor = 0.01;
+constexpr double kVariationMedianFactor = 4.0;
+// Leader clustering keeps at most this many clusters; later neighbours join the nearest one.
+constexpr int kMaxClusters = 8;
+
+struct LocalFit {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // zero when degenerate
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // offset from the reference point
+  double variation = 1.0;                             // 1 (worse than any real value) when degenerate
+};
+
+// PCA of points given as offsets from a reference point (small numbers, whatever the cloud's
+// offset); the covariance is centred in a second pass to avoid cancellation.
+template <class Offsets>
+LocalFit fit_plane(const Offsets& offsets, std::size_t m) {
+  LocalFit out;
+  if (m < 3) return out;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < m; ++i) mean += offsets(i);
+  mean /= double(m);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < m; ++i) {
+    const Eigen::Vector3d d = offsets(i) - mean;
+    covariance.noalias() += d * d.transpose();
+  }
+  covariance /= double(m);
+  if (!(covariance.trace() > 0.0)) return out;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  Eigen::Vector3d l = solver.eigenvalues();
+  // The closed form loses the smallest eigenvector when the two smallest eigenvalues cluster.
+  if (solver.info() != Eigen::Success || !(l[1] - l[0] > 1e-4 * l[2])) {
+    solver.compute(covariance);
+    if (solver.info() != Eigen::Success) return out;
+    l = solver.eigenvalues();
+  }
+  if (!(l[1] > 1e-12 * l[2])) return out;  // a line: no plane
+  const Eigen::Vector3d normal = solver.eigenvectors().col(0).normalized();
+  if (!normal.allFinite()) return out;
+  out.normal = normal;
+  out.centroid = mean;
+  const double l0 = std::max(l[0], 0.0);
+  out.variation = std::clamp(l0 / (l0 + l[1] + l[2]), 0.0, 1.0 / 3.0);
+  return out;
+}
+
+LocalFit fit_neighbourhood(const KdTree& tree, const Eigen::Vector3d& center, const std::vector<Neighbor>& neighbors) {
+  return fit_plane([&](std::size_t i) { return Eigen::Vector3d(tree.point(neighbors[i].index) - center); }, neighbors.size());
+}
+
+struct Cluster {
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();  // sign-aligned sum of member normals
+  int members = 0;
+};
+
+// Per-thread scratch of the screening, reused across candidates (no per-point allocation).
+struct ScreenBuffers {
+  std::vector<int> assignment;
+  std::vector<Eigen::Vector3d> offsets;
+  std::array<Cluster, kMaxClusters> clusters;
+};
+
+// Index of the cluster whose mean direction is nearest to n (unoriented), and that |cos|.
+std::pair<int, double> nearest_cluster(const std::array<Cluster, kMaxClusters>& clusters, int count, const Eigen::Vector3d& n) {
+  int best = -1;
+  double best_cos = -1.0;
+  for (int c = 0; c < count; ++c) {
+    const double len = clusters[c].normal_sum.norm();
+    if (len == 0.0) continue;
+    const double cos = std::abs(clusters[c].normal_sum.dot(n)) / len;
+    if (cos > best_cos) best_cos = cos, best = c;
+  }
+  return {best, best_cos};
+}
+
+void add_to(Cluster& cluster, const Eigen::Vector3d& n) {
+  cluster.normal_sum += cluster.normal_sum.dot(n) < 0.0 ? Eigen::Vector3d(-n) : n;
+  ++cluster.members;
+}
+
+// Number of distinct neighbour planes within `dd` of p (the screening of one candidate).
+int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const std::uint32_t> neighbors,
+                const std::vector<Eigen::Vector3d>& normals, double cos_dn, double dd, int min_points, ScreenBuffers& b) {
+  const std::size_t m = neighbors.size();
+  b.assignment.assign(m, -1);
+  int count = 0;
+  // Leader clustering, nearest neighbour first.
+  for (std::size_t i = 0; i < m; ++i) {
+    const Eigen::Vector3d& n = normals[neighbors[i]];
+    if (n.squaredNorm() == 0.0) continue;
+    auto [best, cos] = nearest_cluster(b.clusters, count, n);
+    if ((best < 0 || cos < cos_dn) && count < kMaxClusters) {
+      b.clusters[count] = Cluster{};
+      best = count++;
+    }
+    add_to(b.clusters[best], n);
+    b.assignment[i] = best;
+  }
+  if (count < 2) return count == 1 ? 1 : 0;
+  // One reassignment to the nearest final mean: the leader pass depends on the visiting order.
+  std::array<Cluster, kMaxClusters> means = b.clusters;
+  for (int c = 0; c < count; ++c) b.clusters[c] = Cluster{};
+  for (std::size_t i = 0; i < m; ++i) {
+    if (b.assignment[i] < 0) continue;
+    const Eigen::Vector3d& n = normals[neighbors[i]];
+    const int best = nearest_cluster(means, count, n).first;
+    add_to(b.clusters[best], n);
+    b.assignment[i] = best;
+  }
+  // Planes of the clusters, largest first; near-parallel duplicates of a larger one are dropped.
+  std::array<int, kMaxClusters> by_size{};
+  for (int c = 0; c < count; ++c) by_size[c] = c;
+  std::sort(by_size.begin(), by_size.begin() + count,
+            [&](int a, int c) { return b.clusters[a].members > b.clusters[c].members || (b.clusters[a].members == b.clusters[c].members && a < c); });
+  std::array<Eigen::Vector3d, kMaxClusters> kept;
+  int kept_count = 0, near = 0;
+  for (int r = 0; r < count; ++r) {
+    const int c = by_size[r];
+    if (b.clusters[c].members < min_points) break;
+    b.offsets.clear();
+    for (std::size_t i = 0; i < m; ++i)
+      if (b.assignment[i] == c) b.offsets.push_back(tree.point(neighbors[i]) - p);
+    const LocalFit plane = fit_plane([&](std::size_t i) { return b.offsets[i]; }, b.offsets.size());
+    if (plane.normal.squaredNorm() == 0.0) continue;
+    bool duplicate = false;
+    for (int q = 0; q < kept_count; ++q) duplicate = duplicate || std::abs(kept[q].dot(plane.normal)) > cos_dn;
+    if (duplicate) continue;
+    kept[kept_count++] = plane.normal;
+    // p is the origin of the offsets: its distance to the plane is |n . centroid|.
+    if (std::abs(plane.normal.dot(plane.centroid)) <= dd) ++near;
+  }
+  return near;
+}
+
+}  // namespace
+
+FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& params, const KdTree* tree,
+                                    const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  if (params.k < 6) throw UsageError(fmt::format("detect_feature_points: k must be >= 6, got {}", params.k));
+  if (!(params.variation_threshold >= 0.0 && params.variation_threshold < 1.0 / 3.0))
+    throw UsageError(fmt::format("detect_feature_points: variation_threshold must be in [0, 1/3) (0: derived), got {}",
+                                 params.variation_threshold));
+  if (!(params.dn_deg > 0.0 && params.dn_deg < 90.0))
+    throw UsageError(fmt::format("detect_feature_points: dn_deg must be in (0, 90) degrees, got {}", params.dn_deg));
+  if (!(params.dd >= 0.0 && std::isfinite(params.dd)))
+    throw UsageError(fmt::format("detect_feature_points: dd must be >= 0 (0: dd_in_spacings * mean spacing), got {}", params.dd));
+  if (params.dd == 0.0 && !(params.dd_in_spacings > 0.0 && std::isfinite(params.dd_in_spacings)))
+    throw UsageError(fmt::format("detect_feature_points: dd_in_spacings must be > 0, got {}", params.dd_in_spacings));
+  if (params.min_cluster_points < 3 || params.min_cluster_points > params.k)
+    throw UsageError(fmt::format("detect_feature_points: min_cluster_points must be in [3, k = {}], got {}", params.k,
+                                 params.min_cluster_points));
+  if (n < static_cast<std::size_t>(params.k) + 1)
+    throw UsageError(fmt::format("detect_feature_points: needs at least k + 1 = {} points, got {}", params.k + 1, n));
+  const bool input_normals = params.normals == FeatureNormals::Input;
+  if (input_normals && cloud.normals.size() != n)
+    throw UsageError(fmt::format("detect_feature_points: normals = Input needs one normal per point, the cloud has {} for {} points",
+                                 cloud.normals.size(), n));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("detect_feature_points: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  FeatureResult result;
+  result.mean_spacing = mean_spacing(*tree);
+  result.dd_used = params.dd > 0.0 ? params.dd : params.dd_in_spacings * result.mean_spacing;
+
+  const std::span<const std::uint32_t> order = tree->spatial_order();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::size_t grain = 256;
+  // Progress shares: the PCA of every point dominates; the other passes visit candidates and
+  // their neighbours only.
+  constexpr double kPcaShare = 0.6, kNeighborsShare = 0.7, kRobustShare = 0.85;
+
+  // Pass 1: PCA of every k-neighbourhood: variation, normal, and the squared reach (distance to
+  // the k-th neighbour), which tells the robust-normal pass whose neighbourhoods contain a point.
+  std::vector<double> variation(n), reach2(n);
+  std::vector<Eigen::Vector3d> pca_normals(input_normals ? 0 : n);
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  {
+    detail::ProgressReporter reporter(progress, 0.0, kPcaShare, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+        const std::uint32_t i = order[pos];
+        const Eigen::Vector3d& p = cloud.positions[i];
+        tree->knn(p, k, neighbors);
+        const LocalFit fit = fit_neighbourhood(*tree, p, neighbors);
+        variation[i] = fit.variation;
+        reach2[i] = neighbors.back().squared_distance;
+        if (!input_normals) pca_normals[i] = fit.normal;
+      }
+      reporter.advance(r.size());
+    });
+    reporter.throw_if_cancelled();
+  }
+
+  // Candidate threshold from the data: the median variation measures how much noise and smooth
+  // curvature ordinary points carry.
+  if (params.variation_threshold > 0.0) {
+    result.variation_threshold_used = params.variation_threshold;
+  } else {
+    std::vector<double> sorted = variation;
+    auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(n / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    result.variation_threshold_used = std::min(std::max(kVariationFloor, kVariationMedianFactor * *mid), 0.3);
+  }
+  const double threshold = result.variation_threshold_used;
+  std::vector<std::uint32_t> candidates;  // in spatial order
+  for (const std::uint32_t i : order)
+    if (variation[i] > threshold) candidates.push_back(i);
+  const std::size_t c = candidates.size();
+  result.candidates = c;
+
+  // Pass 2: the candidates' neighbours (k each, since n > k), kept for the screening; the points
+  // among them are the only ones whose robust normal is needed.
+  std::vector<std::uint32_t> candidate_neighbors(c * k);
+  std::vector<std::atomic<std::uint8_t>> needed(input_normals ? 0 : n);
+  {
+    detail::ProgressReporter reporter(progress, kPcaShare, kNeighborsShare, c);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        tree->knn(cloud.positions[candidates[q]], k, neighbors);
+        for (std::size_t j = 0; j < k; ++j) {
+          candidate_neighbors[q * k + j] = neighbors[j].index;
+          if (!input_normals) needed[neighbors[j].index].store(1, std::memory_order_relaxed);
+        }
+      }
+      reporter.advance(r.size());
+    });
+    reporter.throw_if_cancelled();
+  }
+
+  // Pass 3 (Robust): each needed point takes the normal of the flattest neighbourhood containing it.
+  std::vector<Eigen::Vector3d> robust_normals(input_normals ? 0 : n, Eigen::Vector3d::Zero());
+  if (!input_normals) {
+    detail::ProgressReporter reporter(progress, kNeighborsShare, kRobustShare, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+        const std::uint32_t i = order[pos];
+        if (needed[i].load(std::memory_order_relaxed) == 0) continue;
+        tree->knn(cloud.positions[i], k, neighbors);
+        std::uint32_t best = i;
+        for (const Neighbor& nb : neighbors)
+          if (nb.squared_distance <= reach2[nb.index] && variation[nb.index] < variation[best]) best = nb.index;
+        robust_normals[i] = pca_normals[best];
+      }
+      reporter.advance(r.size());
+    });
+    reporter.throw_if_cancelled();
+  }
+  const std::vector<Eigen::Vector3d>& normals = input_normals ? cloud.normals : robust_normals;
+
+  // Pass 4: screening of the candidates.
+  std::vector<double> labels(n, 0.0);
+  const double cos_dn = std::cos(params.dn_deg * std::numbers::pi / 180.0);
+  tbb::enumerable_thread_specific<ScreenBuffers> screen;
+  tbb::enumerable_thread_specific<std::array<std::size_t, 2>> counts(std::array<std::size_t, 2>{0, 0});
+  {
+    detail::ProgressReporter reporter(progress, kRobustShare, 1.0, c);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      ScreenBuffers& b = screen.local();
+      std::array<std::size_t, 2>& count = counts.local();
+      for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        const std::uint32_t i = candidates[q];
+        const std::span<const std::uint32_t> neighbors(candidate_neighbors.data() + q * k, k);
+        const int planes = planes_near(*tree, cloud.positions[i], neighbors, normals, cos_dn, result.dd_used, params.min_cluster_points, b);
+        if (planes >= 3) {
+          labels[i] = double(FeatureLabel::Corner);
+          ++count[1];
+        } else if (planes == 2) {
+          labels[i] = double(FeatureLabel::Edge);
+          ++count[0];
+        }
+      }
+      reporter.advance(r.size());
+    });
+    reporter.throw_if_cancelled();
+    reporter.report(1.0);
+    reporter.throw_if_cancelled();
+  }
+  for (const auto& count : counts) {
+    result.edges += count[0];
+    result.corners += count[1];
+  }
+  // A field "feature" already there keeps its old type through add(), hence the explicit type.
+  ScalarField& field = cloud.fields.add("feature", 0, ScalarType::UInt8);
+  field.type = ScalarType::UInt8;
+  field.values = std::move(labels);
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Pieces shared by the simplification methods: parameter checks, the target count, surface
+// variation on demand, sorted grid cells and greedy Poisson-disk thinning.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "pointsurf/simplify/simplify.h"
+
+namespace pointsurf::detail {
+
+/// Throws UsageError for an empty cloud or a malformed target. `allow_cell`: whether the
+/// method accepts a cell length; `allow_growth`: whether a count above N is allowed.
+void check_simplify_input(std::string_view function, const PointCloud& cloud, const SimplifyTarget& target, bool allow_cell,
+                          bool allow_growth = false);
+void check_k(std::string_view function, int k);
+/// The tree to use: `tree` (checked against the cloud size) or a new one built in `own`.
+const KdTree& tree_or_own(std::string_view function, const PointCloud& cloud, const KdTree* tree, std::optional<KdTree>& own);
+
+/// A callback mapping a sub-stage's [0, 1] onto [begin, end] of `progress` (empty if it is).
+ProgressCallback sub_progress(const ProgressCallback& progress, double begin, double end);
+
+/// Output count for a ratio or count target (at least 1).
+std::size_t target_count(const SimplifyTarget& target, std::size_t n);
+
+/// Normals and surface variation of every point: taken from the cloud (normals, field
+/// "variation") where present, estimated by PCA with k neighbours otherwise.
+struct SurfaceProperties {
+  std::vector<Vector3d> normals;   // N, unit or zero
+  std::vector<double> variation;   // N, [0, 1/3]
+  bool estimated_normals = false;
+};
+SurfaceProperties surface_properties(const PointCloud& cloud, int k, const KdTree& tree, bool need_normals,
+                                     const ProgressCallback& progress);
+
+/// A uniform grid of cubic cells of side `cell` with its origin at `min - cell/2`.
+struct Grid {
+  Vector3d origin = Vector3d::Zero();
+  double cell = 0.0;
+};
+/// Grid over the bounding box of `points` (Open3D's anchoring). Throws UsageError when the cell
+/// is not positive or the box spans more than 2^21 cells along an axis.
+Grid make_grid(std::string_view function, const BoundingBox& box, double cell);
+
+/// Point indices sorted by cell (x fastest), ties by index, and the segment boundaries:
+/// cell s holds order[starts[s] .. starts[s+1]).
+struct GridCells {
+  std::vector<std::uint64_t> keys;     // per segment
+  std::vector<std::uint32_t> order;    // point indices, grouped by cell
+  std::vector<std::size_t> starts;     // segments + 1
+  std::size_t size() const noexcept { return keys.size(); }
+};
+/// Sorts `subset` (or all points when it is empty and `all` is true) into grid cells.
+GridCells sort_into_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid);
+/// Only the number of occupied cells.
+std::size_t count_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid);
+
+/// Solves for a length L such that count(L) is near `wanted`, assuming count ~ L^-2 locally,
+/// by secant steps in log-log space from `initial`. Returns the best length and its count.
+template <typename CountFn>
+std::pair<double, std::size_t> solve_length(double initial, std::size_t wanted, double tolerance, int max_steps, CountFn&& count);
+
+/// The index of the point of `members` nearest to the centroid of the members.
+std::uint32_t nearest_to_centroid(std::span<const Vector3d> points, std::span<const std::uint32_t> members);
+
+}  // namespace pointsurf::detail
+
+#include "simplify/detail/solve_length.inl"

@@ -1,0 +1,364 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/simplify/simplify.h"
+#include "simplify/detail/simplify_common.h"
+
+namespace pointsurf {
+namespace {
+
+// A cluster holding less than this share of its cell's points is a transition, not a region.
+constexpr double kSmallClusterShare = 0.2;
+
+// Distance to another cluster's plane, in mean spacings, below which a point counts as lying on
+// the crease between the two (linearly from 1 at the crease to 0 at this distance).
+constexpr double kCreaseInSpacings = 2.0;
+
+struct Cluster {
+  Vector3d normal_sum = Vector3d::Zero();  // sign-aligned sum of member normals
+  Vector3d mean = Vector3d::Zero();        // unit mean normal
+  Vector3d offset_sum = Vector3d::Zero();  // sum of (p - base)
+  Vector3d centroid = Vector3d::Zero();    // relative to base
+  double radius = 0.0;
+  std::size_t count = 0;
+};
+
+struct Plane {
+  Vector3d centroid;  // relative to the bounding-box minimum
+  Vector3d normal;    // unit
+  double radius;      // largest distance of a member to the centroid
+};
+
+constexpr int kAxisBits = 21;  // as the cell keys of detail::sort_into_cells
+constexpr std::uint64_t kAxisMask = (std::uint64_t(1) << kAxisBits) - 1;
+
+// Per-thread scratch for one grid cell, reused across cells (no per-point allocation).
+struct CellScratch {
+  std::vector<std::uint32_t> members;
+  std::vector<std::uint32_t> cluster;  // per member
+  std::vector<Cluster> clusters;
+};
+
+// Mean normal (sign-aligned sum), centroid (relative to `origin`) and radius of each cluster
+// from the current membership.
+void compute_statistics(CellScratch& s, const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                        const Vector3d& origin) {
+  for (Cluster& c : s.clusters) c = Cluster{};
+  for (std::size_t q = 0; q < s.members.size(); ++q) {
+    const std::uint32_t i = s.members[q];
+    Cluster& c = s.clusters[s.cluster[q]];
+    c.normal_sum += c.normal_sum.dot(normals[i]) < 0.0 ? Vector3d(-normals[i]) : normals[i];
+    c.offset_sum += positions[i] - origin;
+    ++c.count;
+  }
+  for (Cluster& c : s.clusters) {
+    const double len = c.normal_sum.norm();
+    c.mean = len > 0.0 ? Vector3d(c.normal_sum / len) : Vector3d::Zero();
+    if (c.count > 0) c.centroid = c.offset_sum / double(c.count);
+  }
+  for (std::size_t q = 0; q < s.members.size(); ++q) {
+    Cluster& c = s.clusters[s.cluster[q]];
+    c.radius = std::max(c.radius, (positions[s.members[q]] - origin - c.centroid).norm());
+  }
+}
+
+void check_params(const RegionalParams& p) {
+  constexpr std::string_view f = "simplify_regional";
+  detail::check_k(f, p.k);
+  if (!(p.region_in_spacings > 0.0) || !std::isfinite(p.region_in_spacings))
+    throw UsageError(fmt::format("{}: region_in_spacings must be > 0, got {}", f, p.region_in_spacings));
+  if (!(p.region_angle_deg > 0.0 && p.region_angle_deg <= 90.0))
+    throw UsageError(fmt::format("{}: region_angle_deg must be in (0, 90] degrees, got {}", f, p.region_angle_deg));
+  for (auto [name, w] : {std::pair{"variation_weight", p.variation_weight}, std::pair{"normal_weight", p.normal_weight},
+                         std::pair{"distance_weight", p.distance_weight}})
+    if (!(w >= 0.0) || !std::isfinite(w)) throw UsageError(fmt::format("{}: {} must be >= 0, got {}", f, name, w));
+  if (!(p.variation_weight + p.normal_weight + p.distance_weight > 0.0))
+    throw UsageError(fmt::format("{}: variation_weight, normal_weight and distance_weight are all 0; at least one must be > 0", f));
+  if (!(p.feature_threshold <= 1.0) || std::isnan(p.feature_threshold))
+    throw UsageError(fmt::format("{}: feature_threshold must be in [0, 1] (or < 0 for the derived default), got {}", f,
+                                 p.feature_threshold));
+  if (!(p.max_feature_share > 0.0 && p.max_feature_share <= 1.0))
+    throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
+}
+
+bool lexicographic_less(const Vector3d& a, const Vector3d& b) {
+  return a.x() < b.x() || (a.x() == b.x() && (a.y() < b.y() || (a.y() == b.y() && a.z() < b.z())));
+}
+
+}  // namespace
+
+SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
+                                 const ProgressCallback& progress) {
+  detail::check_simplify_input("simplify_regional", cloud, params.target, true);
+  check_params(params);
+  const std::size_t n = cloud.size();
+  SimplifyResult result;
+  result.input_points = n;
+  if (n < 3) {  // nothing to cluster: keep what the target asks for, in input order
+    std::vector<std::size_t> keep(params.target.cell > 0.0 ? n : std::min(n, detail::target_count(params.target, n)));
+    std::iota(keep.begin(), keep.end(), std::size_t(0));
+    result.cloud = cloud.select(keep);
+    result.source_index = std::move(keep);
+    return result;
+  }
+  std::optional<KdTree> own;
+  const KdTree& t = detail::tree_or_own("simplify_regional", cloud, tree, own);
+  const BoundingBox box = bounding_box(cloud.positions);
+  double spacing = mean_spacing(t);
+  if (!(spacing > 0.0)) spacing = box.diagonal() > 0.0 ? box.diagonal() / std::sqrt(double(n)) : 1.0;
+  const detail::SurfaceProperties surface =
+      detail::surface_properties(cloud, params.k, t, true, detail::sub_progress(progress, 0.0, 0.6));
+  detail::ProgressReporter reporter(progress, 0.6, 1.0, n);
+
+  // Clusters by position (grid cells) and normal (greedy grouping inside each cell), and the
+  // feature factor of every point.
+  const detail::Grid region_grid =
+      detail::make_grid("simplify_regional", box, std::max(params.region_in_spacings * spacing, box.extent().maxCoeff() * 1e-6));
+  const detail::GridCells regions = detail::sort_into_cells(cloud.positions, {}, true, region_grid);
+  const double cos_join = std::cos(params.region_angle_deg * std::numbers::pi / 180.0);
+  const double crease_scale = kCreaseInSpacings * spacing;
+  const double weight_sum = params.variation_weight + params.normal_weight + params.distance_weight;
+  std::vector<float> factor(n);
+  // Per point, from the first pass: its cluster's unit mean normal and the variation, normal
+  // and own-plane terms; per cell, the planes of its greedy clusters.
+  std::vector<Vector3d> cluster_normal(n);
+  std::vector<float> base_terms(n), own_delta(n);
+  std::vector<std::vector<Plane>> planes(regions.size());
+  tbb::enumerable_thread_specific<CellScratch> scratch;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, regions.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
+    CellScratch& s = scratch.local();
+    std::size_t visited = 0;
+    for (std::size_t cell = r.begin(); cell != r.end(); ++cell) {
+      s.members.assign(regions.order.begin() + std::ptrdiff_t(regions.starts[cell]),
+                       regions.order.begin() + std::ptrdiff_t(regions.starts[cell + 1]));
+      // A fixed visiting order independent of the input order (permutation invariance).
+      std::sort(s.members.begin(), s.members.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return lexicographic_less(cloud.positions[a], cloud.positions[b]) ||
+               (cloud.positions[a] == cloud.positions[b] && a < b);
+      });
+      visited += s.members.size();
+      s.clusters.clear();
+      s.cluster.resize(s.members.size());
+      for (std::size_t q = 0; q < s.members.size(); ++q) {
+        const Vector3d& normal = surface.normals[s.members[q]];
+        std::size_t best = s.clusters.size();
+        double best_cos = cos_join;
+        if (normal.squaredNorm() > 0.0) {
+          for (std::size_t c = 0; c < s.clusters.size(); ++c) {
+            const double cosine = std::abs(normal.dot(s.clusters[c].mean));
+            if (cosine >= best_cos) best = c, best_cos = cosine;
+          }
+        }
+        if (best == s.clusters.size()) s.clusters.emplace_back();
+        Cluster& c = s.clusters[best];
+        if (normal.squaredNorm() > 0.0) {
+          c.normal_sum += c.normal_sum.dot(normal) < 0.0 ? Vector3d(-normal) : normal;
+          const double len = c.normal_sum.norm();
+          if (len > 0.0) c.mean = c.normal_sum / len;
+        }
+        ++c.count;
+        s.cluster[q] = static_cast<std::uint32_t>(best);
+      }
+      compute_statistics(s, cloud.positions, surface.normals, box.min);
+      // The planes of the greedy clusters of at least 3 points: a point close to the plane of a
+      // cluster whose normal differs from its own cluster's lies on a crease.
+      for (const Cluster& c : s.clusters)
+        if (c.count >= 3 && c.mean.squaredNorm() > 0.0) planes[cell].push_back({c.centroid, c.mean, c.radius});
+      // Small clusters are transitions between large ones (the points along an edge, whose
+      // normals turn from one face to the other): their members join the large cluster closest
+      // in normal, so that their deviation from it shows.
+      const std::size_t small = std::max<std::size_t>(3, static_cast<std::size_t>(kSmallClusterShare * double(s.members.size())));
+      bool any_large = false;
+      for (const Cluster& c : s.clusters) any_large |= c.count >= small;
+      if (any_large) {
+        for (std::size_t q = 0; q < s.members.size(); ++q) {
+          if (s.clusters[s.cluster[q]].count >= small) continue;
+          const Vector3d& normal = surface.normals[s.members[q]];
+          std::size_t best = s.clusters.size();
+          double best_cos = -1.0;
+          for (std::size_t c = 0; c < s.clusters.size(); ++c) {
+            if (s.clusters[c].count < small) continue;
+            const double cosine = std::abs(normal.dot(s.clusters[c].mean));
+            if (cosine > best_cos) best = c, best_cos = cosine;
+          }
+          s.cluster[q] = static_cast<std::uint32_t>(best);
+        }
+        compute_statistics(s, cloud.positions, surface.normals, box.min);
+      }
+      for (std::size_t q = 0; q < s.members.size(); ++q) {
+        const std::uint32_t i = s.members[q];
+        const Cluster& c = s.clusters[s.cluster[q]];
+        const Vector3d& normal = surface.normals[i];
+        const double sigma = std::min(1.0, 3.0 * std::max(surface.variation[i], 0.0));
+        // A point without a normal (degenerate neighbourhood) or in a cluster without one
+        // deviates as much as it can.
+        const double theta = normal.squaredNorm() > 0.0 && c.mean.squaredNorm() > 0.0
+                                 ? std::acos(std::min(1.0, std::abs(normal.dot(c.mean)))) / (0.5 * std::numbers::pi)
+                                 : 1.0;
+        const double delta = c.radius > 0.0 && c.mean.squaredNorm() > 0.0
+                                 ? std::min(1.0, std::abs((cloud.positions[i] - box.min - c.centroid).dot(c.mean)) / (0.5 * c.radius))
+                                 : 0.0;
+        cluster_normal[i] = c.mean;
+        base_terms[i] = static_cast<float>(params.variation_weight * sigma + params.normal_weight * theta);
+        own_delta[i] = static_cast<float>(delta);
+      }
+    }
+    reporter.advance(visited / 2);
+  });
+  reporter.throw_if_cancelled();
+  // Second pass: the crease term looks at the planes of the 27 cells around each point's cell,
+  // so a crease near a cell border is seen from both sides.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, regions.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
+    std::size_t visited = 0;
+    for (std::size_t cell = r.begin(); cell != r.end(); ++cell) {
+      const std::uint64_t key = regions.keys[cell];
+      const std::int64_t cx = std::int64_t(key & kAxisMask), cy = std::int64_t((key >> kAxisBits) & kAxisMask),
+                         cz = std::int64_t(key >> (2 * kAxisBits));
+      std::array<std::size_t, 27> around{};
+      std::size_t around_count = 0;
+      for (std::int64_t dz = -1; dz <= 1; ++dz)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+          for (std::int64_t dx = -1; dx <= 1; ++dx) {
+            if (cx + dx < 0 || cy + dy < 0 || cz + dz < 0) continue;
+            const std::uint64_t other = std::uint64_t(cx + dx) | (std::uint64_t(cy + dy) << kAxisBits) |
+                                        (std::uint64_t(cz + dz) << (2 * kAxisBits));
+            const auto it = std::lower_bound(regions.keys.begin(), regions.keys.end(), other);
+            if (it != regions.keys.end() && *it == other) around[around_count++] = std::size_t(it - regions.keys.begin());
+          }
+      for (std::size_t q = regions.starts[cell]; q != regions.starts[cell + 1]; ++q) {
+        const std::uint32_t i = regions.order[q];
+        const Vector3d p = cloud.positions[i] - box.min;
+        double delta = own_delta[i];
+        for (std::size_t a = 0; a < around_count; ++a)
+          for (const Plane& plane : planes[around[a]]) {
+            if (std::abs(plane.normal.dot(cluster_normal[i])) >= cos_join) continue;  // the same region
+            if ((p - plane.centroid).norm() > plane.radius + crease_scale) continue;   // beyond its cluster
+            const double d = std::abs((p - plane.centroid).dot(plane.normal));
+            delta = std::max(delta, 1.0 - std::min(1.0, d / crease_scale));
+          }
+        factor[i] = static_cast<float>((base_terms[i] + params.distance_weight * delta) / weight_sum);
+      }
+      visited += regions.starts[cell + 1] - regions.starts[cell];
+    }
+    reporter.advance(visited / 2);
+  });
+  reporter.throw_if_cancelled();
+
+  // Threshold: a robust outlier bound on F (median + 3 MAD), at least 0.02.
+  double threshold = params.feature_threshold;
+  if (threshold < 0.0) {
+    std::vector<float> sorted(factor);
+    const auto mid = sorted.begin() + std::ptrdiff_t(n / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    const double median = *mid;
+    for (float& v : sorted) v = std::abs(v - static_cast<float>(median));
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    threshold = std::max(0.02, median + 3.0 * 1.4826 * double(*mid));
+  }
+  const ScalarField* feature_field = cloud.fields.find("feature");
+  std::vector<std::uint32_t> candidates;
+  for (std::uint32_t i = 0; i < n; ++i)
+    if ((feature_field != nullptr && feature_field->values[i] > 0.0) || factor[i] >= threshold) candidates.push_back(i);
+  // Priority: points the features module marked first, then by decreasing F.
+  const auto priority = [&](std::uint32_t i) {
+    return (feature_field != nullptr && feature_field->values[i] > 0.0 ? 2.0 : 0.0) + double(factor[i]);
+  };
+  const auto before = [&](std::uint32_t a, std::uint32_t b) {
+    const double pa = priority(a), pb = priority(b);
+    return pa > pb || (pa == pb && lexicographic_less(cloud.positions[a], cloud.positions[b]));
+  };
+  const bool by_cell = params.target.cell > 0.0;
+  const std::size_t wanted = by_cell ? 0 : detail::target_count(params.target, n);
+  std::size_t feature_budget = candidates.size();
+  if (!by_cell) feature_budget = std::min(feature_budget, static_cast<std::size_t>(params.max_feature_share * double(wanted)));
+  if (feature_budget < candidates.size()) {
+    std::nth_element(candidates.begin(), candidates.begin() + std::ptrdiff_t(feature_budget), candidates.end(), before);
+    candidates.resize(feature_budget);
+  }
+  std::vector<char> kept(n, 0);
+  for (std::uint32_t i : candidates) kept[i] = 1;
+  result.feature_points = candidates.size();
+
+  // Flat points: a grid over the rest, the sample nearest to each cell's centroid.
+  std::vector<std::uint32_t> flat;
+  flat.reserve(n - candidates.size());
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (!kept[i]) flat.push_back(i);
+  const std::size_t flat_wanted = by_cell ? 0 : wanted - candidates.size();
+  std::vector<std::uint32_t> chosen;
+  if (!flat.empty() && (by_cell || flat_wanted > 0)) {
+    double cell = params.target.cell;
+    if (!by_cell) {
+      if (flat_wanted >= flat.size()) {
+        cell = 0.0;
+        chosen = flat;
+      } else {
+        const double initial = spacing * std::sqrt(double(flat.size()) / double(flat_wanted));
+        cell = detail::solve_length(initial, flat_wanted, 0.02, 6, [&](double c) {
+                 return detail::count_cells(cloud.positions, flat, false, detail::make_grid("simplify_regional", box, c));
+               }).first;
+      }
+    }
+    if (cell > 0.0) {
+      result.length_used = cell;
+      const detail::GridCells cells =
+          detail::sort_into_cells(cloud.positions, flat, false, detail::make_grid("simplify_regional", box, cell));
+      chosen.resize(cells.size());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t s = r.begin(); s != r.end(); ++s)
+          chosen[s] = detail::nearest_to_centroid(
+              cloud.positions, std::span<const std::uint32_t>(cells.order.data() + cells.starts[s], cells.starts[s + 1] - cells.starts[s]));
+      });
+      if (!by_cell && chosen.size() > flat_wanted) {
+        // Too many cells: drop the representatives of the least populated cells (partial cells
+        // at borders), so the count is exact.
+        std::vector<std::size_t> cell_index(chosen.size());
+        std::iota(cell_index.begin(), cell_index.end(), std::size_t(0));
+        std::stable_sort(cell_index.begin(), cell_index.end(), [&](std::size_t a, std::size_t b) {
+          return cells.starts[a + 1] - cells.starts[a] > cells.starts[b + 1] - cells.starts[b];
+        });
+        cell_index.resize(flat_wanted);
+        std::vector<std::uint32_t> trimmed;
+        trimmed.reserve(flat_wanted);
+        for (std::size_t s : cell_index) trimmed.push_back(chosen[s]);
+        chosen = std::move(trimmed);
+      }
+    }
+    for (std::uint32_t i : chosen) kept[i] = 1;
+    if (!by_cell && chosen.size() < flat_wanted) {
+      // Too few cells: add the leftover points with the highest F.
+      std::vector<std::uint32_t> rest;
+      for (std::uint32_t i : flat)
+        if (!kept[i]) rest.push_back(i);
+      const std::size_t extra = std::min(rest.size(), flat_wanted - chosen.size());
+      std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(), before);
+      for (std::size_t q = 0; q < extra; ++q) kept[rest[q]] = 1;
+    }
+  }
+  std::vector<std::size_t> keep;
+  keep.reserve(by_cell ? candidates.size() + chosen.size() : wanted);
+  for (std::size_t i = 0; i < n; ++i)
+    if (kept[i]) keep.push_back(i);
+  result.cloud = cloud.select(keep);
+  ScalarField& field = result.cloud.fields.add("feature_factor", keep.size(), ScalarType::Float32);
+  for (std::size_t j = 0; j < keep.size(); ++j) field.values[j] = factor[keep[j]];
+  result.source_index = std::move(keep);
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,249 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/features/feature_points.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/spatial/kd_tree.h"
+#include "support/features_shapes.h"
+#include "support/files.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+// Scoring bands, in mean spacings of the noiseless cloud: a point within kTruth of a sharp edge
+// must be labelled; a labelled point within kTolerance is correct.
+constexpr double kTruth = 1.0;
+constexpr double kTolerance = 1.5;
+
+const std::vector<double>& labels_of(const PointCloud& cloud) {
+  const ScalarField* field = cloud.fields.find("feature");
+  EXPECT_NE(field, nullptr);
+  static const std::vector<double> none;
+  return field == nullptr ? none : field->values;
+}
+
+test::FeatureScore detect_and_score(test::FeatureShape shape, double noise_in_spacings, const FeatureParams& params = {}) {
+  const double spacing = mean_spacing(shape.cloud.positions);
+  test::add_feature_noise(shape, noise_in_spacings * spacing);
+  shape.cloud.normals.clear();
+  detect_feature_points(shape.cloud, params);
+  return test::score_features(labels_of(shape.cloud), shape.edge_distance, kTruth * spacing, kTolerance * spacing);
+}
+
+// Share of points whose labels differ.
+double label_disagreement(const std::vector<double>& a, const std::vector<double>& b) {
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) differ += a[i] != b[i];
+  return double(differ) / double(a.size());
+}
+
+TEST(DetectFeaturePoints, CubeEdgesCleanAndNoisy) {
+  for (const double noise : {0.0, 0.2}) {
+    const test::FeatureScore s = detect_and_score(test::sample_cube_features(30000), noise);
+    EXPECT_GE(s.precision, 0.9) << "noise " << noise;
+    EXPECT_GE(s.recall, 0.9) << "noise " << noise;
+    EXPECT_GT(s.truth, 500u);
+  }
+}
+
+TEST(DetectFeaturePoints, CadPartEdgesCleanAndNoisy) {
+  // Right-angled convex and concave edges, two 135-degree chamfer edges and two circles.
+  for (const double noise : {0.0, 0.2}) {
+    const test::FeatureShape shape = test::sample_cad_part(30000);
+    const test::FeatureScore s = detect_and_score(shape, noise);
+    EXPECT_GE(s.precision, 0.9) << "noise " << noise;
+    EXPECT_GE(s.recall, 0.9) << "noise " << noise;
+  }
+}
+
+TEST(DetectFeaturePoints, ChamferEdgesAreFound) {
+  // The 135-degree edges alone: points near x = -2 .. -1.75 on the part, away from other edges.
+  test::FeatureShape shape = test::sample_cad_part(30000);
+  const double spacing = mean_spacing(shape.cloud.positions);
+  detect_feature_points(shape.cloud);
+  const std::vector<double>& labels = labels_of(shape.cloud);
+  std::size_t truth = 0, found = 0;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    const Vector3d& p = shape.cloud.positions[i];
+    if (p.x() > -1.7 || std::abs(p.y()) > 1.3 || p.z() < 0.1 || shape.edge_distance[i] > spacing) continue;
+    ++truth;
+    found += labels[i] != 0.0;
+  }
+  ASSERT_GT(truth, 50u);
+  EXPECT_GE(double(found) / double(truth), 0.9);
+}
+
+TEST(DetectFeaturePoints, CubeCornersAreLabelledNearCorners) {
+  test::FeatureShape shape = test::sample_cube_features(30000);
+  const double spacing = mean_spacing(shape.cloud.positions);
+  const FeatureResult r = detect_feature_points(shape.cloud);
+  const std::vector<double>& labels = labels_of(shape.cloud);
+  std::size_t corners = 0;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (labels[i] != double(FeatureLabel::Corner)) continue;
+    ++corners;
+    EXPECT_LE(shape.corner_distance[i], 3.0 * spacing) << "point " << i;
+  }
+  EXPECT_EQ(corners, r.corners);
+  EXPECT_GE(r.corners, 4u);
+  EXPECT_EQ(r.edges + r.corners, std::size_t(std::count_if(labels.begin(), labels.end(), [](double v) { return v != 0.0; })));
+}
+
+TEST(DetectFeaturePoints, SmoothSurfacesHaveAlmostNoFeatures) {
+  for (const PointCloud& smooth : {test::sample_sphere(20000), test::sample_torus(20000), test::sample_plane(5000)}) {
+    PointCloud cloud = smooth;
+    cloud.normals.clear();
+    const FeatureResult r = detect_feature_points(cloud);
+    EXPECT_LE(r.edges + r.corners, cloud.size() / 200) << r.edges << " edges, " << r.corners << " corners";
+  }
+}
+
+TEST(DetectFeaturePoints, FieldIsUint8AndReplacesAnExistingOne) {
+  PointCloud cloud = test::sample_cube_features(8000).cloud;
+  cloud.fields.add("feature", cloud.size(), ScalarType::Float64).values.assign(cloud.size(), 7.0);
+  const std::vector<Vector3d> positions = cloud.positions;
+  const std::vector<Vector3d> normals = cloud.normals;
+  const FeatureResult r = detect_feature_points(cloud);
+  const ScalarField* field = cloud.fields.find("feature");
+  ASSERT_NE(field, nullptr);
+  EXPECT_EQ(field->type, ScalarType::UInt8);
+  ASSERT_EQ(field->values.size(), cloud.size());
+  for (double v : field->values) ASSERT_TRUE(v == 0.0 || v == 1.0 || v == 2.0) << v;
+  EXPECT_EQ(cloud.positions, positions);
+  EXPECT_EQ(cloud.normals, normals);
+  EXPECT_GE(r.candidates, r.edges + r.corners);
+  EXPECT_GT(r.mean_spacing, 0.0);
+  EXPECT_DOUBLE_EQ(r.dd_used, r.mean_spacing);
+}
+
+TEST(DetectFeaturePoints, ExplicitParametersAreUsedAndTreeIsReused) {
+  PointCloud cloud = test::sample_cube_features(8000).cloud;
+  const KdTree tree(cloud.positions);
+  PointCloud with_tree = cloud;
+  const FeatureResult a = detect_feature_points(with_tree, {.variation_threshold = 0.02, .dd = 0.01}, &tree);
+  EXPECT_EQ(a.variation_threshold_used, 0.02);
+  EXPECT_EQ(a.dd_used, 0.01);
+  const FeatureResult b = detect_feature_points(cloud, {.variation_threshold = 0.02, .dd = 0.01});
+  EXPECT_EQ(a.edges, b.edges);
+  EXPECT_EQ(labels_of(cloud), labels_of(with_tree));
+  // dd_in_spacings scales the derived distance.
+  const FeatureResult c = detect_feature_points(cloud, {.dd_in_spacings = 0.5}, &tree);
+  EXPECT_DOUBLE_EQ(c.dd_used, 0.5 * c.mean_spacing);
+}
+
+TEST(DetectFeaturePoints, InputNormalsWorkUnoriented) {
+  // Sharp input normals (exact ones) with random signs give the same labels as consistent signs.
+  test::FeatureShape shape = test::sample_cube_features(20000);
+  const double spacing = mean_spacing(shape.cloud.positions);
+  PointCloud oriented = shape.cloud;
+  PointCloud flipped = shape.cloud;
+  std::mt19937_64 rng(11);
+  for (Vector3d& n : flipped.normals)
+    if (rng() % 2 == 0) n = -n;
+  const FeatureParams params{.normals = FeatureNormals::Input};
+  detect_feature_points(oriented, params);
+  detect_feature_points(flipped, params);
+  EXPECT_EQ(labels_of(oriented), labels_of(flipped));
+  const test::FeatureScore s = test::score_features(labels_of(oriented), shape.edge_distance, kTruth * spacing, kTolerance * spacing);
+  EXPECT_GE(s.precision, 0.9);
+  EXPECT_GE(s.recall, 0.9);
+}
+
+TEST(DetectFeaturePoints, InvariantUnderPermutation) {
+  const PointCloud cloud = test::sample_cad_part(20000).cloud;
+  std::vector<std::size_t> perm(cloud.size());
+  std::iota(perm.begin(), perm.end(), std::size_t(0));
+  std::shuffle(perm.begin(), perm.end(), std::mt19937_64(5));
+  PointCloud a = cloud, b = cloud.select(perm);
+  detect_feature_points(a);
+  detect_feature_points(b);
+  std::vector<double> back(cloud.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) back[perm[i]] = labels_of(b)[i];
+  EXPECT_LE(label_disagreement(labels_of(a), back), 1e-3);
+}
+
+TEST(DetectFeaturePoints, InvariantUnderRigidMotionAndGeoreferencedShift) {
+  const PointCloud cloud = test::sample_cad_part(20000).cloud;
+  PointCloud reference = cloud;
+  const FeatureResult r0 = detect_feature_points(reference);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.rotate(Eigen::AngleAxisd(0.7, Vector3d(1.0, -2.0, 0.5).normalized()));
+  t.pretranslate(Vector3d(12.0, -3.5, 100.0));
+  PointCloud moved = cloud, shifted = cloud;
+  for (Vector3d& p : moved.positions) p = t * p;
+  for (Vector3d& p : shifted.positions) p += Vector3d(4.5e6, 5.3e6, 1.0e6);
+  const FeatureResult r1 = detect_feature_points(moved);
+  const FeatureResult r2 = detect_feature_points(shifted);
+  EXPECT_LE(label_disagreement(labels_of(reference), labels_of(moved)), 1e-3);
+  EXPECT_LE(label_disagreement(labels_of(reference), labels_of(shifted)), 1e-3);
+  EXPECT_NEAR(double(r1.edges), double(r0.edges), 0.01 * double(r0.edges));
+  EXPECT_NEAR(double(r2.edges), double(r0.edges), 0.01 * double(r0.edges));
+}
+
+TEST(DetectFeaturePoints, InvariantUnderScale) {
+  // Every default derives from the mean spacing or is scale-free.
+  const PointCloud cloud = test::sample_cube_features(10000).cloud;
+  PointCloud small = cloud, large = cloud;
+  for (Vector3d& p : small.positions) p *= 1e-3;
+  for (Vector3d& p : large.positions) p *= 1e3;
+  detect_feature_points(small);
+  detect_feature_points(large);
+  EXPECT_LE(label_disagreement(labels_of(small), labels_of(large)), 1e-3);
+}
+
+TEST(DetectFeaturePoints, CancelLeavesTheCloudUnchanged) {
+  PointCloud cloud = test::sample_cube_features(8000).cloud;
+  int calls = 0;
+  EXPECT_THROW(detect_feature_points(cloud, {}, nullptr, [&](double) { return ++calls < 2; }), CancelledError);
+  EXPECT_FALSE(cloud.fields.contains("feature"));
+  double last = -1.0;
+  bool monotone = true;
+  detect_feature_points(cloud, {}, nullptr, [&](double f) {
+    monotone = monotone && f >= last && f <= 1.0;
+    last = f;
+    return true;
+  });
+  EXPECT_TRUE(monotone);
+  EXPECT_EQ(last, 1.0);
+}
+
+TEST(DetectFeaturePoints, BadParametersAreUsageErrors) {
+  PointCloud cloud = test::sample_cube_features(2000).cloud;
+  using test::expect_error;
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.k = 5}); }, "detect_feature_points: k must be >= 6, got 5");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.variation_threshold = 0.4}); },
+                           "variation_threshold must be in [0, 1/3) (0: derived), got 0.4");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.variation_threshold = -0.1}); }, "got -0.1");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 0.0}); }, "dn_deg must be in (0, 90) degrees, got 0");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 95.0}); }, "dn_deg must be in (0, 90) degrees, got 95");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd = -1.0}); }, "dd must be >= 0 (0: dd_in_spacings * mean spacing), got -1");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd_in_spacings = 0.0}); }, "dd_in_spacings must be > 0, got 0");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.min_cluster_points = 2}); },
+                           "min_cluster_points must be in [3, k = 30], got 2");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.k = 10, .min_cluster_points = 11}); },
+                           "min_cluster_points must be in [3, k = 10], got 11");
+  PointCloud no_normals = cloud;
+  no_normals.normals.clear();
+  expect_error<UsageError>([&] { detect_feature_points(no_normals, {.normals = FeatureNormals::Input}); },
+                           "normals = Input needs one normal per point, the cloud has 0 for 2000 points");
+  PointCloud tiny;
+  tiny.positions.assign(10, Vector3d::Zero());
+  expect_error<UsageError>([&] { detect_feature_points(tiny); }, "needs at least k + 1 = 31 points, got 10");
+  const KdTree other(tiny.positions);
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {}, &other); }, "the kd-tree holds 10 points but the cloud has 2000");
+  EXPECT_FALSE(cloud.fields.contains("feature"));
+}
+
+}  // namespace
+}  // namespace pointsurf
