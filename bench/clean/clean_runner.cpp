@@ -24,6 +24,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "pointsurf/core/error.h"
 #include "pointsurf/clean/remove_duplicates.h"
 #include "pointsurf/clean/remove_outliers.h"
 #include "pointsurf/clean/smooth_points.h"
