@@ -146,6 +146,7 @@ int run(int argc, char** argv) {
     const std::string path = argc > 4 ? argv[4] : "";
     SimplifyResult r;
     if (what == "grid") {
+      cloud.normals.clear();  // positions only, as open3d_simplify.py gives Open3D
       GridParams p;
       p.target.cell = std::stod(argv[3]);
       const auto t0 = Clock::now();
