@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
 
 namespace pointsurf::cli {
 
@@ -263,6 +264,21 @@ void write_cloud_reported(const std::filesystem::path& path, const PointCloud& c
   report.end_stage(stage);
   report.stage(stage)["counts"]["points"] = cloud.size();
   report.add_output(describe_cloud(path, format_from_extension(path), cloud));
+}
+
+void estimate_missing_normals(PointCloud& cloud, const KdTree& tree, int k, const CommonOptions& common, Report& report) {
+  const std::size_t stage = report.begin_stage("normals");
+  NormalResult estimated;
+  OrientResult oriented;
+  {
+    ProgressBar bar("normals", !common.quiet);
+    estimated = estimate_normals(cloud, {.k = k, .keep_variation = false}, &tree, bar.callback());
+    oriented = orient_normals(cloud, {}, &tree, bar.callback());
+  }
+  report.end_stage(stage);
+  report.stage(stage)["counts"] = {
+      {"points", cloud.size()}, {"degenerate", estimated.degenerate}, {"flipped", oriented.flipped}, {"components", oriented.components}};
+  report.stage(stage)["metrics"] = {{"k", k}, {"orientation", "mst"}, {"reason", "the input has no normals"}};
 }
 
 namespace {

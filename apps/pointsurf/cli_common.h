@@ -15,6 +15,7 @@
 
 #include "pointsurf/core/progress.h"
 #include "pointsurf/io/io.h"
+#include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::cli {
 
@@ -110,6 +111,11 @@ void write_cloud_reported(const std::filesystem::path& path, const PointCloud& c
 /// Adds the warnings about attributes the output format cannot hold.
 void warn_lost_attributes(const std::filesystem::path& path, bool normals, bool colors, const FieldSet& fields, std::size_t faces,
                           const WriteOptions& options, const CommonOptions& common, Report& report);
+
+/// For commands that need oriented normals on input that has none: PCA normals over `k`
+/// neighbours (no variation field) and MST orientation, reusing `tree` (built over
+/// cloud.positions), recorded as a report stage "normals" with its counts.
+void estimate_missing_normals(PointCloud& cloud, const KdTree& tree, int k, const CommonOptions& common, Report& report);
 
 /// A registered subcommand: its CLI11 app and the function that runs it after parsing.
 struct Command {

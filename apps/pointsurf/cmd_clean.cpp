@@ -128,25 +128,15 @@ void run_clean(const CleanState& s) {
     const std::string name = method_name(method);
     if (cloud.size() < 4) throw InputError(fmt::format("{}: {} points left before {}; cleaning needs at least 4", s.input, cloud.size(), name));
     const bool smoothing = method == Method::Bilateral || method == Method::Trilateral;
+    const KdTree tree(cloud.positions);  // one tree per step: the previous step may have removed points
     if (smoothing && !cloud.has_normals()) {
       // The filters move points along their normals: estimate and orient them when missing.
-      const std::size_t stage = report.begin_stage("normals");
-      const KdTree tree(cloud.positions);
-      NormalResult estimated;
-      {
-        ProgressBar bar("normals", !s.common.quiet);
-        estimated = estimate_normals(cloud, {.keep_variation = false}, &tree, bar.callback());
-        orient_normals(cloud, {}, &tree);
-      }
-      report.end_stage(stage);
-      report.stage(stage)["counts"] = {{"points", cloud.size()}, {"degenerate", estimated.degenerate}};
-      report.stage(stage)["metrics"]["reason"] = "the input has no normals: PCA (k 30), MST orientation";
+      estimate_missing_normals(cloud, tree, NormalParams{}.k, s.common, report);
       estimated_normals = true;
     }
 
     const std::size_t stage = report.begin_stage(name);
     const std::size_t before = cloud.size();
-    const KdTree tree(cloud.positions);
     nlohmann::json& record = report.stage(stage);
     ProgressBar bar(name, !s.common.quiet);
     auto removal = [&](const OutlierResult& r, const char* threshold_name) {

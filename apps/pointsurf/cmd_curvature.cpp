@@ -8,7 +8,6 @@
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
-#include "pointsurf/normals/normals.h"
 #include "pointsurf/shape/curvature.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -73,26 +72,7 @@ void run_curvature(const CurvatureState& s) {
 
   // The sign of the curvature comes from the normals: estimate and orient them when missing.
   const bool estimated_normals = !cloud.has_normals();
-  if (estimated_normals) {
-    stage = report.begin_stage("normals");
-    NormalResult normals;
-    OrientResult oriented;
-    {
-      ProgressBar bar("normals", !s.common.quiet);
-      NormalParams np;
-      np.k = s.normal_k;
-      np.keep_variation = false;
-      normals = estimate_normals(cloud, np, &tree, bar.callback());
-      oriented = orient_normals(cloud, {}, &tree);
-    }
-    report.end_stage(stage);
-    report.stage(stage)["counts"] = {{"points", cloud.size()},
-                                     {"degenerate", normals.degenerate},
-                                     {"flipped", oriented.flipped},
-                                     {"components", oriented.components}};
-    report.stage(stage)["metrics"]["k"] = s.normal_k;
-    report.stage(stage)["metrics"]["orientation"] = "mst";
-  }
+  if (estimated_normals) estimate_missing_normals(cloud, tree, s.normal_k, s.common, report);
 
   stage = report.begin_stage("curvature");
   CurvatureResult result;

@@ -8,7 +8,6 @@
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/features/feature_points.h"
-#include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::cli {
@@ -89,15 +88,7 @@ void run_features(FeaturesState& s) {
 
   bool estimated = false;
   if (s.params.normals == FeatureNormals::Input && !cloud.has_normals()) {
-    stage = report.begin_stage("normals");
-    NormalResult normals;
-    {
-      ProgressBar bar("normals", !s.common.quiet);
-      normals = estimate_normals(cloud, {.k = s.params.k, .keep_variation = false}, &tree, bar.callback());
-      orient_normals(cloud, {}, &tree, bar.callback());
-    }
-    report.end_stage(stage);
-    report.stage(stage)["counts"] = {{"estimated", cloud.size()}, {"degenerate", normals.degenerate}};
+    estimate_missing_normals(cloud, tree, s.params.k, s.common, report);
     estimated = true;
   }
 
