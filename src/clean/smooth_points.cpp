@@ -128,6 +128,14 @@ void fill_displacements(const std::vector<Vector3d>& before, const std::vector<V
   result.max_displacement = largest;
 }
 
+// Radius and height sigma in cloud units: explicit values, or multiples of the mean spacing.
+void resolve_lengths(Resolved& r, const BilateralParams& params, const KdTree& tree) {
+  const double spacing = params.radius > 0.0 && params.height_sigma > 0.0 ? 0.0 : mean_spacing(tree);
+  r.radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * spacing;
+  r.height_sigma = params.height_sigma > 0.0 ? params.height_sigma : params.height_sigma_in_spacings * spacing;
+  r.max_neighbours = static_cast<std::size_t>(params.max_neighbours);
+}
+
 }  // namespace
 
 SmoothResult smooth_bilateral(PointCloud& cloud, const BilateralParams& params, const KdTree* tree, const ProgressCallback& progress) {
@@ -135,10 +143,7 @@ SmoothResult smooth_bilateral(PointCloud& cloud, const BilateralParams& params, 
   Resolved r = check_and_resolve(fn, cloud, params, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
-  const double spacing = params.radius > 0.0 && params.height_sigma > 0.0 ? 0.0 : mean_spacing(t);
-  r.radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * spacing;
-  r.height_sigma = params.height_sigma > 0.0 ? params.height_sigma : params.height_sigma_in_spacings * spacing;
-  r.max_neighbours = static_cast<std::size_t>(params.max_neighbours);
+  resolve_lengths(r, params, t);
 
   SmoothResult result;
   result.radius_used = r.radius;
@@ -166,10 +171,7 @@ SmoothResult smooth_trilateral(PointCloud& cloud, const TrilateralParams& params
   Resolved r = check_and_resolve(fn, cloud, bp, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
-  const double spacing = bp.radius > 0.0 && bp.height_sigma > 0.0 ? 0.0 : mean_spacing(t);
-  r.radius = bp.radius > 0.0 ? bp.radius : bp.radius_in_spacings * spacing;
-  r.height_sigma = bp.height_sigma > 0.0 ? bp.height_sigma : bp.height_sigma_in_spacings * spacing;
-  r.max_neighbours = static_cast<std::size_t>(bp.max_neighbours);
+  resolve_lengths(r, bp, t);
 
   SmoothResult result;
   result.radius_used = r.radius;
