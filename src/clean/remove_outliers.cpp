@@ -78,19 +78,27 @@ OutlierResult remove_statistical_outliers(const PointCloud& cloud, const Statist
     for (const Neighbor& nb : neighbors) sum += std::sqrt(nb.squared_distance);
     mean_distance[i] = sum / double(neighbors.size());
   });
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+  return statistical_outliers_from_distances(mean_distance, params.std_ratio);
+}
+
+OutlierResult statistical_outliers_from_distances(std::span<const double> mean_distances, double std_ratio) {
+  constexpr std::string_view fn = "statistical_outliers_from_distances";
+  detail::check_positive(fn, "std_ratio", std_ratio);
+  const std::size_t n = mean_distances.size();
+  if (n < 2) throw UsageError(fmt::format("{}: needs at least 2 distances, got {}", fn, n));
   // Serial sums in index order, as Open3D does them, so that a point at the threshold is
   // decided the same way. Zero mean distances count in N but not in the squared deviations.
   double sum = 0.0;
-  for (double d : mean_distance) sum += d;
+  for (double d : mean_distances) sum += d;
   const double mean = sum / double(n);
   double squares = 0.0;
-  for (double d : mean_distance)
+  for (double d : mean_distances)
     if (d > 0.0) squares += (d - mean) * (d - mean);
-  const double threshold = mean + params.std_ratio * std::sqrt(squares / double(n - 1));
+  const double threshold = mean + std_ratio * std::sqrt(squares / double(n - 1));
   std::vector<std::uint8_t> keep(n);
-  for (std::size_t i = 0; i < n; ++i) keep[i] = mean_distance[i] > 0.0 && mean_distance[i] < threshold;
-  reporter.report(1.0);
-  reporter.throw_if_cancelled();
+  for (std::size_t i = 0; i < n; ++i) keep[i] = mean_distances[i] > 0.0 && mean_distances[i] < threshold;
   return collect(keep, threshold);
 }
 

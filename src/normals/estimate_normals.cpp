@@ -101,6 +101,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   const bool had_normals = cloud.has_normals();
   std::vector<Eigen::Vector3d> normals(n);
   std::vector<double> variation(params.keep_variation ? n : 0);
+  std::vector<double> mean_distance(params.keep_mean_distance ? n : 0);
 
   const std::span<const std::uint32_t> order = tree->spatial_order();
   detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
@@ -124,6 +125,11 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
       if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;
       normals[i] = fit.normal;
       if (params.keep_variation) variation[i] = fit.variation;
+      if (params.keep_mean_distance) {
+        double sum = 0.0;  // nearest first, as remove_statistical_outliers sums them
+        for (const Neighbor& nb : neighbors) sum += std::sqrt(nb.squared_distance);
+        mean_distance[i] = neighbors.empty() ? 0.0 : sum / double(neighbors.size());
+      }
     }
     reporter.advance(r.size());
   });
@@ -138,6 +144,11 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
     ScalarField& field = cloud.fields.add("variation", 0, ScalarType::Float32);
     field.type = ScalarType::Float32;
     field.values = std::move(variation);
+  }
+  if (params.keep_mean_distance) {
+    ScalarField& field = cloud.fields.add("mean_distance", 0, ScalarType::Float64);
+    field.type = ScalarType::Float64;
+    field.values = std::move(mean_distance);
   }
   return result;
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -50,66 +51,59 @@ SimplifyResult simplify_grid(const PointCloud& cloud, const GridParams& params, 
   }
   const detail::Grid grid = detail::make_grid("simplify_grid", box, cell);
   result.length_used = cell;
-  const detail::GridCells cells = detail::sort_into_cells(cloud.positions, {}, true, grid);
+  const detail::CellLabels cells = detail::label_cells(cloud.positions, grid);
   const std::size_t m = cells.size();
   reporter.report(0.6);
   reporter.throw_if_cancelled();
 
-  // The representative sample of each cell: nearest to its centroid (both modes).
+  // Per-cell sums in input order: sequential reads of the points and scatter into m cells that
+  // stay in cache, instead of gathering each cell's members from all over the cloud.
+  const std::vector<std::uint32_t>& cell_of = cells.cell_of;
+  const auto members = [&](std::size_t s) { return double(cells.count[s]); };
+  std::vector<Vector3d> centroid(m, Vector3d::Zero());  // offsets from the grid origin
+  for (std::size_t i = 0; i < n; ++i) centroid[cell_of[i]] += cloud.positions[i] - grid.origin;
+  for (std::size_t s = 0; s < m; ++s) centroid[s] /= members(s);
+
+  // The representative sample of each cell: nearest to its centroid (both modes; ties to the
+  // lowest index).
   std::vector<std::size_t>& source = result.source_index;
-  source.resize(m);
-  PointCloud& out = result.cloud;
-  const bool centroid = params.mode == GridMode::Centroid;
-  if (centroid) out.positions.resize(m);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t s = r.begin(); s != r.end(); ++s) {
-      const std::span<const std::uint32_t> members(cells.order.data() + cells.starts[s], cells.starts[s + 1] - cells.starts[s]);
-      source[s] = detail::nearest_to_centroid(cloud.positions, members);
-      if (centroid) {
-        Vector3d sum = Vector3d::Zero();
-        for (std::uint32_t i : members) sum += cloud.positions[i] - grid.origin;
-        out.positions[s] = grid.origin + sum / double(members.size());
-      }
+  source.assign(m, 0);
+  {
+    std::vector<double> best(m, std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t s = cell_of[i];
+      const double d = (cloud.positions[i] - grid.origin - centroid[s]).squaredNorm();
+      if (d < best[s]) best[s] = d, source[s] = i;
     }
-  });
-  if (!centroid) {
+  }
+  PointCloud& out = result.cloud;
+  if (params.mode == GridMode::Nearest) {
     out = cloud.select(source);
   } else {
+    out.positions.resize(m);
+    for (std::size_t s = 0; s < m; ++s) out.positions[s] = grid.origin + centroid[s];
     if (cloud.has_normals()) {
-      out.normals.resize(m);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t s = r.begin(); s != r.end(); ++s) {
-          Vector3d sum = Vector3d::Zero();
-          for (std::size_t q = cells.starts[s]; q != cells.starts[s + 1]; ++q) sum += cloud.normals[cells.order[q]];
-          const double len = sum.norm();
-          out.normals[s] = len > 0.0 ? Vector3d(sum / len) : Vector3d::Zero();
-        }
-      });
+      out.normals.assign(m, Vector3d::Zero());
+      for (std::size_t i = 0; i < n; ++i) out.normals[cell_of[i]] += cloud.normals[i];
+      for (Vector3d& v : out.normals) {
+        const double len = v.norm();
+        v = len > 0.0 ? Vector3d(v / len) : Vector3d::Zero();
+      }
     }
     if (cloud.has_colors()) {
-      out.colors.resize(m);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t s = r.begin(); s != r.end(); ++s) {
-          Vector3f sum = Vector3f::Zero();
-          for (std::size_t q = cells.starts[s]; q != cells.starts[s + 1]; ++q) sum += cloud.colors[cells.order[q]];
-          out.colors[s] = sum / float(cells.starts[s + 1] - cells.starts[s]);
-        }
-      });
+      out.colors.assign(m, Vector3f::Zero());
+      for (std::size_t i = 0; i < n; ++i) out.colors[cell_of[i]] += cloud.colors[i];
+      for (std::size_t s = 0; s < m; ++s) out.colors[s] /= float(members(s));
     }
     for (const ScalarField& f : cloud.fields) {
       ScalarField& g = out.fields.add(f.name, m, f.type);
-      const bool average = scalar_type_is_float(f.type);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t s = r.begin(); s != r.end(); ++s) {
-          if (!average) {  // labels and classes are not averaged
-            g.values[s] = f.values[source[s]];
-            continue;
-          }
-          double sum = 0.0;
-          for (std::size_t q = cells.starts[s]; q != cells.starts[s + 1]; ++q) sum += f.values[cells.order[q]];
-          g.values[s] = sum / double(cells.starts[s + 1] - cells.starts[s]);
-        }
-      });
+      if (!scalar_type_is_float(f.type)) {  // labels and classes are not averaged
+        for (std::size_t s = 0; s < m; ++s) g.values[s] = f.values[source[s]];
+        continue;
+      }
+      std::fill(g.values.begin(), g.values.end(), 0.0);
+      for (std::size_t i = 0; i < n; ++i) g.values[cell_of[i]] += f.values[i];
+      for (std::size_t s = 0; s < m; ++s) g.values[s] /= members(s);
     }
   }
   reporter.report(1.0);

@@ -88,6 +88,8 @@ void check_params(const RegionalParams& p) {
   if (!(p.feature_threshold <= 1.0) || std::isnan(p.feature_threshold))
     throw UsageError(fmt::format("{}: feature_threshold must be in [0, 1] (or < 0 for the derived default), got {}", f,
                                  p.feature_threshold));
+  if (!(p.spacing >= 0.0) || !std::isfinite(p.spacing))
+    throw UsageError(fmt::format("{}: spacing must be >= 0 (cloud units; 0: measured), got {}", f, p.spacing));
   if (!(p.max_feature_share > 0.0 && p.max_feature_share <= 1.0))
     throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
 }
@@ -112,13 +114,22 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
     result.source_index = std::move(keep);
     return result;
   }
+  // A kd-tree only where something is missing: normals, variation or the spacing.
+  const ScalarField* given_variation = cloud.fields.find("variation");
+  const bool have_surface = cloud.has_normals() && given_variation != nullptr && given_variation->values.size() == n;
   std::optional<KdTree> own;
-  const KdTree& t = detail::tree_or_own("simplify_regional", cloud, tree, own);
+  const KdTree* t = nullptr;
+  if (!have_surface || params.spacing == 0.0) t = &detail::tree_or_own("simplify_regional", cloud, tree, own);
   const BoundingBox box = bounding_box(cloud.positions);
-  double spacing = mean_spacing(t);
+  double spacing = params.spacing > 0.0 ? params.spacing : mean_spacing(*t);
   if (!(spacing > 0.0)) spacing = box.diagonal() > 0.0 ? box.diagonal() / std::sqrt(double(n)) : 1.0;
-  const detail::SurfaceProperties surface =
-      detail::surface_properties(cloud, params.k, t, true, detail::sub_progress(progress, 0.0, 0.6));
+  detail::SurfaceProperties surface;
+  if (have_surface) {
+    surface.normals = cloud.normals;
+    surface.variation = given_variation->values;
+  } else {
+    surface = detail::surface_properties(cloud, params.k, *t, true, detail::sub_progress(progress, 0.0, 0.6));
+  }
   detail::ProgressReporter reporter(progress, 0.6, 1.0, n);
 
   // Clusters by position (grid cells) and normal (greedy grouping inside each cell), and the

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
 #include "support/clean_shapes.h"
 #include "support/files.h"
 #include "support/shapes.h"
@@ -90,6 +91,29 @@ TEST(StatisticalOutliers, FindsInjectedOutliersOnANoisySphere) {
   EXPECT_GE(d.precision, 0.9);
   EXPECT_EQ(result.kept.size() + result.removed, s.cloud.size());
   EXPECT_TRUE(std::is_sorted(result.kept.begin(), result.kept.end()));
+}
+
+TEST(StatisticalOutliers, SharesTheNormalsPassThroughMeanDistances) {
+  // estimate_normals with keep_mean_distance computes the statistic in its own kNN pass: the
+  // cut from those distances keeps exactly what remove_statistical_outliers keeps.
+  Noisy s = noisy_sphere(8000);
+  const KdTree tree(s.cloud.positions);
+  const StatisticalOutlierParams sor;
+  const OutlierResult direct = remove_statistical_outliers(s.cloud, sor, &tree);
+  PointCloud work = s.cloud;
+  NormalParams normals;
+  normals.k = sor.k;
+  normals.keep_mean_distance = true;
+  estimate_normals(work, normals, &tree);
+  const ScalarField* field = work.fields.find("mean_distance");
+  ASSERT_NE(field, nullptr);
+  EXPECT_EQ(field->type, ScalarType::Float64);
+  const OutlierResult shared = statistical_outliers_from_distances(field->values, sor.std_ratio);
+  EXPECT_EQ(shared.kept, direct.kept);
+  EXPECT_DOUBLE_EQ(shared.threshold, direct.threshold);
+  EXPECT_GT(direct.removed, 100u);
+  expect_error<UsageError>([&] { statistical_outliers_from_distances(field->values, 0.0); }, "std_ratio");
+  expect_error<UsageError>([&] { statistical_outliers_from_distances(std::vector<double>{1.0}, 2.0); }, "at least 2");
 }
 
 TEST(StatisticalOutliers, DropsStacksOfDuplicatesLikeOpen3D) {

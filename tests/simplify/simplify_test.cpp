@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
 #include "support/distances.h"
 #include "support/files.h"
@@ -76,29 +77,33 @@ void expect_valid(const SimplifyResult& r, const PointCloud& input) {
 
 TEST(SimplifyGrid, CentroidsMatchBruteForceWithOpen3dAnchoring) {
   PointCloud cloud = test::sample_sphere(3000, 1.0, Vector3d(0.3, -0.2, 0.1), 3);
-  const double cell = 0.17;
-  GridParams params;
-  params.target.cell = cell;
-  const SimplifyResult r = simplify_grid(cloud, params);
-  expect_valid(r, cloud);
-  // Brute force: origin = bounding-box minimum - cell / 2, index = floor((p - origin) / cell).
-  const BoundingBox box = bounding_box(cloud.positions);
-  const Vector3d origin = box.min - Vector3d::Constant(cell / 2);
-  std::map<std::tuple<long, long, long>, std::pair<Vector3d, int>> cells;
-  for (const Vector3d& p : cloud.positions) {
-    const Vector3d q = (p - origin) / cell;
-    auto [it, fresh] = cells.try_emplace({long(std::floor(q.x())), long(std::floor(q.y())), long(std::floor(q.z()))},
-                                         Vector3d::Zero(), 0);
-    auto& c = it->second;
-    c.first += p;
-    ++c.second;
+  // 0.17: a dense grid (counting sort); 0.01: more cells than 4 per point (packed sort);
+  // 0.0005: more than 2^32 cells in the box (full-key sort). All must agree with brute force.
+  for (const double cell : {0.17, 0.01, 0.0005}) {
+    SCOPED_TRACE(cell);
+    GridParams params;
+    params.target.cell = cell;
+    const SimplifyResult r = simplify_grid(cloud, params);
+    expect_valid(r, cloud);
+    // Brute force: origin = bounding-box minimum - cell / 2, index = floor((p - origin) / cell).
+    const BoundingBox box = bounding_box(cloud.positions);
+    const Vector3d origin = box.min - Vector3d::Constant(cell / 2);
+    std::map<std::tuple<long, long, long>, std::pair<Vector3d, int>> cells;
+    for (const Vector3d& p : cloud.positions) {
+      const Vector3d q = (p - origin) / cell;
+      auto [it, fresh] =
+          cells.try_emplace({long(std::floor(q.x())), long(std::floor(q.y())), long(std::floor(q.z()))}, Vector3d::Zero(), 0);
+      auto& c = it->second;
+      c.first += p;
+      ++c.second;
+    }
+    PointCloud expected;
+    for (auto& [key, c] : cells) expected.positions.push_back(c.first / c.second);
+    expect_near_sets(r.cloud, expected, Vector3d::Zero(), 1e-12);
+    EXPECT_DOUBLE_EQ(r.length_used, cell);
+    // Averaged normals are unit length.
+    for (const Vector3d& nrm : r.cloud.normals) EXPECT_NEAR(nrm.norm(), 1.0, 1e-12);
   }
-  PointCloud expected;
-  for (auto& [key, c] : cells) expected.positions.push_back(c.first / c.second);
-  expect_near_sets(r.cloud, expected, Vector3d::Zero(), 1e-12);
-  EXPECT_DOUBLE_EQ(r.length_used, cell);
-  // Averaged normals are unit length.
-  for (const Vector3d& nrm : r.cloud.normals) EXPECT_NEAR(nrm.norm(), 1.0, 1e-12);
 }
 
 TEST(SimplifyGrid, RatioAndCountTargetsAreMetWithinThreePercent) {
@@ -265,6 +270,24 @@ TEST(SimplifyRegional, InvariantUnderPermutationAndMillionMetreShift) {
   std::set<std::size_t> base_set(base.source_index.begin(), base.source_index.end());
   for (std::size_t s : moved.source_index) same += base_set.count(s);
   EXPECT_GE(double(same), 0.98 * double(base.cloud.size()));
+}
+
+TEST(SimplifyRegional, GivenNormalsVariationAndSpacingNeedNoTreeAndGiveTheSameResult) {
+  // The pipeline form: normals and variation from an earlier pass, the spacing given; the
+  // result is the one regional computes itself from the same normals and spacing.
+  PointCloud cube = bare_cube(8000, 4);
+  const KdTree tree(cube.positions);
+  NormalParams normals;
+  normals.k = RegionalParams{}.k;
+  estimate_normals(cube, normals, &tree);
+  RegionalParams params;
+  params.target.ratio = 0.1;
+  const SimplifyResult measured = simplify_regional(cube, params, &tree);
+  params.spacing = mean_spacing(tree);
+  const SimplifyResult given = simplify_regional(cube, params);
+  EXPECT_EQ(given.source_index, measured.source_index);
+  params.spacing = -1.0;
+  test::expect_error<UsageError>([&] { simplify_regional(cube, params); }, "spacing");
 }
 
 TEST(SimplifyRegional, CellTargetKeepsFeaturesAndThinsFlatAreas) {

@@ -44,6 +44,14 @@ struct StatisticalOutlierParams {
 OutlierResult remove_statistical_outliers(const PointCloud& cloud, const StatisticalOutlierParams& params = {},
                                           const KdTree* tree = nullptr, const ProgressCallback& progress = {});
 
+/// The statistical cut alone, for mean neighbour distances computed elsewhere (one per point,
+/// cloud units): keeps a point when 0 < d_i < mean + std_ratio × std of the d_i, the rule and
+/// summation order of remove_statistical_outliers. With estimate_normals'
+/// `keep_mean_distance`, normals and outlier removal share one kNN pass (remove the points
+/// afterwards: their normals and variation are those of the full cloud). Throws UsageError for
+/// std_ratio <= 0 or fewer than 2 distances.
+OutlierResult statistical_outliers_from_distances(std::span<const double> mean_distances, double std_ratio);
+
 struct RadiusOutlierParams {
   int min_neighbours = 4;           // keep a point with at least this many other points
                                     // within the radius, >= 1

@@ -19,6 +19,10 @@ struct NormalParams {
   double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
   double radius_in_spacings = 3.0;  // used when radius == 0
   bool keep_variation = true;       // add field "variation" = l0 / (l0 + l1 + l2), in [0, 1/3]
+  bool keep_mean_distance = false;  // add field "mean_distance" (Float64, cloud units): mean
+                                    // distance from the point to its neighbours, itself included,
+                                    // the statistic of statistical outlier removal (see
+                                    // statistical_outliers_from_distances): one kNN pass for both
 };
 
 struct NormalResult {

@@ -116,6 +116,9 @@ struct RegionalParams {
   double feature_threshold = -1.0;     // F above which a point is a feature candidate, [0, 1];
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
+  double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
+                                       // (with a cloud that already has normals and the field
+                                       // "variation", a given spacing means no kd-tree is needed)
 };
 
 /// Regional simplification: cluster by position and normal, decide per point by a feature
@@ -142,7 +145,8 @@ struct RegionalParams {
 /// by dropping the lowest-F or adding the highest-F leftover points.
 /// Follows the regional method of the paper (SPEC C6); the paper names the feature factor
 /// without a formula, the one above is ours. Reuses `tree` (built over cloud.positions) for
-/// normals and spacing. Parallel; throws UsageError for bad parameters; CancelledError when
+/// normals and spacing; builds one only when it needs one (normals or variation missing, or
+/// spacing 0 and no tree given). Parallel; throws UsageError for bad parameters; CancelledError when
 /// `progress` returns false.
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params = {}, const KdTree* tree = nullptr,
                                  const ProgressCallback& progress = {});

@@ -2,11 +2,15 @@
 #include "simplify/detail/simplify_common.h"
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
+#include <functional>
 #include <cmath>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
@@ -32,18 +36,61 @@ std::uint64_t cell_key(const Vector3d& p, const Grid& grid) {
   return (axis(r.z()) << (2 * kAxisBits)) | (axis(r.y()) << kAxisBits) | axis(r.x());
 }
 
-std::vector<KeyIndex> keyed(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid) {
-  const std::size_t m = all ? points.size() : subset.size();
-  std::vector<KeyIndex> out(m);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t q = r.begin(); q != r.end(); ++q) {
-      const std::uint32_t i = all ? static_cast<std::uint32_t>(q) : subset[q];
-      out[q] = {cell_key(points[i], grid), i};
+// Rank of a cell key in the grid's dense x-fastest numbering: the same order as the key.
+std::uint64_t dense_key(std::uint64_t key, const Grid& grid) {
+  const std::uint64_t x = key & (kAxisCells - 1), y = (key >> kAxisBits) & (kAxisCells - 1), z = key >> (2 * kAxisBits);
+  return x + grid.nx * (y + grid.ny * z);
+}
+
+std::uint64_t key_of_dense(std::uint64_t d, const Grid& grid) {
+  const std::uint64_t x = d % grid.nx, y = (d / grid.nx) % grid.ny, z = d / (grid.nx * grid.ny);
+  return (z << (2 * kAxisBits)) | (y << kAxisBits) | x;
+}
+
+// A dense numbering pays (an array over all cells) when the cells are not many more than the points.
+bool dense_pays(const Grid& grid, std::size_t points) {
+  return grid.cells() <= std::max<std::uint64_t>(4 * std::uint64_t(points), std::uint64_t(1) << 16);
+}
+
+// One bit per dense cell rank: set in parallel, then ranks (occupied cells below) by popcount.
+class OccupancyBitmap {
+ public:
+  explicit OccupancyBitmap(std::uint64_t cells) : words_((cells + 63) / 64, 0) {}
+  void set(std::uint64_t d) {
+    std::uint64_t& word = words_[d >> 6];
+    const std::uint64_t bit = std::uint64_t(1) << (d & 63);
+    if ((std::atomic_ref<std::uint64_t>(word).load(std::memory_order_relaxed) & bit) == 0)
+      std::atomic_ref<std::uint64_t>(word).fetch_or(bit, std::memory_order_relaxed);
+  }
+  // Prefix counts per word; returns the number of occupied cells.
+  std::size_t finish() {
+    below_.resize(words_.size());
+    std::size_t total = 0;
+    for (std::size_t w = 0; w < words_.size(); ++w) {
+      below_[w] = total;
+      total += static_cast<std::size_t>(std::popcount(words_[w]));
     }
-  });
-  tbb::parallel_sort(out.begin(), out.end(),
-                     [](const KeyIndex& a, const KeyIndex& b) { return a.key < b.key || (a.key == b.key && a.index < b.index); });
-  return out;
+    return total;
+  }
+  std::size_t rank(std::uint64_t d) const {
+    const std::uint64_t below_bits = words_[d >> 6] & ((std::uint64_t(1) << (d & 63)) - 1);
+    return below_[d >> 6] + static_cast<std::size_t>(std::popcount(below_bits));
+  }
+  template <typename Visit>
+  void for_each(Visit&& visit) const {  // occupied ranks, ascending
+    for (std::size_t w = 0; w < words_.size(); ++w)
+      for (std::uint64_t bits = words_[w]; bits != 0; bits &= bits - 1) visit((std::uint64_t(w) << 6) + std::countr_zero(bits));
+  }
+
+ private:
+  std::vector<std::uint64_t> words_;
+  std::vector<std::size_t> below_;
+};
+
+// A bitmap over all cells pays when it is not much larger than the points' own arrays.
+bool bitmap_pays(const Grid& grid, std::size_t points) {
+  return grid.cells() <= std::max<std::uint64_t>(64 * std::uint64_t(points), std::uint64_t(1) << 20) &&
+         grid.cells() <= (std::uint64_t(1) << 32);
 }
 
 }  // namespace
@@ -122,26 +169,120 @@ Grid make_grid(std::string_view function, const BoundingBox& box, double cell) {
   if (!(cells < double(kAxisCells)))
     throw UsageError(fmt::format("{}: cell {} is too small for the cloud's extent {} (more than 2^21 cells along an axis)", function,
                                  cell, box.extent().maxCoeff()));
+  const std::uint64_t corner = cell_key(box.max, grid);  // the largest key on every axis
+  grid.nx = (corner & (kAxisCells - 1)) + 1;
+  grid.ny = ((corner >> kAxisBits) & (kAxisCells - 1)) + 1;
+  grid.nz = (corner >> (2 * kAxisBits)) + 1;
   return grid;
 }
 
 GridCells sort_into_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid) {
-  const std::vector<KeyIndex> sorted = keyed(points, subset, all, grid);
+  const std::size_t m = all ? points.size() : subset.size();
+  const auto index_of = [&](std::size_t q) { return all ? static_cast<std::uint32_t>(q) : subset[q]; };
   GridCells cells;
-  cells.order.resize(sorted.size());
-  for (std::size_t q = 0; q < sorted.size(); ++q) {
+  cells.order.resize(m);
+  if (dense_pays(grid, m)) {
+    // Few cells for the points: a stable counting sort over the dense cell rank, O(N + cells);
+    // ties stay in index order as the comparison sort would leave them.
+    std::vector<std::uint32_t> dense(m);
+    std::vector<std::uint32_t> count(grid.cells() + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        dense[q] = static_cast<std::uint32_t>(dense_key(cell_key(points[index_of(q)], grid), grid));
+        std::atomic_ref<std::uint32_t>(count[dense[q] + 1]).fetch_add(1, std::memory_order_relaxed);
+      }
+    });
+    for (std::size_t d = 0; d + 1 < count.size(); ++d) {
+      if (count[d + 1] != 0) {
+        cells.keys.push_back(key_of_dense(d, grid));
+        cells.starts.push_back(count[d]);
+      }
+      count[d + 1] += count[d];
+    }
+    cells.starts.push_back(m);
+    for (std::size_t q = 0; q < m; ++q) cells.order[count[dense[q]]++] = index_of(q);
+    return cells;
+  }
+  if (grid.cells() <= (std::uint64_t(1) << 32)) {
+    // Sparse occupation: sort packed (cell rank, index) words.
+    std::vector<std::uint64_t> packed(m);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t q = r.begin(); q != r.end(); ++q) packed[q] = (dense_key(cell_key(points[index_of(q)], grid), grid) << 32) | index_of(q);
+    });
+    tbb::parallel_sort(packed.begin(), packed.end());
+    for (std::size_t q = 0; q < m; ++q) {
+      cells.order[q] = static_cast<std::uint32_t>(packed[q] & 0xffffffffu);
+      if (q == 0 || (packed[q] >> 32) != (packed[q - 1] >> 32)) {
+        cells.keys.push_back(key_of_dense(packed[q] >> 32, grid));
+        cells.starts.push_back(q);
+      }
+    }
+    cells.starts.push_back(m);
+    return cells;
+  }
+  std::vector<KeyIndex> sorted(m);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t q = r.begin(); q != r.end(); ++q) sorted[q] = {cell_key(points[index_of(q)], grid), index_of(q)};
+  });
+  tbb::parallel_sort(sorted.begin(), sorted.end(),
+                     [](const KeyIndex& a, const KeyIndex& b) { return a.key < b.key || (a.key == b.key && a.index < b.index); });
+  for (std::size_t q = 0; q < m; ++q) {
     cells.order[q] = sorted[q].index;
     if (q == 0 || sorted[q].key != sorted[q - 1].key) {
       cells.keys.push_back(sorted[q].key);
       cells.starts.push_back(q);
     }
   }
-  cells.starts.push_back(sorted.size());
+  cells.starts.push_back(m);
   return cells;
+}
+
+CellLabels label_cells(std::span<const Vector3d> points, const Grid& grid) {
+  const std::size_t m = points.size();
+  CellLabels labels;
+  labels.cell_of.resize(m);
+  if (!bitmap_pays(grid, m)) {
+    GridCells cells = sort_into_cells(points, {}, true, grid);
+    labels.count.resize(cells.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t s = r.begin(); s != r.end(); ++s) {
+        labels.count[s] = static_cast<std::uint32_t>(cells.starts[s + 1] - cells.starts[s]);
+        for (std::size_t q = cells.starts[s]; q != cells.starts[s + 1]; ++q) labels.cell_of[cells.order[q]] = static_cast<std::uint32_t>(s);
+      }
+    });
+    labels.keys = std::move(cells.keys);
+    return labels;
+  }
+  // Dense rank per point and a bitmap of occupied ranks (one bit per cell: small enough to
+  // stay in cache); a cell's number is the count of occupied ranks below its own.
+  OccupancyBitmap occupied(grid.cells());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t q = r.begin(); q != r.end(); ++q) {
+      const std::uint64_t d = dense_key(cell_key(points[q], grid), grid);
+      labels.cell_of[q] = static_cast<std::uint32_t>(d);
+      occupied.set(d);
+    }
+  });
+  const std::size_t cells = occupied.finish();
+  labels.keys.reserve(cells);
+  occupied.for_each([&](std::uint64_t d) { labels.keys.push_back(key_of_dense(d, grid)); });
+  labels.count.assign(cells, 0);
+  for (std::uint32_t& c : labels.cell_of) {
+    c = static_cast<std::uint32_t>(occupied.rank(c));
+    ++labels.count[c];
+  }
+  return labels;
 }
 
 std::size_t count_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid) {
   const std::size_t m = all ? points.size() : subset.size();
+  if (bitmap_pays(grid, m)) {
+    OccupancyBitmap occupied(grid.cells());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t q = r.begin(); q != r.end(); ++q) occupied.set(dense_key(cell_key(points[all ? q : subset[q]], grid), grid));
+    });
+    return occupied.finish();
+  }
   std::vector<std::uint64_t> keys(m);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t q = r.begin(); q != r.end(); ++q) keys[q] = cell_key(points[all ? q : subset[q]], grid);

@@ -41,6 +41,8 @@ SurfaceProperties surface_properties(const PointCloud& cloud, int k, const KdTre
 struct Grid {
   Vector3d origin = Vector3d::Zero();
   double cell = 0.0;
+  std::uint64_t nx = 0, ny = 0, nz = 0;  // cells along each axis up to the box's maximum corner
+  std::uint64_t cells() const noexcept { return nx * ny * nz; }
 };
 /// Grid over the bounding box of `points` (Open3D's anchoring). Throws UsageError when the cell
 /// is not positive or the box spans more than 2^21 cells along an axis.
@@ -56,6 +58,17 @@ struct GridCells {
 };
 /// Sorts `subset` (or all points when it is empty and `all` is true) into grid cells.
 GridCells sort_into_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid);
+/// Every point's cell, without grouping the points: the occupied cells in ascending key
+/// (as sort_into_cells numbers them), each point's cell number and each cell's point count.
+/// O(N + cells) with an array over the grid's cells when they are not many more than the
+/// points, sort_into_cells otherwise.
+struct CellLabels {
+  std::vector<std::uint64_t> keys;     // per occupied cell, ascending
+  std::vector<std::uint32_t> cell_of;  // per point
+  std::vector<std::uint32_t> count;    // per occupied cell
+  std::size_t size() const noexcept { return keys.size(); }
+};
+CellLabels label_cells(std::span<const Vector3d> points, const Grid& grid);
 /// Only the number of occupied cells.
 std::size_t count_cells(std::span<const Vector3d> points, std::span<const std::uint32_t> subset, bool all, const Grid& grid);
 
