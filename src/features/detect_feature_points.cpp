@@ -17,6 +17,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "normals/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/features/feature_points.h"
@@ -36,38 +37,15 @@ struct LocalFit {
   double variation = 1.0;                             // 1 (worse than any real value) when degenerate
 };
 
-// PCA of points given as offsets from a reference point (small numbers, whatever the cloud's
-// offset); the covariance is centred in a second pass to avoid cancellation.
+// PCA of points given as offsets from a reference point (see detail::local_pca).
 template <class Offsets>
 LocalFit fit_plane(const Offsets& offsets, std::size_t m) {
   LocalFit out;
-  if (m < 3) return out;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < m; ++i) mean += offsets(i);
-  mean /= double(m);
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < m; ++i) {
-    const Eigen::Vector3d d = offsets(i) - mean;
-    covariance.noalias() += d * d.transpose();
-  }
-  covariance /= double(m);
-  if (!(covariance.trace() > 0.0)) return out;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-  solver.computeDirect(covariance);
-  Eigen::Vector3d l = solver.eigenvalues();
-  // The closed form loses the smallest eigenvector when the two smallest eigenvalues cluster.
-  if (solver.info() != Eigen::Success || !(l[1] - l[0] > 1e-4 * l[2])) {
-    solver.compute(covariance);
-    if (solver.info() != Eigen::Success) return out;
-    l = solver.eigenvalues();
-  }
-  if (!(l[1] > 1e-12 * l[2])) return out;  // a line: no plane
-  const Eigen::Vector3d normal = solver.eigenvectors().col(0).normalized();
-  if (!normal.allFinite()) return out;
-  out.normal = normal;
-  out.centroid = mean;
-  const double l0 = std::max(l[0], 0.0);
-  out.variation = std::clamp(l0 / (l0 + l[1] + l[2]), 0.0, 1.0 / 3.0);
+  const detail::LocalPca pca = detail::local_pca(offsets, m);
+  if (!pca.valid) return out;
+  out.normal = pca.normal();
+  out.centroid = pca.mean;
+  out.variation = pca.variation();
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "normals/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
@@ -19,53 +20,20 @@
 namespace pointsurf {
 namespace {
 
-// A neighbourhood whose middle eigenvalue is below this fraction of the largest is a line (or
-// a single repeated point): its normal is undefined.
-constexpr double kRankTolerance = 1e-12;
-// computeDirect (closed form) loses accuracy in the smallest eigenvector when the two smallest
-// eigenvalues cluster; below this gap (relative to the largest) the iterative solver recomputes
-// it. That covers near-lines too, whose rank test needs accurate small eigenvalues. Rare on
-// real surfaces, where l0 << l1.
-constexpr double kDirectSolverGap = 1e-4;
-
 struct PointNormal {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // zero when degenerate
   double variation = 0.0;
   bool degenerate = true;
 };
 
-// PCA of the neighbourhood of `center`. Offsets are taken from the query point so that the
-// covariance of a georeferenced cloud is accumulated from small numbers, and the covariance
-// is centred on the neighbourhood centroid in a second pass (no E[x^2] - E[x]^2 cancellation).
+// PCA of the neighbourhood of `center`, in offsets from it (see detail::local_pca).
 PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::span<const Neighbor> neighbors) {
   PointNormal out;
-  const std::size_t m = neighbors.size();
-  if (m < 3) return out;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const Neighbor& nb : neighbors) mean += tree.point(nb.index) - center;
-  mean /= double(m);
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const Neighbor& nb : neighbors) {
-    const Eigen::Vector3d d = tree.point(nb.index) - center - mean;
-    covariance.noalias() += d * d.transpose();
-  }
-  covariance /= double(m);
-  if (!(covariance.trace() > 0.0)) return out;
-
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-  solver.computeDirect(covariance);
-  Eigen::Vector3d l = solver.eigenvalues();
-  if (solver.info() != Eigen::Success || !(l[1] - l[0] > kDirectSolverGap * l[2])) {
-    solver.compute(covariance);
-    if (solver.info() != Eigen::Success) return out;
-    l = solver.eigenvalues();
-  }
-  if (!(l[1] > kRankTolerance * l[2])) return out;
-  const Eigen::Vector3d normal = solver.eigenvectors().col(0).normalized();
-  if (!normal.allFinite()) return out;
-  out.normal = normal;
-  const double l0 = std::max(l[0], 0.0);
-  out.variation = std::clamp(l0 / (l0 + l[1] + l[2]), 0.0, 1.0 / 3.0);
+  const detail::LocalPca pca = detail::local_pca(
+      [&](std::size_t j) { return Eigen::Vector3d(tree.point(neighbors[j].index) - center); }, neighbors.size());
+  if (!pca.valid) return out;
+  out.normal = pca.normal();
+  out.variation = pca.variation();
   out.degenerate = false;
   return out;
 }

@@ -13,6 +13,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "normals/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/shape/curvature.h"
@@ -20,9 +21,6 @@
 namespace pointsurf {
 namespace {
 
-// Below this fraction of the largest covariance eigenvalue the middle one means a line: no
-// tangent plane.
-constexpr double kRankTolerance = 1e-12;
 // The LDLT pivots of the scaled normal equations: a ratio below this is a singular fit (points
 // on a conic, too few distinct points).
 constexpr double kPivotTolerance = 1e-12;
@@ -67,37 +65,18 @@ PointShape fit_jet(const KdTree& tree, const Vector3d& center, const Vector3d& s
   const std::size_t m = neighbors.size();
   if (m < std::size_t(C) || !(side.squaredNorm() > 0.0)) return out;
 
-  // PCA frame. Offsets from the query point keep georeferenced coordinates small; the
-  // covariance is centred on the neighbourhood mean in a second pass.
-  Vector3d mean = Vector3d::Zero();
-  for (const Neighbor& nb : neighbors) mean += tree.point(nb.index) - center;
-  mean /= double(m);
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  // PCA frame, in offsets from the query point (georeferenced coordinates stay small).
   double h2 = 0.0;
-  for (const Neighbor& nb : neighbors) {
-    const Vector3d d = tree.point(nb.index) - center;
-    h2 = std::max(h2, d.squaredNorm());
-    const Vector3d c = d - mean;
-    covariance.noalias() += c * c.transpose();
-  }
-  covariance /= double(m);
-  if (!(covariance.trace() > 0.0) || !(h2 > 0.0)) return out;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-  solver.computeDirect(covariance);
-  Eigen::Vector3d l = solver.eigenvalues();
-  if (solver.info() != Eigen::Success || !(l[1] - l[0] > 1e-4 * l[2])) {
-    // The closed form loses accuracy when the two smallest eigenvalues cluster.
-    solver.compute(covariance);
-    if (solver.info() != Eigen::Success) return out;
-    l = solver.eigenvalues();
-  }
-  if (!(l[1] > kRankTolerance * l[2])) return out;
-  Vector3d e3 = solver.eigenvectors().col(0).normalized();
+  for (const Neighbor& nb : neighbors) h2 = std::max(h2, (tree.point(nb.index) - center).squaredNorm());
+  if (!(h2 > 0.0)) return out;
+  const detail::LocalPca pca =
+      detail::local_pca([&](std::size_t j) { return Vector3d(tree.point(neighbors[j].index) - center); }, m);
+  if (!pca.valid) return out;
+  Vector3d e3 = pca.normal();
   if (e3.dot(side) < 0.0) e3 = -e3;
-  const Vector3d e1 = solver.eigenvectors().col(2).normalized();
+  const Vector3d e1 = pca.eigenvectors.col(2).normalized();
   const Vector3d e2 = e3.cross(e1);
-  const double l0 = std::max(l[0], 0.0);
-  out.variation = std::clamp(l0 / (l0 + l[1] + l[2]), 0.0, 1.0 / 3.0);
+  out.variation = pca.variation();
 
   // Least squares in coordinates scaled by the neighbourhood radius h, so the normal equations
   // are well conditioned whatever the cloud's units.
