@@ -144,7 +144,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   // Per point, from the first pass: its cluster's unit mean normal and the variation, normal
   // and own-plane terms; per cell, the planes of its greedy clusters.
   std::vector<Vector3d> cluster_normal(n);
-  std::vector<float> base_terms(n), own_delta(n);
+  std::vector<float> base_terms(n), own_delta(n), crease(n, 0.0f);
   std::vector<std::vector<Plane>> planes(regions.size());
   tbb::enumerable_thread_specific<CellScratch> scratch;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, regions.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -252,14 +252,16 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
       for (std::size_t q = regions.starts[cell]; q != regions.starts[cell + 1]; ++q) {
         const std::uint32_t i = regions.order[q];
         const Vector3d p = cloud.positions[i] - box.min;
-        double delta = own_delta[i];
+        double delta = own_delta[i], on_crease = 0.0;
         for (std::size_t a = 0; a < around_count; ++a)
           for (const Plane& plane : planes[around[a]]) {
             if (std::abs(plane.normal.dot(cluster_normal[i])) >= cos_join) continue;  // the same region
             if ((p - plane.centroid).norm() > plane.radius + crease_scale) continue;   // beyond its cluster
             const double d = std::abs((p - plane.centroid).dot(plane.normal));
-            delta = std::max(delta, 1.0 - std::min(1.0, d / crease_scale));
+            on_crease = std::max(on_crease, 1.0 - std::min(1.0, d / crease_scale));
           }
+        delta = std::max(delta, on_crease);
+        crease[i] = static_cast<float>(on_crease);
         factor[i] = static_cast<float>((base_terms[i] + params.distance_weight * delta) / weight_sum);
       }
       visited += regions.starts[cell + 1] - regions.starts[cell];
@@ -283,9 +285,10 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   std::vector<std::uint32_t> candidates;
   for (std::uint32_t i = 0; i < n; ++i)
     if ((feature_field != nullptr && feature_field->values[i] > 0.0) || factor[i] >= threshold) candidates.push_back(i);
-  // Priority: points the features module marked first, then by decreasing F.
+  // Priority: points the features module marked first, then by decreasing F + crease term
+  // (the crease term again: of the band of high-F points along an edge, those on the crease).
   const auto priority = [&](std::uint32_t i) {
-    return (feature_field != nullptr && feature_field->values[i] > 0.0 ? 2.0 : 0.0) + double(factor[i]);
+    return (feature_field != nullptr && feature_field->values[i] > 0.0 ? 4.0 : 0.0) + double(factor[i]) + double(crease[i]);
   };
   const auto before = [&](std::uint32_t a, std::uint32_t b) {
     const double pa = priority(a), pb = priority(b);

@@ -139,7 +139,9 @@ struct RegionalParams {
 ///     and s is the mean spacing: a point within 2 s of such a plane lies where two regions meet
 ///   F_i = (wv sigma_i + wn theta_i + wd delta_i) / (wv + wn + wd)
 /// Feature points: those with field "feature" > 0 (from the features module) when present,
-/// then those with F >= threshold, by decreasing F, up to max_feature_share of the target.
+/// then those with F >= threshold, by decreasing F + c_i (c_i the crease part of delta_i:
+/// of the band of high-F points along an edge, those on the crease first), up to
+/// max_feature_share of the target.
 /// The rest of the budget goes to the other points, thinned by a grid (nearest sample to each
 /// cell centroid) whose cell is solved for the remaining count; the count is then made exact
 /// by dropping the lowest-F or adding the highest-F leftover points.
