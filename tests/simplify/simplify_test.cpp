@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numeric>
 #include <random>
@@ -352,7 +353,8 @@ TEST(ResampleLfs, MakesANonUniformPlaneMoreUniform) {
   expect_valid(r, plane);
   EXPECT_NEAR(double(r.cloud.size()), 5000.0, 0.05 * 5000.0);
   EXPECT_GT(r.added_points, 0u);
-  EXPECT_LT(half_ratio(r.cloud), 2.0);  // from 4.0; measured 1.57
+  std::printf("lfs on a 4:1 plane: output density ratio %.3f, %zu points added\n", half_ratio(r.cloud), r.added_points);
+  EXPECT_LT(half_ratio(r.cloud), 1.4);  // from 4.0; measured 1.24 (1.57 with inserts every t)
   EXPECT_GT(half_ratio(r.cloud), 0.67);
   for (const Vector3d& p : r.cloud.positions) EXPECT_NEAR(p.z(), 0.0, 1e-12);  // inserted points stay on the plane
   // The output spans the plane z = 0: three far-apart output points have a normal along z.

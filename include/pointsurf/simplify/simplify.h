@@ -183,7 +183,7 @@ struct LfsParams {
 /// neighbours within radius r (a spherical cap gives v = r² / (24 R²), so R = r / sqrt(24 v)).
 /// Target spacing t_i = lambda × clamp(LFS_i, median/a, median×a), lambda solved for the
 /// target (cell: the spacing at the median LFS). Gaps: along each of the fill_neighbours
-/// nearest-neighbour edges longer than 1.5 t, points are inserted every t, blended between the
+/// nearest-neighbour edges longer than t, candidates are inserted every 0.4 t, blended between the
 /// two endpoints' tangent planes (normal interpolated; colour interpolated; fields copied from
 /// the nearer endpoint). Then a greedy Poisson-disk pass with per-point radius t (input points
 /// first, in spatial order, inserted points after) thins dense regions. A non-uniform cloud
