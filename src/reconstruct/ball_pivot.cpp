@@ -1,0 +1,427 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Ball pivoting (Bernardini et al. 1999). The front is advanced serially: every pivot depends
+// on the triangles made before it. What can run in parallel (duplicate detection, normal
+// normalisation) does; the serial part allocates nothing per point: edges live in one array
+// with intrusive per-vertex lists, and neighbour queries reuse one buffer.
+#include "pointsurf/reconstruct/ball_pivot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+
+namespace pointsurf {
+namespace {
+
+// Points closer than this fraction of the mean spacing to a point of lower index are duplicates
+// and are left out (a triangle through two of them would be degenerate).
+constexpr double kDuplicateInSpacings = 1e-6;
+// A triangle whose sine of its angle at the shared vertex is below this is treated as collinear.
+constexpr double kCollinearSine = 1e-9;
+// A point is inside a ball when its squared distance to the centre is below (1 - this) r^2:
+// points exactly on the sphere (co-circular grids) do not block it.
+constexpr double kInsideTolerance = 1e-9;
+// Seeds try pairs among this many nearest unused neighbours of a point (Bernardini et al.
+// consider pairs nearest first; the first pairs almost always give the seed when one exists).
+constexpr int kSeedNeighbours = 12;
+constexpr double kPi = 3.14159265358979323846;
+
+enum class EdgeState : std::uint8_t { Front, Boundary, Inner };
+
+// An edge of the growing mesh. While it has one triangle, that triangle runs v0 -> v1 and
+// `opposite` is its third vertex.
+struct Edge {
+  int v0, v1, opposite;
+  EdgeState state;
+  int next0, next1;  // next edge in the lists of v0 and v1 (-1 ends)
+};
+
+struct Candidate {
+  double angle;
+  int point;
+  Eigen::Vector3d center;
+};
+
+class BallPivoter {
+public:
+  BallPivoter(const KdTree& tree, std::vector<Eigen::Vector3d> local, std::vector<Eigen::Vector3d> normals,
+              std::vector<std::uint8_t> skip, const Eigen::Vector3d& origin, double cos_max_angle,
+              detail::ProgressReporter& reporter)
+      : tree_(tree), local_(std::move(local)), normals_(std::move(normals)), skip_(std::move(skip)), origin_(origin),
+        cos_max_angle_(cos_max_angle), reporter_(reporter), head_(local_.size(), -1), open_(local_.size(), 0),
+        used_(local_.size(), 0) {}
+
+  void run_pass(double radius, std::size_t pass, std::size_t passes) {
+    if (pass == 0) near_plane_ = 0.5 * radius;
+    radius_ = radius;
+    squared_radius_ = radius * radius;
+    pass_begin_ = double(pass) / double(passes);
+    pass_span_ = 1.0 / double(passes);
+    // Edges a smaller ball could not pivot over get a second chance with this one.
+    for (std::size_t e = 0; e < edges_.size(); ++e)
+      if (edges_[e].state == EdgeState::Boundary) {
+        edges_[e].state = EdgeState::Front;
+        front_.push_back(int(e));
+      }
+    const std::span<const std::uint32_t> order = tree_.spatial_order();
+    std::size_t cursor = 0;
+    for (;;) {
+      advance_front();
+      // Next seed: the first unused point, in spatial order, that has an empty seed ball.
+      bool seeded = false;
+      while (cursor < order.size() && !seeded) {
+        const int v = int(order[cursor++]);
+        if (!used_[v] && !skip_[v]) seeded = try_seed(v);
+        if ((cursor & 4095) == 0) tick();
+      }
+      if (!seeded) break;
+    }
+  }
+
+  // Closes the holes bounded by exactly three boundary edges: a ball that could not rest on
+  // their corners (it touched a point of the finished surface first) leaves such triangles
+  // open although their corners are already joined in a cycle.
+  void close_triangular_holes() {
+    for (std::size_t e = 0; e < edges_.size(); ++e) {
+      if (edges_[e].state == EdgeState::Inner) continue;
+      const int a = edges_[e].v0, b = edges_[e].v1;
+      for (int f = head_[a]; f >= 0;) {
+        const Edge edge = edges_[f];
+        f = edge.v0 == a ? edge.next0 : edge.next1;
+        if (edge.state == EdgeState::Inner || edge.v1 != a) continue;
+        const int c = edge.v0;  // boundary edge c -> a
+        const int g = find_edge(b, c);
+        if (c == b || g < 0 || edges_[g].state == EdgeState::Inner || edges_[g].v0 != b) continue;
+        const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, c);
+        if (!n || n->dot(normals_[a] + normals_[b] + normals_[c]) <= 0.0) continue;
+        add_triangle(b, a, c);
+        front_.clear();  // the three edges were glued; nothing is left to pivot
+        break;
+      }
+    }
+  }
+
+  std::vector<Triangle> take_triangles() { return std::move(triangles_); }
+  const std::vector<std::uint8_t>& used() const { return used_; }
+
+private:
+  void tick() {
+    reporter_.report(pass_begin_ + pass_span_ * double(used_count_) / double(local_.size()));
+    reporter_.throw_if_cancelled();
+  }
+
+  Eigen::Vector3d global(const Eigen::Vector3d& p) const { return p + origin_; }
+
+  // A vertex whose every edge has two triangles: the surface around it is finished. Balls pass
+  // through such vertices (neither hit nor blocked by them), so that a larger ball can close a
+  // hole whose rim it could otherwise not reach without touching the finished surface around.
+  bool inner(int v) const { return used_[v] && open_[v] == 0; }
+
+  int find_edge(int a, int b) const {
+    for (int e = head_[a]; e >= 0;) {
+      const Edge& edge = edges_[e];
+      if (edge.v0 == b || edge.v1 == b) return e;
+      e = edge.v0 == a ? edge.next0 : edge.next1;
+    }
+    return -1;
+  }
+
+  // The directed edge from -> to can be added to a triangle: it is new, or its one triangle
+  // runs the other way (so the two triangles are consistently oriented).
+  bool edge_fits(int from, int to) const {
+    const int e = find_edge(from, to);
+    if (e < 0) return true;
+    const Edge& edge = edges_[e];
+    return edge.state != EdgeState::Inner && edge.v0 == to && edge.v1 == from;
+  }
+
+  void add_edge_side(int from, int to, int opposite) {
+    const int e = find_edge(from, to);
+    if (e >= 0) {  // glue: the edge now has its second triangle
+      edges_[e].state = EdgeState::Inner;
+      --open_[from];
+      --open_[to];
+      return;
+    }
+    const int id = int(edges_.size());
+    edges_.push_back(Edge{from, to, opposite, EdgeState::Front, head_[from], head_[to]});
+    head_[from] = id;
+    head_[to] = id;
+    ++open_[from];
+    ++open_[to];
+    front_.push_back(id);
+  }
+
+  void add_triangle(int a, int b, int c) {
+    add_edge_side(a, b, c);
+    add_edge_side(b, c, a);
+    add_edge_side(c, a, b);
+    for (const int v : {a, b, c})
+      if (!used_[v]) {
+        used_[v] = 1;
+        ++used_count_;
+      }
+    triangles_.emplace_back(a, b, c);
+  }
+
+  // Unit normal of a -> b -> c (counter-clockwise), or nullopt when the triangle is degenerate.
+  std::optional<Eigen::Vector3d> triangle_normal(int a, int b, int c) const {
+    const Eigen::Vector3d u = local_[b] - local_[a];
+    const Eigen::Vector3d v = local_[c] - local_[a];
+    const Eigen::Vector3d w = u.cross(v);
+    const double norm = w.norm();
+    if (!(norm > kCollinearSine * u.norm() * v.norm())) return std::nullopt;
+    return Eigen::Vector3d(w / norm);
+  }
+
+  // Centre of the ball of radius_ through a, b, c on the side their counter-clockwise normal
+  // points to, or nullopt when the triangle is degenerate or its circumcircle is too wide.
+  std::optional<Eigen::Vector3d> ball_center(int a, int b, int c) const {
+    const Eigen::Vector3d u = local_[b] - local_[a];
+    const Eigen::Vector3d v = local_[c] - local_[a];
+    const Eigen::Vector3d w = u.cross(v);
+    const double w2 = w.squaredNorm();
+    if (!(std::sqrt(w2) > kCollinearSine * u.norm() * v.norm())) return std::nullopt;
+    const Eigen::Vector3d to_circumcenter = (u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u)) / (2.0 * w2);
+    const double height2 = squared_radius_ - to_circumcenter.squaredNorm();
+    if (!(height2 >= 0.0)) return std::nullopt;
+    return Eigen::Vector3d(local_[a] + to_circumcenter + w * std::sqrt(height2 / w2));
+  }
+
+  // The triangle's normal agrees with the normals of its three vertices.
+  bool normals_agree(const Eigen::Vector3d& n, int a, int b, int c) const {
+    return n.dot(normals_[a]) > cos_max_angle_ && n.dot(normals_[b]) > cos_max_angle_ &&
+           n.dot(normals_[c]) > cos_max_angle_;
+  }
+
+  // No neighbour other than a, b, c is strictly inside the ball at `center`. A finished
+  // (inner) vertex within `near_plane_` of the triangle's plane does not count: it belongs to
+  // the surface around a hole the ball is closing. Farther ones do: they are another sheet
+  // that the ball must not reach through.
+  bool ball_empty(const Eigen::Vector3d& center, int a, int b, int c) const {
+    const double limit = squared_radius_ * (1.0 - kInsideTolerance);
+    const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
+    for (const Neighbor& nb : neighbors_) {
+      const int q = int(nb.index);
+      if (q == a || q == b || q == c || skip_[q]) continue;
+      if ((local_[q] - center).squaredNorm() >= limit) continue;
+      if (inner(q) && n && std::abs(n->dot(local_[q] - local_[a])) <= near_plane_) continue;
+      return false;
+    }
+    return true;
+  }
+
+  bool try_seed(int v) {
+    tree_.radius(global(local_[v]), 2.0 * radius_, neighbors_);
+    seed_candidates_.clear();
+    for (const Neighbor& nb : neighbors_) {
+      const int q = int(nb.index);
+      if (q == v || used_[q] || skip_[q]) continue;
+      seed_candidates_.push_back(q);
+      if (int(seed_candidates_.size()) == kSeedNeighbours) break;
+    }
+    for (std::size_t i = 0; i < seed_candidates_.size(); ++i)
+      for (std::size_t j = i + 1; j < seed_candidates_.size(); ++j) {
+        int a = seed_candidates_[i];
+        int b = seed_candidates_[j];
+        std::optional<Eigen::Vector3d> n = triangle_normal(v, a, b);
+        if (!n) continue;
+        if (n->dot(normals_[v] + normals_[a] + normals_[b]) < 0.0) {
+          std::swap(a, b);
+          *n = -*n;
+        }
+        if (!normals_agree(*n, v, a, b)) continue;
+        const std::optional<Eigen::Vector3d> center = ball_center(v, a, b);
+        if (!center || !ball_empty(*center, v, a, b)) continue;
+        add_triangle(v, a, b);
+        return true;
+      }
+    return false;
+  }
+
+  // Pivots the ball resting on the edge's triangle around the edge, away from that triangle,
+  // and returns true when it makes a new triangle.
+  bool pivot(const Edge& edge) {
+    const int a = edge.v0;
+    const int b = edge.v1;
+    const int o = edge.opposite;
+    const std::optional<Eigen::Vector3d> start = ball_center(a, b, o);
+    if (!start) return false;
+    const Eigen::Vector3d mid = 0.5 * (local_[a] + local_[b]);
+    const Eigen::Vector3d axis = (local_[b] - local_[a]).normalized();
+    Eigen::Vector3d from = *start - mid;
+    from -= axis * axis.dot(from);
+    if (!(from.squaredNorm() > 0.0)) return false;
+    from.normalize();
+    // The ball rolls over the edge away from the old triangle: rotation about `axis` that
+    // first moves `from` towards the side opposite to `o`.
+    Eigen::Vector3d towards_o = local_[o] - mid;
+    towards_o -= axis * axis.dot(towards_o);
+    const double sign = from.cross(-towards_o).dot(axis) >= 0.0 ? 1.0 : -1.0;
+
+    tree_.radius(global(mid), 2.0 * radius_, neighbors_);
+    candidates_.clear();
+    for (const Neighbor& nb : neighbors_) {
+      const int p = int(nb.index);
+      if (p == a || p == b || p == o || skip_[p] || inner(p)) continue;
+      // The new triangle runs b -> a -> p, so the shared edge is traversed the other way.
+      const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, p);
+      if (!n || n->dot(normals_[a] + normals_[b] + normals_[p]) <= 0.0) continue;
+      const std::optional<Eigen::Vector3d> center = ball_center(b, a, p);
+      if (!center) continue;
+      Eigen::Vector3d to = *center - mid;
+      to -= axis * axis.dot(to);
+      double angle = std::atan2(sign * from.cross(to).dot(axis), from.dot(to));
+      if (angle < -1e-7) angle += 2.0 * kPi;  // rounding around 0 stays at 0 (co-circular points)
+      candidates_.push_back(Candidate{std::max(angle, 0.0), p, *center});
+    }
+    std::sort(candidates_.begin(), candidates_.end(),
+              [](const Candidate& x, const Candidate& y) { return x.angle < y.angle || (x.angle == y.angle && x.point < y.point); });
+    for (const Candidate& c : candidates_) {
+      if (!ball_empty(c.center, a, b, c.point)) continue;
+      // The first point the ball hits decides: if it cannot take a triangle the edge is a
+      // boundary (trying farther points would let the ball pass through this one).
+      const int p = c.point;
+      const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, p);
+      if (!n || !normals_agree(*n, a, b, p)) return false;
+      if (!edge_fits(a, p) || !edge_fits(p, b)) return false;
+      add_triangle(b, a, p);
+      return true;
+    }
+    return false;
+  }
+
+  void advance_front() {
+    std::size_t processed = 0;
+    while (front_head_ < front_.size()) {
+      const int e = front_[front_head_++];
+      if (edges_[e].state != EdgeState::Front) continue;
+      const Edge edge = edges_[e];
+      if (!pivot(edge)) {
+        // pivot() made no triangle, so edges_ did not move and `e` is still this edge.
+        edges_[e].state = EdgeState::Boundary;
+      }
+      if ((++processed & 4095) == 0) tick();
+    }
+    front_.clear();
+    front_head_ = 0;
+  }
+
+  const KdTree& tree_;
+  std::vector<Eigen::Vector3d> local_;    // positions minus origin_
+  std::vector<Eigen::Vector3d> normals_;  // unit (zero where undefined)
+  std::vector<std::uint8_t> skip_;        // duplicates and points without a usable normal
+  Eigen::Vector3d origin_;
+  double cos_max_angle_;
+  detail::ProgressReporter& reporter_;
+
+  double radius_ = 0.0, squared_radius_ = 0.0;
+  double near_plane_ = 0.0;  // half the smallest radius, cloud units
+  double pass_begin_ = 0.0, pass_span_ = 1.0;
+  std::vector<Edge> edges_;
+  std::vector<int> head_;          // first edge of each vertex, -1 if none
+  std::vector<int> open_;          // edges with one triangle (front or boundary) at each vertex
+  std::vector<std::uint8_t> used_;  // vertex belongs to a triangle
+  std::size_t used_count_ = 0;
+  std::vector<int> front_;
+  std::size_t front_head_ = 0;
+  std::vector<Triangle> triangles_;
+  std::vector<Neighbor> neighbors_;
+  std::vector<Candidate> candidates_;
+  std::vector<int> seed_candidates_;
+};
+
+}  // namespace
+
+ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
+                                               const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  if (n < 3) throw UsageError(fmt::format("reconstruct_ball_pivoting: needs at least 3 points, got {}", n));
+  if (n > std::size_t(std::numeric_limits<int>::max() / 4))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: at most {} points, got {}", std::numeric_limits<int>::max() / 4, n));
+  if (!cloud.has_normals())
+    throw UsageError("reconstruct_ball_pivoting: the cloud has no normals; ball pivoting needs oriented normals "
+                     "(estimate and orient them first)");
+  if (cloud.normals.size() != n)
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  for (const double r : params.radii)
+    if (!(r > 0.0 && std::isfinite(r)))
+      throw UsageError(fmt::format("reconstruct_ball_pivoting: radii must be > 0 and finite, got {}", r));
+  if (params.radii.empty()) {
+    if (params.radii_in_spacings.empty())
+      throw UsageError("reconstruct_ball_pivoting: radii and radii_in_spacings are both empty; give at least one radius");
+    for (const double r : params.radii_in_spacings)
+      if (!(r > 0.0 && std::isfinite(r)))
+        throw UsageError(fmt::format("reconstruct_ball_pivoting: radii_in_spacings must be > 0 and finite, got {}", r));
+  }
+  if (!(params.max_normal_angle_deg > 0.0 && params.max_normal_angle_deg <= 180.0))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: max_normal_angle_deg must be in (0, 180], got {}",
+                                 params.max_normal_angle_deg));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite())
+      throw InputError(fmt::format("reconstruct_ball_pivoting: point {} has a non-finite coordinate", i));
+
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
+
+  ReconstructionResult result;
+  result.mean_spacing = mean_spacing(*tree);
+  if (!(result.mean_spacing > 0.0))
+    throw ComputeError(fmt::format("reconstruct_ball_pivoting: all {} points coincide; there is no surface", n));
+  std::vector<double> radii = params.radii;
+  if (radii.empty())
+    for (const double s : params.radii_in_spacings) radii.push_back(s * result.mean_spacing);
+  std::sort(radii.begin(), radii.end());
+  radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+
+  // Local coordinates keep georeferenced clouds precise in the circumcentre computations.
+  const Eigen::Vector3d origin = bounding_box(cloud.positions).center();
+  std::vector<Eigen::Vector3d> local(n), normals(n);
+  std::vector<std::uint8_t> skip(n, 0);
+  const double duplicate_distance = kDuplicateInSpacings * result.mean_spacing;
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Neighbor>& nbs = buffers.local();
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      local[i] = cloud.positions[i] - origin;
+      const Eigen::Vector3d& nrm = cloud.normals[i];
+      const double len = nrm.norm();
+      normals[i] = len > 0.0 && std::isfinite(len) ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
+      if (normals[i].isZero()) skip[i] = 1;
+      tree->radius(cloud.positions[i], duplicate_distance, nbs);
+      for (const Neighbor& nb : nbs)
+        if (nb.index < i) skip[i] = 1;
+    }
+  });
+
+  const double cos_max_angle = std::cos(params.max_normal_angle_deg * kPi / 180.0);
+  BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, cos_max_angle, reporter);
+  for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
+  pivoter.close_triangular_holes();
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+
+  const std::vector<std::uint8_t>& used = pivoter.used();
+  result.unused_points = std::size_t(std::count(used.begin(), used.end(), std::uint8_t(0)));
+  result.mesh = TriangleMesh::from_cloud(cloud, pivoter.take_triangles());
+  result.topology = analyze_topology(result.mesh);
+  return result;
+}
+
+}  // namespace pointsurf
