@@ -11,6 +11,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -55,13 +56,31 @@ struct Candidate {
   Eigen::Vector3d center;
 };
 
+// Triangle acceptance rules, as cosines and lengths.
+struct Rules {
+  double cos_vertex;     // triangle normal against each vertex normal
+  double cos_mean;       // triangle normal against the mean of its vertex normals
+  double cos_opposite;   // two vertex normals farther apart than this: opposite sides
+  double sheet_offset;   // cloud units: see other_sheet()
+};
+// Vertex normals closer than this are "parallel" for the sheet test, degrees.
+constexpr double kSheetNormalDeg = 30.0;
+// A chord between parallel-normal points that leaves their common tangent plane by more than
+// this angle (and more than kSheetOffsetInSpacings) goes to another sheet, degrees.
+constexpr double kSheetChordDeg = 20.0;
+constexpr double kSheetOffsetInSpacings = 1.0;
+// Two vertex normals more than this apart point to opposite sides, degrees.
+constexpr double kOppositeNormalsDeg = 120.0;
+// The final pass closes boundary loops of at most this many edges that fit in the largest ball.
+constexpr std::size_t kMaxClosedLoop = 6;
+
 class BallPivoter {
 public:
   BallPivoter(const KdTree& tree, std::vector<Eigen::Vector3d> local, std::vector<Eigen::Vector3d> normals,
-              std::vector<std::uint8_t> skip, const Eigen::Vector3d& origin, double cos_max_angle,
+              std::vector<std::uint8_t> skip, const Eigen::Vector3d& origin, const Rules& rules,
               detail::ProgressReporter& reporter)
       : tree_(tree), local_(std::move(local)), normals_(std::move(normals)), skip_(std::move(skip)), origin_(origin),
-        cos_max_angle_(cos_max_angle), reporter_(reporter), head_(local_.size(), -1), open_(local_.size(), 0),
+        rules_(rules), reporter_(reporter), head_(local_.size(), -1), open_(local_.size(), 0),
         used_(local_.size(), 0) {}
 
   void run_pass(double radius, std::size_t pass, std::size_t passes) {
@@ -70,9 +89,12 @@ public:
     squared_radius_ = radius * radius;
     pass_begin_ = double(pass) / double(passes);
     pass_span_ = 1.0 / double(passes);
-    // Edges a smaller ball could not pivot over get a second chance with this one.
+    // Edges a smaller ball could not pivot over get a second chance with this one, but only
+    // where the larger ball can rest on the edge's triangle without holding another point
+    // (Bernardini et al. 1999, section 4.3): a larger ball whose starting position already
+    // reaches through a nearby sheet would bridge to it.
     for (std::size_t e = 0; e < edges_.size(); ++e)
-      if (edges_[e].state == EdgeState::Boundary) {
+      if (edges_[e].state == EdgeState::Boundary && larger_ball_fits(edges_[e])) {
         edges_[e].state = EdgeState::Front;
         front_.push_back(int(e));
       }
@@ -91,33 +113,166 @@ public:
     }
   }
 
-  // Closes the holes bounded by exactly three boundary edges: a ball that could not rest on
-  // their corners (it touched a point of the finished surface first) leaves such triangles
-  // open although their corners are already joined in a cycle.
-  void close_triangular_holes() {
-    for (std::size_t e = 0; e < edges_.size(); ++e) {
-      if (edges_[e].state == EdgeState::Inner) continue;
-      const int a = edges_[e].v0, b = edges_[e].v1;
-      for (int f = head_[a]; f >= 0;) {
-        const Edge edge = edges_[f];
-        f = edge.v0 == a ? edge.next0 : edge.next1;
-        if (edge.state == EdgeState::Inner || edge.v1 != a) continue;
-        const int c = edge.v0;  // boundary edge c -> a
-        const int g = find_edge(b, c);
-        if (c == b || g < 0 || edges_[g].state == EdgeState::Inner || edges_[g].v0 != b) continue;
-        const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, c);
-        if (!n || n->dot(normals_[a] + normals_[b] + normals_[c]) <= 0.0) continue;
-        add_triangle(b, a, c);
-        front_.clear();  // the three edges were glued; nothing is left to pivot
-        break;
+  // Final pass: closes the holes bounded by at most kMaxClosedLoop boundary edges whose corners
+  // fit in the largest ball, as a still larger ball resting on them would: a ball that could not
+  // rest on their corners (it touched a point of the finished surface first, typically at a
+  // sharp edge) leaves such holes although their corners are joined in a cycle. A hole that has
+  // no acceptable triangulation (the surface around it folds, as where the ball rolled over a
+  // sharp edge from two sides) is widened once by the triangles along it and tried again; if
+  // that fails too, they are put back. Works on the triangle list with a map of directed edges
+  // (the pivoting structures are done with). Returns the holes closed.
+  std::size_t close_small_loops(double largest_radius) {
+    half_.clear();
+    half_.reserve(triangles_.size() * 3);
+    alive_.assign(triangles_.size(), 1);
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      for (int k = 0; k < 3; ++k) half_[key(triangles_[t][k], triangles_[t][(k + 1) % 3])] = int(t);
+    std::vector<std::uint64_t> holes;  // hole half-edges b -> a of boundary edges a -> b
+    for (const auto& [k, t] : half_)
+      if (!half_.contains(key(int(k & 0xffffffffu), int(k >> 32)))) holes.push_back(key(int(k & 0xffffffffu), int(k >> 32)));
+    std::sort(holes.begin(), holes.end());  // deterministic order
+    std::size_t closed = 0;
+    std::vector<int> loop, removed;
+    for (const std::uint64_t h : holes) {
+      const int from = int(h >> 32), to = int(h & 0xffffffffu);
+      if (half_.contains(h) || !half_.contains(key(to, from))) continue;  // closed meanwhile
+      if (!walk_hole(from, kMaxClosedLoop, loop) || !fits_ball(loop, largest_radius)) continue;
+      if (fill_loop(loop)) {
+        ++closed;
+        continue;
       }
+      // Widen: drop the triangles along the hole and try the larger hole once.
+      removed.clear();
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = half_.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it != half_.end() && std::find(removed.begin(), removed.end(), it->second) == removed.end()) removed.push_back(it->second);
+      }
+      for (const int t : removed) set_triangle(t, false);
+      const int start = loop.front();
+      if (walk_hole(start, 2 * kMaxClosedLoop, loop) && fits_ball(loop, largest_radius) && fill_loop(loop)) {
+        ++closed;
+        continue;
+      }
+      for (const int t : removed) set_triangle(t, true);
     }
+    std::size_t out = 0;
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      if (alive_[t]) triangles_[out++] = triangles_[t];
+    triangles_.resize(out);
+    return closed;
   }
 
   std::vector<Triangle> take_triangles() { return std::move(triangles_); }
   const std::vector<std::uint8_t>& used() const { return used_; }
 
 private:
+  static std::uint64_t key(int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); }
+
+  void set_triangle(int t, bool alive) {
+    alive_[t] = alive ? 1 : 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t e = key(triangles_[t][k], triangles_[t][(k + 1) % 3]);
+      if (alive) half_[e] = t;
+      else half_.erase(e);
+    }
+  }
+
+  void push_triangle(int a, int b, int c) {
+    triangles_.emplace_back(a, b, c);
+    alive_.push_back(1);
+    set_triangle(int(triangles_.size()) - 1, true);
+  }
+
+  // A hole through vertex `start` of at most `max_size` vertices: loop[i] -> loop[i + 1] are
+  // hole half-edges (reverse of boundary edges), the direction the closing triangles take. At a
+  // pinched vertex (two holes meet) each way on is tried; no vertex appears twice.
+  bool walk_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
+    loop.assign(1, start);
+    return extend_hole(start, max_size, loop);
+  }
+
+  bool extend_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
+    const int at = loop.back();
+    for (int f = head_[at]; f >= 0;) {  // the pivoting edges hold every edge of the mesh
+      const Edge& edge = edges_[f];
+      f = edge.v0 == at ? edge.next0 : edge.next1;
+      const int next = edge.v0 == at ? edge.v1 : edge.v0;
+      if (half_.contains(key(at, next)) || !half_.contains(key(next, at))) continue;
+      if (next == start) {
+        if (loop.size() >= 3) return true;
+        continue;
+      }
+      if (loop.size() >= max_size || std::find(loop.begin(), loop.end(), next) != loop.end()) continue;
+      loop.push_back(next);
+      if (extend_hole(start, max_size, loop)) return true;
+      loop.pop_back();
+    }
+    return false;
+  }
+
+  bool fits_ball(const std::vector<int>& loop, double radius) const {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const int v : loop) centroid += local_[v];
+    centroid /= double(loop.size());
+    for (const int v : loop)
+      if ((local_[v] - centroid).norm() > radius) return false;
+    return true;
+  }
+
+  // Triangulates one hole, loop[i] -> loop[i + 1] being the direction the new triangles take:
+  // of all its triangulations, the one whose worst triangle agrees best with its corners'
+  // normals, every triangle obeying closes_hole() and no diagonal duplicating an existing edge
+  // (dynamic programme over the sub-polygons, O(k^3)). Returns false (and adds nothing) when
+  // none does.
+  bool fill_loop(const std::vector<int>& loop) {
+    const int k = int(loop.size());
+    constexpr double kInvalid = -3.0;
+    constexpr int kMax = 2 * int(kMaxClosedLoop);
+    // best[i][j]: the best worst-score of the polygon loop[i..j] closed by the chord (i, j);
+    // split[i][j]: its apex.
+    double best[kMax][kMax];
+    int split[kMax][kMax];
+    for (int len = 2; len < k; ++len)
+      for (int i = 0; i + len < k; ++i) {
+        const int j = i + len;
+        best[i][j] = kInvalid;
+        split[i][j] = -1;
+        if (!(i == 0 && j == k - 1) && (half_.contains(key(loop[i], loop[j])) || half_.contains(key(loop[j], loop[i]))))
+          continue;
+        for (int m = i + 1; m < j; ++m) {
+          const double left = m - i >= 2 ? best[i][m] : 1.0, right = j - m >= 2 ? best[m][j] : 1.0;
+          if (left == kInvalid || right == kInvalid) continue;
+          const int a = loop[i], b = loop[m], c = loop[j];
+          const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
+          if (!n || !closes_hole(*n, a, b, c)) continue;
+          const double score = std::min({left, right, n->dot((normals_[a] + normals_[b] + normals_[c]).normalized())});
+          if (score > best[i][j]) {
+            best[i][j] = score;
+            split[i][j] = m;
+          }
+        }
+      }
+    if (split[0][k - 1] < 0) return false;
+    int stack[kMax][2];
+    int top = 0;
+    stack[top][0] = 0;
+    stack[top++][1] = k - 1;
+    while (top > 0) {
+      --top;
+      const int i = stack[top][0], j = stack[top][1], m = split[i][j];
+      push_triangle(loop[i], loop[m], loop[j]);
+      if (m - i >= 2) {
+        stack[top][0] = i;
+        stack[top++][1] = m;
+      }
+      if (j - m >= 2) {
+        stack[top][0] = m;
+        stack[top++][1] = j;
+      }
+    }
+    return true;
+  }
+
   void tick() {
     reporter_.report(pass_begin_ + pass_span_ * double(used_count_) / double(local_.size()));
     reporter_.throw_if_cancelled();
@@ -201,16 +356,52 @@ private:
     return Eigen::Vector3d(local_[a] + to_circumcenter + w * std::sqrt(height2 / w2));
   }
 
-  // The triangle's normal agrees with the normals of its three vertices.
+  // p and q lie on two different sheets: their normals are nearly parallel, but the chord
+  // between them leaves their common tangent plane steeply and by more than a spacing (two scans
+  // of a thin wall, stacked plates). On one smooth sheet the chord is perpendicular to the sum
+  // of the two normals (exactly so on a circle), whatever the curvature.
+  bool other_sheet(int p, int q) const {
+    static const double cos_parallel = std::cos(kSheetNormalDeg * kPi / 180.0);
+    static const double sin_chord = std::sin(kSheetChordDeg * kPi / 180.0);
+    if (!(normals_[p].dot(normals_[q]) > cos_parallel)) return false;
+    const Eigen::Vector3d d = local_[q] - local_[p];
+    const Eigen::Vector3d m = (normals_[p] + normals_[q]).normalized();
+    const double offset = std::abs(m.dot(d));
+    return offset > rules_.sheet_offset && offset > sin_chord * d.norm();
+  }
+
+  // The looser rule for the triangles that close a small hole, which the surrounding surface
+  // already bounds: on the side the normals point to (mean angle below 90 degrees), no two
+  // opposite normals, no two sheets. Where the samples across a sharp edge are nearly in line,
+  // the one triangle that closes the hole is almost perpendicular to both faces.
+  bool closes_hole(const Eigen::Vector3d& n, int a, int b, int c) const {
+    if (!(n.dot(normals_[a] + normals_[b] + normals_[c]) > 0.0)) return false;
+    if (normals_[a].dot(normals_[b]) < rules_.cos_opposite || normals_[b].dot(normals_[c]) < rules_.cos_opposite ||
+        normals_[c].dot(normals_[a]) < rules_.cos_opposite)
+      return false;
+    return !other_sheet(a, b) && !other_sheet(b, c) && !other_sheet(c, a);
+  }
+
+  // The triangle's normal agrees with the normals of its three vertices: within the vertex
+  // angle of each, within the mean angle of their mean; no two of them opposite; and the
+  // triangle does not join two sheets.
   bool normals_agree(const Eigen::Vector3d& n, int a, int b, int c) const {
-    return n.dot(normals_[a]) > cos_max_angle_ && n.dot(normals_[b]) > cos_max_angle_ &&
-           n.dot(normals_[c]) > cos_max_angle_;
+    const Eigen::Vector3d sum = normals_[a] + normals_[b] + normals_[c];
+    if (!(n.dot(sum) >= rules_.cos_mean * sum.norm())) return false;
+    if (!(n.dot(normals_[a]) > rules_.cos_vertex && n.dot(normals_[b]) > rules_.cos_vertex &&
+          n.dot(normals_[c]) > rules_.cos_vertex))
+      return false;
+    if (normals_[a].dot(normals_[b]) < rules_.cos_opposite || normals_[b].dot(normals_[c]) < rules_.cos_opposite ||
+        normals_[c].dot(normals_[a]) < rules_.cos_opposite)
+      return false;
+    return !other_sheet(a, b) && !other_sheet(b, c) && !other_sheet(c, a);
   }
 
   // No neighbour other than a, b, c is strictly inside the ball at `center`. A finished
   // (inner) vertex within `near_plane_` of the triangle's plane does not count: it belongs to
-  // the surface around a hole the ball is closing. Farther ones do: they are another sheet
-  // that the ball must not reach through.
+  // the surface around a hole the ball is closing. Farther ones do. A point on another sheet
+  // than all three corners (other_sheet) does not count either: a ball wider than the gap
+  // between two parallel sheets may reach through one while it rolls on the other.
   bool ball_empty(const Eigen::Vector3d& center, int a, int b, int c) const {
     const double limit = squared_radius_ * (1.0 - kInsideTolerance);
     const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
@@ -219,9 +410,18 @@ private:
       if (q == a || q == b || q == c || skip_[q]) continue;
       if ((local_[q] - center).squaredNorm() >= limit) continue;
       if (inner(q) && n && std::abs(n->dot(local_[q] - local_[a])) <= near_plane_) continue;
+      if (other_sheet(a, q) && other_sheet(b, q) && other_sheet(c, q)) continue;
       return false;
     }
     return true;
+  }
+
+  // The ball of the current radius rests on the edge's triangle and holds no other point.
+  bool larger_ball_fits(const Edge& edge) {
+    const std::optional<Eigen::Vector3d> center = ball_center(edge.v0, edge.v1, edge.opposite);
+    if (!center) return false;
+    tree_.radius(global(*center), radius_, neighbors_);
+    return ball_empty(*center, edge.v0, edge.v1, edge.opposite);
   }
 
   bool try_seed(int v) {
@@ -276,7 +476,7 @@ private:
     candidates_.clear();
     for (const Neighbor& nb : neighbors_) {
       const int p = int(nb.index);
-      if (p == a || p == b || p == o || skip_[p] || inner(p)) continue;
+      if (p == a || p == b || p == o || skip_[p] || inner(p) || (other_sheet(a, p) && other_sheet(b, p))) continue;
       // The new triangle runs b -> a -> p, so the shared edge is traversed the other way.
       const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, p);
       if (!n || n->dot(normals_[a] + normals_[b] + normals_[p]) <= 0.0) continue;
@@ -325,7 +525,7 @@ private:
   std::vector<Eigen::Vector3d> normals_;  // unit (zero where undefined)
   std::vector<std::uint8_t> skip_;        // duplicates and points without a usable normal
   Eigen::Vector3d origin_;
-  double cos_max_angle_;
+  Rules rules_;
   detail::ProgressReporter& reporter_;
 
   double radius_ = 0.0, squared_radius_ = 0.0;
@@ -339,6 +539,8 @@ private:
   std::vector<int> front_;
   std::size_t front_head_ = 0;
   std::vector<Triangle> triangles_;
+  std::unordered_map<std::uint64_t, int> half_;  // small-hole pass: directed edge -> triangle
+  std::vector<std::uint8_t> alive_;               // small-hole pass: triangle kept
   std::vector<Neighbor> neighbors_;
   std::vector<Candidate> candidates_;
   std::vector<int> seed_candidates_;
@@ -370,6 +572,9 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   if (!(params.max_normal_angle_deg > 0.0 && params.max_normal_angle_deg <= 180.0))
     throw UsageError(fmt::format("reconstruct_ball_pivoting: max_normal_angle_deg must be in (0, 180], got {}",
                                  params.max_normal_angle_deg));
+  if (!(params.max_mean_normal_angle_deg > 0.0 && params.max_mean_normal_angle_deg <= 180.0))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: max_mean_normal_angle_deg must be in (0, 180], got {}",
+                                 params.max_mean_normal_angle_deg));
   if (tree != nullptr && tree->size() != n)
     throw UsageError(fmt::format("reconstruct_ball_pivoting: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
   for (std::size_t i = 0; i < n; ++i)
@@ -410,10 +615,14 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
     }
   });
 
-  const double cos_max_angle = std::cos(params.max_normal_angle_deg * kPi / 180.0);
-  BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, cos_max_angle, reporter);
+  Rules rules;
+  rules.cos_vertex = std::cos(params.max_normal_angle_deg * kPi / 180.0);
+  rules.cos_mean = std::cos(params.max_mean_normal_angle_deg * kPi / 180.0);
+  rules.cos_opposite = std::cos(kOppositeNormalsDeg * kPi / 180.0);
+  rules.sheet_offset = kSheetOffsetInSpacings * result.mean_spacing;
+  BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, rules, reporter);
   for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
-  pivoter.close_triangular_holes();
+  if (params.close_small_holes) pivoter.close_small_loops(radii.back());
   reporter.report(1.0);
   reporter.throw_if_cancelled();
 
