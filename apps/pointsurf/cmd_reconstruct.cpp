@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // pointsurf reconstruct IN OUT: a triangle mesh through the points (region-growing
 // triangulation by default; Crust or ball pivoting on request), with its holes reported.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -24,9 +27,8 @@ struct ReconstructState {
   OutputOptions output;
   std::string input, output_path;
   std::string method = "triangulate";
-  // Normals, when the input has none.
+  // Normals, when the input has none (PCA over k neighbours, MST orientation).
   int normals_k = 30;
-  int orient_k = 10;
   // Region-growing triangulation.
   TriangulateParams triangulate;
   // Crust.
@@ -35,6 +37,8 @@ struct ReconstructState {
   // Ball pivoting.
   std::string radii, radii_in_spacings;
   double bp_max_normal_angle_deg = BallPivotParams{}.max_normal_angle_deg;
+  double bp_max_mean_normal_angle_deg = BallPivotParams{}.max_mean_normal_angle_deg;
+  bool bp_keep_small_holes = false;
 };
 
 std::vector<double> parse_list(const std::string& text, const std::string& option) {
@@ -68,24 +72,39 @@ void check_range(const std::string& option, double value, double low, double hig
     throw UsageError(fmt::format("--{}: {} must be in {}{}, {}{}", option, value, low_open ? "(" : "[", low, high, high_open ? ")" : "]"));
 }
 
+// Genus of the result when it is one connected, edge-manifold, oriented surface whose boundary
+// edges all lie on the reported loops: (2 - chi - holes) / 2 (a closed surface has no holes);
+// -1 otherwise.
+long surface_genus(const MeshTopology& t) {
+  std::size_t loop_edges = 0;
+  for (const BoundaryLoop& loop : t.boundary_loops) loop_edges += loop.vertices.size();
+  if (t.components != 1 || !t.edge_manifold() || !t.oriented() || loop_edges != t.boundary_edges) return -1;
+  const long twice = 2 - t.euler_characteristic - long(t.boundary_loops.size());
+  return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
+}
+
+double total_hole_perimeter(const MeshTopology& t) {
+  double total = 0.0;
+  for (const BoundaryLoop& loop : t.boundary_loops) total += loop.length;
+  return total;
+}
+
 // Holes and manifoldness of the result, for the report and the summary.
 nlohmann::json topology_metrics(const ReconstructionResult& r) {
   const MeshTopology& t = r.topology;
-  double total = 0.0;
-  for (const BoundaryLoop& loop : t.boundary_loops) total += loop.length;
   return {{"triangles", t.triangles},
           {"vertices_used", t.vertices},
           {"unused_points", r.unused_points},
           {"boundary_edges", t.boundary_edges},
           {"holes", t.boundary_loops.size()},
-          {"holes_total_perimeter", total},
+          {"holes_total_perimeter", total_hole_perimeter(t)},
           {"largest_hole_perimeter", t.boundary_loops.empty() ? 0.0 : t.boundary_loops.front().length},
           {"non_manifold_edges", t.non_manifold_edges},
           {"non_manifold_vertices", t.non_manifold_vertices},
           {"inconsistent_edges", t.inconsistent_edges},
           {"components", t.components},
           {"euler_characteristic", t.euler_characteristic},
-          {"genus", t.genus()},
+          {"genus", surface_genus(t)},
           {"watertight", t.watertight()},
           {"mean_spacing", r.mean_spacing}};
 }
@@ -94,7 +113,6 @@ void run_reconstruct(const ReconstructState& s) {
   if (s.method != "triangulate" && s.method != "crust" && s.method != "ball-pivot")
     throw UsageError(fmt::format("--method: '{}': expected triangulate, crust or ball-pivot", s.method));
   if (s.normals_k < 3) throw UsageError(fmt::format("--normals-k: {} must be at least 3", s.normals_k));
-  if (s.orient_k < 1) throw UsageError(fmt::format("--orient-k: {} must be at least 1", s.orient_k));
   const TriangulateParams& tp = s.triangulate;
   if (tp.k < 3) throw UsageError(fmt::format("--k: {} must be at least 3", tp.k));
   if (!(tp.radius >= 0.0) || !std::isfinite(tp.radius)) throw UsageError(fmt::format("--radius: {} must be >= 0", tp.radius));
@@ -114,13 +132,17 @@ void run_reconstruct(const ReconstructState& s) {
   if (!s.radii.empty()) ball.radii = parse_list(s.radii, "--radii");
   if (!s.radii_in_spacings.empty()) ball.radii_in_spacings = parse_list(s.radii_in_spacings, "--radii-in-spacings");
   check_range("ball-normal-angle", s.bp_max_normal_angle_deg, 0.0, 180.0, true, false);
+  check_range("ball-mean-normal-angle", s.bp_max_mean_normal_angle_deg, 0.0, 180.0, true, false);
   ball.max_normal_angle_deg = s.bp_max_normal_angle_deg;
+  ball.max_mean_normal_angle_deg = s.bp_max_mean_normal_angle_deg;
+  ball.close_small_holes = !s.bp_keep_small_holes;
   const WriteOptions write_options = s.output.to_write_options();
+  // An unknown output extension fails now, not after the work.
   const std::string out_format = write_options.format.empty() ? format_from_extension(s.output_path) : write_options.format;
 
   Report report("reconstruct");
   nlohmann::json& parameters = report.parameters();
-  parameters = {{"input", s.input}, {"output", s.output_path}, {"method", s.method}, {"normals_k", s.normals_k}, {"orient_k", s.orient_k}};
+  parameters = {{"input", s.input}, {"output", s.output_path}, {"method", s.method}, {"normals_k", s.normals_k}};
   if (s.method == "triangulate")
     parameters.update({{"k", tp.k},
                        {"radius", tp.radius},
@@ -137,7 +159,11 @@ void run_reconstruct(const ReconstructState& s) {
                        {"sharp_edge_angle_deg", crust.sharp_edge_angle_deg},
                        {"boundary", s.crust_boundary}});
   if (s.method == "ball-pivot")
-    parameters.update({{"radii", ball.radii}, {"radii_in_spacings", ball.radii_in_spacings}, {"max_normal_angle_deg", ball.max_normal_angle_deg}});
+    parameters.update({{"radii", ball.radii},
+                       {"radii_in_spacings", ball.radii_in_spacings},
+                       {"max_normal_angle_deg", ball.max_normal_angle_deg},
+                       {"max_mean_normal_angle_deg", ball.max_mean_normal_angle_deg},
+                       {"close_small_holes", ball.close_small_holes}});
 
   PointCloud cloud = read_cloud_reported(s.input, s.common, report).cloud;
   if (cloud.size() < 3) throw InputError(fmt::format("{}: {} points; a surface needs at least 3", s.input, cloud.size()));
@@ -149,28 +175,12 @@ void run_reconstruct(const ReconstructState& s) {
   report.stage(stage)["metrics"]["mean_spacing"] = spacing;
   if (!(spacing > 0.0)) throw InputError(fmt::format("{}: all {} points coincide; no surface can be built", s.input, cloud.size()));
 
-  // Crust needs no normals; the others need oriented ones.
-  bool estimated_normals = false;
-  if (s.method != "crust" && !cloud.has_normals()) {
-    stage = report.begin_stage("normals");
-    NormalResult estimated;
-    OrientResult oriented;
-    {
-      ProgressBar bar("normals", !s.common.quiet);
-      NormalParams np;
-      np.k = s.normals_k;
-      estimated = estimate_normals(cloud, np, &tree, bar.callback());
-      OrientParams op;
-      op.k = s.orient_k;
-      oriented = orient_normals(cloud, op, &tree, bar.callback());
-    }
-    report.end_stage(stage);
-    report.stage(stage)["counts"] = {{"points", cloud.size()},
-                                     {"degenerate", estimated.degenerate},
-                                     {"flipped", oriented.flipped},
-                                     {"components", oriented.components}};
-    report.stage(stage)["metrics"] = {{"method", "pca + mst orientation"}, {"k", s.normals_k}, {"orient_k", s.orient_k}};
-    estimated_normals = true;
+  // Crust needs no normals; the others need oriented ones: estimated here when absent (and said
+  // so in the report's "normals" stage and in the summary line).
+  const bool estimated_normals = s.method != "crust" && !cloud.has_normals();
+  if (estimated_normals) {
+    estimate_missing_normals(cloud, tree, s.normals_k, s.common, report);
+    report.warn(fmt::format("{}: no normals in the input; estimated (PCA, k = {}) and MST-oriented", s.input, s.normals_k), s.common.quiet);
   }
 
   stage = report.begin_stage(s.method);
@@ -196,6 +206,11 @@ void run_reconstruct(const ReconstructState& s) {
                        {"closed_pieces", stats.closed_pieces}};
     } else {
       result = reconstruct_ball_pivoting(cloud, ball, &tree, bar.callback());
+      std::vector<double> radii = ball.radii;
+      if (radii.empty())
+        for (const double f : ball.radii_in_spacings) radii.push_back(f * result.mean_spacing);
+      std::sort(radii.begin(), radii.end());
+      method_counts = {{"radii_used", radii}};
     }
   }
   report.end_stage(stage);
@@ -207,7 +222,7 @@ void run_reconstruct(const ReconstructState& s) {
                                    s.input, cloud.size()));
   if (topo.boundary_loops.size() > 0)
     report.warn(fmt::format("{} holes remain (total perimeter {:.4g}, largest {:.4g})", topo.boundary_loops.size(),
-                            report.stage(stage)["metrics"]["holes_total_perimeter"].get<double>(),
+                            total_hole_perimeter(topo),
                             topo.boundary_loops.front().length),
                 s.common.quiet);
   if (topo.non_manifold_edges > 0) report.warn(fmt::format("{} non-manifold edges", topo.non_manifold_edges), s.common.quiet);
@@ -226,9 +241,13 @@ void run_reconstruct(const ReconstructState& s) {
   report.finish();
   if (!s.common.report_path.empty()) report.write(s.common.report_path);
   if (!s.common.quiet)
-    fmt::print(stderr, "{} -> {}: {} {} triangles from {} points{}, {} holes, {} non-manifold edges, {} components, {:.2f} s\n", s.input,
-               s.output_path, s.method, topo.triangles, cloud.size(), estimated_normals ? " (normals estimated)" : "",
-               topo.boundary_loops.size(), topo.non_manifold_edges, topo.components, report.json()["total_seconds"].get<double>());
+    fmt::print(stderr,
+               "{} -> {}: {} {} triangles from {} points{}; {} holes (perimeter {:.4g}), {} non-manifold edges, {} components, "
+               "genus {}, {:.2f} s\n",
+               s.input, s.output_path, s.method, topo.triangles, cloud.size(), estimated_normals ? " (normals estimated)" : "",
+               topo.boundary_loops.size(), total_hole_perimeter(topo), topo.non_manifold_edges, topo.components,
+               surface_genus(topo) >= 0 ? std::to_string(surface_genus(topo)) : std::string("-"),
+               report.json()["total_seconds"].get<double>());
 }
 
 }  // namespace
@@ -242,7 +261,6 @@ Command register_reconstruct(CLI::App& app) {
   cmd->add_option("output", s.output_path, "Output mesh with vertex normals (.ply .off .obj .stl)")->required();
   cmd->add_option("--method", s.method, "triangulate (region growing, default), crust or ball-pivot")->type_name("METHOD");
   cmd->add_option("--normals-k", s.normals_k, "Neighbours for normals when the input has none (default 30)");
-  cmd->add_option("--orient-k", s.orient_k, "Neighbours in the MST orientation graph (default 10)");
   // triangulate
   cmd->add_option("--k", s.triangulate.k, "triangulate: at most k neighbours per point (default 30)");
   cmd->add_option("--radius", s.triangulate.radius, "triangulate: search radius and longest edge, cloud units (default: from local spacing)")
@@ -268,7 +286,11 @@ Command register_reconstruct(CLI::App& app) {
   cmd->add_option("--radii", s.radii, "ball-pivot: ball radii, cloud units (default: from --radii-in-spacings)")->type_name("R1,R2,...");
   cmd->add_option("--radii-in-spacings", s.radii_in_spacings, "ball-pivot: radii in mean spacings (default 1.5,3,6)")->type_name("A,B,...");
   cmd->add_option("--ball-normal-angle", s.bp_max_normal_angle_deg,
-                  "ball-pivot: largest angle between a triangle and its vertex normals, degrees (default 90)");
+                  "ball-pivot: largest angle between a triangle and each vertex normal, degrees (default 100)");
+  cmd->add_option("--ball-mean-normal-angle", s.bp_max_mean_normal_angle_deg,
+                  "ball-pivot: largest angle between a triangle and its mean vertex normal, degrees (default 65)");
+  cmd->add_flag("--ball-keep-small-holes", s.bp_keep_small_holes,
+                "ball-pivot: skip the final pass that closes holes of up to 6 edges within the largest ball");
   add_common_options(*cmd, s.common);
   add_output_options(*cmd, s.output);
   return {cmd, [state] { run_reconstruct(*state); }, &state->common};
