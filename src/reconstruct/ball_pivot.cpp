@@ -83,6 +83,34 @@ public:
         rules_(rules), reporter_(reporter), head_(local_.size(), -1), open_(local_.size(), 0),
         used_(local_.size(), 0) {}
 
+  // Neighbour lists of every point within 3 × the first radius, computed in parallel before the
+  // first pass (which makes most of the triangles): a pivot around edge (a, b) or a seed at a
+  // only needs the points within 2r of a point within r of a.
+  void precompute_neighbours(double first_radius) {
+    const std::size_t n = local_.size();
+    near_radius_ = 3.0 * first_radius;
+    constexpr std::size_t kChunk = 2048;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::vector<std::uint32_t>> chunk_index(chunks);
+    near_offsets_.assign(n + 1, 0);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      std::vector<Neighbor>& nbs = buffers.local();
+      std::vector<std::uint32_t>& out = chunk_index[c];
+      for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+        if (skip_[i]) continue;
+        tree_.radius(global(local_[i]), near_radius_, nbs);
+        near_offsets_[i + 1] = nbs.size();
+        for (const Neighbor& nb : nbs) out.push_back(nb.index);
+      }
+    });
+    for (std::size_t i = 0; i < n; ++i) near_offsets_[i + 1] += near_offsets_[i];
+    near_index_.resize(near_offsets_[n]);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      std::copy(chunk_index[c].begin(), chunk_index[c].end(), near_index_.begin() + long(near_offsets_[c * kChunk]));
+    });
+  }
+
   void run_pass(double radius, std::size_t pass, std::size_t passes) {
     if (pass == 0) near_plane_ = 0.5 * radius;
     radius_ = radius;
@@ -424,8 +452,24 @@ private:
     return ball_empty(*center, edge.v0, edge.v1, edge.opposite);
   }
 
+  // neighbors_ = the points within `reach` of `center`, which lies within reach / 2 of point
+  // `near`: from near's precomputed list when it covers them, else from the tree.
+  void gather(int near, const Eigen::Vector3d& center, double reach) {
+    if (!near_offsets_.empty() && 1.5 * reach <= near_radius_ * (1.0 + 1e-12)) {
+      neighbors_.clear();
+      const double reach2 = reach * reach;
+      for (std::size_t k = near_offsets_[near]; k < near_offsets_[near + 1]; ++k) {
+        const std::uint32_t q = near_index_[k];
+        const double d2 = (local_[q] - center).squaredNorm();
+        if (d2 <= reach2) neighbors_.emplace_back(q, d2);
+      }
+      return;
+    }
+    tree_.radius(global(center), reach, neighbors_);
+  }
+
   bool try_seed(int v) {
-    tree_.radius(global(local_[v]), 2.0 * radius_, neighbors_);
+    gather(v, local_[v], 2.0 * radius_);
     seed_candidates_.clear();
     for (const Neighbor& nb : neighbors_) {
       const int q = int(nb.index);
@@ -472,7 +516,7 @@ private:
     towards_o -= axis * axis.dot(towards_o);
     const double sign = from.cross(-towards_o).dot(axis) >= 0.0 ? 1.0 : -1.0;
 
-    tree_.radius(global(mid), 2.0 * radius_, neighbors_);
+    gather(a, mid, 2.0 * radius_);
     candidates_.clear();
     for (const Neighbor& nb : neighbors_) {
       const int p = int(nb.index);
@@ -521,6 +565,9 @@ private:
   }
 
   const KdTree& tree_;
+  std::vector<std::size_t> near_offsets_;   // precompute_neighbours(): CSR rows per point
+  std::vector<std::uint32_t> near_index_;   // their points, nearest first
+  double near_radius_ = 0.0;
   std::vector<Eigen::Vector3d> local_;    // positions minus origin_
   std::vector<Eigen::Vector3d> normals_;  // unit (zero where undefined)
   std::vector<std::uint8_t> skip_;        // duplicates and points without a usable normal
@@ -621,6 +668,7 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   rules.cos_opposite = std::cos(kOppositeNormalsDeg * kPi / 180.0);
   rules.sheet_offset = kSheetOffsetInSpacings * result.mean_spacing;
   BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, rules, reporter);
+  pivoter.precompute_neighbours(radii.front());
   for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
   if (params.close_small_holes) pivoter.close_small_loops(radii.back());
   reporter.report(1.0);
