@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Ball pivoting (Bernardini et al. 1999). The front is advanced serially: every pivot depends
 // on the triangles made before it. What can run in parallel (duplicate detection, normal
-// normalisation) does; the serial part allocates nothing per point: edges live in one array
-// with intrusive per-vertex lists, and neighbour queries reuse one buffer.
+// normalisation, the neighbour lists of the first pass) does; the serial part allocates nothing
+// per point: edges live in one array with intrusive per-vertex lists, and neighbour queries
+// reuse one buffer.
 #include "pointsurf/reconstruct/ball_pivot.h"
 
 #include <algorithm>
@@ -73,6 +74,9 @@ constexpr double kSheetOffsetInSpacings = 1.0;
 constexpr double kOppositeNormalsDeg = 120.0;
 // The final pass closes boundary loops of at most this many edges that fit in the largest ball.
 constexpr std::size_t kMaxClosedLoop = 6;
+// Neighbour lists are precomputed (in parallel) when the first radius is at most this many mean
+// spacings.
+constexpr double kPrecomputeInSpacings = 3.0;
 
 class BallPivoter {
 public:
@@ -668,7 +672,10 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   rules.cos_opposite = std::cos(kOppositeNormalsDeg * kPi / 180.0);
   rules.sheet_offset = kSheetOffsetInSpacings * result.mean_spacing;
   BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, rules, reporter);
-  pivoter.precompute_neighbours(radii.front());
+  // Lists of about 30 points each at the default 1.5 spacings; a first radius beyond
+  // kPrecomputeInSpacings would make them large (they grow with its square), so the tree
+  // answers instead.
+  if (radii.front() <= kPrecomputeInSpacings * result.mean_spacing) pivoter.precompute_neighbours(radii.front());
   for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
   if (params.close_small_holes) pivoter.close_small_loops(radii.back());
   reporter.report(1.0);

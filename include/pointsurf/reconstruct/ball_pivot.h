@@ -27,7 +27,9 @@ struct BallPivotParams {
   // whose vertex normals agree with each other but not with it, is near 90.
   double max_mean_normal_angle_deg = 65.0;
   // Final pass: close holes of at most 6 boundary edges whose corners fit in the largest ball
-  // (what a still larger ball would do), with triangles obeying the rules above. Default true.
+  // (what a still larger ball would do), on the side the normals point to; a hole the folded
+  // surface around it leaves no such triangulation for is widened once by the triangles along
+  // it (up to 12 edges) and tried again. Default true.
   bool close_small_holes = true;
 };
 
@@ -52,7 +54,9 @@ struct BallPivotParams {
 /// Throws UsageError for fewer than 3 points, missing normals, or a radius (or
 /// radius-in-spacings) that is not > 0 and finite, or a normal angle outside (0, 180].
 /// Throws ComputeError when all points coincide. Collinear input gives an empty mesh.
-/// Time about O(N · k) for k points within 2r; serial (the front is sequential).
+/// Time about O(N · k) for k points within 2r. The front is sequential; the neighbour lists of
+/// the first (smallest) radius are computed beforehand in parallel with oneTBB (when it is at
+/// most 3 mean spacings), about 4 bytes per neighbour within 3 radii.
 /// Thread-safe: reads its inputs only.
 ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params = {},
                                                const KdTree* tree = nullptr,
