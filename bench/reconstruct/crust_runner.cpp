@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stage runner for bench/reconstruct/run_crust_bench.sh.
+//   crust_runner run CLOUD.ply OUT.ply [drop_normals]
+//   crust_runner xyz CLOUD.ply OUT.xyz       positions only, for the CGAL peer
+// Reads the cloud (normals dropped when the third argument is "drop_normals", so that the pole
+// vectors orient the mesh), runs reconstruct_crust with default parameters and writes the mesh.
+// Prints one JSON line: seconds (whole reconstruction, file reading excluded), delaunay_seconds,
+// peak_rss_mb (whole process, reading included), the stage counts and the mesh topology.
+#include <sys/resource.h>
+
+#include <chrono>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/reconstruct/crust.h"
+
+namespace {
+
+using namespace pointsurf;
+using Clock = std::chrono::steady_clock;
+
+double peak_rss_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals) {
+  PointCloud cloud = read_point_cloud(cloud_path).cloud;
+  if (drop_normals) cloud.normals.clear();
+  CrustStats stats;
+  const Clock::time_point start = Clock::now();
+  const ReconstructionResult result = reconstruct_crust(cloud, {}, {}, &stats);
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const double rss = peak_rss_mb();
+  write_mesh(out_path, result.mesh);
+  const MeshTopology& t = result.topology;
+  nlohmann::json out;
+  out["tool"] = "pointsurf";
+  out["points"] = cloud.size();
+  out["seconds"] = seconds;
+  out["delaunay_seconds"] = stats.seconds_delaunay;
+  out["peak_rss_mb"] = rss;
+  out["mean_spacing"] = result.mean_spacing;
+  out["delaunay_cells"] = stats.delaunay_cells;
+  out["hull_points"] = stats.hull_points;
+  out["cocone_triangles"] = stats.cocone_triangles;
+  out["normal_filtered"] = stats.normal_filtered;
+  out["pruned"] = stats.pruned;
+  out["walk_dropped"] = stats.walk_dropped;
+  out["open_pieces"] = stats.open_pieces;
+  out["closed_pieces"] = stats.closed_pieces;
+  out["triangles"] = t.triangles;
+  out["unused_points"] = result.unused_points;
+  out["boundary_edges"] = t.boundary_edges;
+  out["non_manifold_edges"] = t.non_manifold_edges;
+  out["non_manifold_vertices"] = t.non_manifold_vertices;
+  out["inconsistent_edges"] = t.inconsistent_edges;
+  out["components"] = t.components;
+  out["euler_characteristic"] = t.euler_characteristic;
+  fmt::print("{}\n", out.dump());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const std::string mode = argc > 1 ? argv[1] : "";
+    if (mode == "run" && (argc == 4 || argc == 5))
+      return run(argv[2], argv[3], argc == 5 && std::string(argv[4]) == "drop_normals");
+    if (mode == "xyz" && argc == 4) {
+      PointCloud cloud = read_point_cloud(argv[2]).cloud;
+      PointCloud positions;
+      positions.positions = std::move(cloud.positions);
+      write_point_cloud(argv[3], positions);
+      return 0;
+    }
+    fmt::print(stderr, "usage: crust_runner run CLOUD.ply OUT.ply [drop_normals] | xyz CLOUD.ply OUT.xyz\n");
+    return 1;
+  } catch (const Error& e) {
+    fmt::print(stderr, "crust_runner: {}\n", e.what());
+    return e.exit_code();
+  }
+}

@@ -1,0 +1,691 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Ball pivoting (Bernardini et al. 1999). The front is advanced serially: every pivot depends
+// on the triangles made before it. What can run in parallel (duplicate detection, normal
+// normalisation, the neighbour lists of the first pass) does; the serial part allocates nothing
+// per point: edges live in one array with intrusive per-vertex lists, and neighbour queries
+// reuse one buffer.
+#include "pointsurf/reconstruct/ball_pivot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+
+namespace pointsurf {
+namespace {
+
+// Points closer than this fraction of the mean spacing to a point of lower index are duplicates
+// and are left out (a triangle through two of them would be degenerate).
+constexpr double kDuplicateInSpacings = 1e-6;
+// A triangle whose sine of its angle at the shared vertex is below this is treated as collinear.
+constexpr double kCollinearSine = 1e-9;
+// A point is inside a ball when its squared distance to the centre is below (1 - this) r^2:
+// points exactly on the sphere (co-circular grids) do not block it.
+constexpr double kInsideTolerance = 1e-9;
+// Seeds try pairs among this many nearest unused neighbours of a point (Bernardini et al.
+// consider pairs nearest first; the first pairs almost always give the seed when one exists).
+constexpr int kSeedNeighbours = 12;
+constexpr double kPi = 3.14159265358979323846;
+
+enum class EdgeState : std::uint8_t { Front, Boundary, Inner };
+
+// An edge of the growing mesh. While it has one triangle, that triangle runs v0 -> v1 and
+// `opposite` is its third vertex.
+struct Edge {
+  int v0, v1, opposite;
+  EdgeState state;
+  int next0, next1;  // next edge in the lists of v0 and v1 (-1 ends)
+};
+
+struct Candidate {
+  double angle;
+  int point;
+  Eigen::Vector3d center;
+};
+
+// Triangle acceptance rules, as cosines and lengths.
+struct Rules {
+  double cos_vertex;     // triangle normal against each vertex normal
+  double cos_mean;       // triangle normal against the mean of its vertex normals
+  double cos_opposite;   // two vertex normals farther apart than this: opposite sides
+  double sheet_offset;   // cloud units: see other_sheet()
+};
+// Vertex normals closer than this are "parallel" for the sheet test, degrees.
+constexpr double kSheetNormalDeg = 30.0;
+// A chord between parallel-normal points that leaves their common tangent plane by more than
+// this angle (and more than kSheetOffsetInSpacings) goes to another sheet, degrees.
+constexpr double kSheetChordDeg = 20.0;
+constexpr double kSheetOffsetInSpacings = 1.0;
+// Two vertex normals more than this apart point to opposite sides, degrees.
+constexpr double kOppositeNormalsDeg = 120.0;
+// The final pass closes boundary loops of at most this many edges that fit in the largest ball.
+constexpr std::size_t kMaxClosedLoop = 6;
+// Neighbour lists are precomputed (in parallel) when the first radius is at most this many mean
+// spacings.
+constexpr double kPrecomputeInSpacings = 3.0;
+
+class BallPivoter {
+public:
+  BallPivoter(const KdTree& tree, std::vector<Eigen::Vector3d> local, std::vector<Eigen::Vector3d> normals,
+              std::vector<std::uint8_t> skip, const Eigen::Vector3d& origin, const Rules& rules,
+              detail::ProgressReporter& reporter)
+      : tree_(tree), local_(std::move(local)), normals_(std::move(normals)), skip_(std::move(skip)), origin_(origin),
+        rules_(rules), reporter_(reporter), head_(local_.size(), -1), open_(local_.size(), 0),
+        used_(local_.size(), 0) {}
+
+  // Neighbour lists of every point within 3 × the first radius, computed in parallel before the
+  // first pass (which makes most of the triangles): a pivot around edge (a, b) or a seed at a
+  // only needs the points within 2r of a point within r of a.
+  void precompute_neighbours(double first_radius) {
+    const std::size_t n = local_.size();
+    near_radius_ = 3.0 * first_radius;
+    constexpr std::size_t kChunk = 2048;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::vector<std::uint32_t>> chunk_index(chunks);
+    near_offsets_.assign(n + 1, 0);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      std::vector<Neighbor>& nbs = buffers.local();
+      std::vector<std::uint32_t>& out = chunk_index[c];
+      for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+        if (skip_[i]) continue;
+        tree_.radius(global(local_[i]), near_radius_, nbs);
+        near_offsets_[i + 1] = nbs.size();
+        for (const Neighbor& nb : nbs) out.push_back(nb.index);
+      }
+    });
+    for (std::size_t i = 0; i < n; ++i) near_offsets_[i + 1] += near_offsets_[i];
+    near_index_.resize(near_offsets_[n]);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      std::copy(chunk_index[c].begin(), chunk_index[c].end(), near_index_.begin() + long(near_offsets_[c * kChunk]));
+    });
+  }
+
+  void run_pass(double radius, std::size_t pass, std::size_t passes) {
+    if (pass == 0) near_plane_ = 0.5 * radius;
+    radius_ = radius;
+    squared_radius_ = radius * radius;
+    pass_begin_ = double(pass) / double(passes);
+    pass_span_ = 1.0 / double(passes);
+    // Edges a smaller ball could not pivot over get a second chance with this one, but only
+    // where the larger ball can rest on the edge's triangle without holding another point
+    // (Bernardini et al. 1999, section 4.3): a larger ball whose starting position already
+    // reaches through a nearby sheet would bridge to it.
+    for (std::size_t e = 0; e < edges_.size(); ++e)
+      if (edges_[e].state == EdgeState::Boundary && larger_ball_fits(edges_[e])) {
+        edges_[e].state = EdgeState::Front;
+        front_.push_back(int(e));
+      }
+    const std::span<const std::uint32_t> order = tree_.spatial_order();
+    std::size_t cursor = 0;
+    for (;;) {
+      advance_front();
+      // Next seed: the first unused point, in spatial order, that has an empty seed ball.
+      bool seeded = false;
+      while (cursor < order.size() && !seeded) {
+        const int v = int(order[cursor++]);
+        if (!used_[v] && !skip_[v]) seeded = try_seed(v);
+        if ((cursor & 4095) == 0) tick();
+      }
+      if (!seeded) break;
+    }
+  }
+
+  // Final pass: closes the holes bounded by at most kMaxClosedLoop boundary edges whose corners
+  // fit in the largest ball, as a still larger ball resting on them would: a ball that could not
+  // rest on their corners (it touched a point of the finished surface first, typically at a
+  // sharp edge) leaves such holes although their corners are joined in a cycle. A hole that has
+  // no acceptable triangulation (the surface around it folds, as where the ball rolled over a
+  // sharp edge from two sides) is widened once by the triangles along it and tried again; if
+  // that fails too, they are put back. Works on the triangle list with a map of directed edges
+  // (the pivoting structures are done with). Returns the holes closed.
+  std::size_t close_small_loops(double largest_radius) {
+    half_.clear();
+    half_.reserve(triangles_.size() * 3);
+    alive_.assign(triangles_.size(), 1);
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      for (int k = 0; k < 3; ++k) half_[key(triangles_[t][k], triangles_[t][(k + 1) % 3])] = int(t);
+    std::vector<std::uint64_t> holes;  // hole half-edges b -> a of boundary edges a -> b
+    for (const auto& [k, t] : half_)
+      if (!half_.contains(key(int(k & 0xffffffffu), int(k >> 32)))) holes.push_back(key(int(k & 0xffffffffu), int(k >> 32)));
+    std::sort(holes.begin(), holes.end());  // deterministic order
+    std::size_t closed = 0;
+    std::vector<int> loop, removed;
+    for (const std::uint64_t h : holes) {
+      const int from = int(h >> 32), to = int(h & 0xffffffffu);
+      if (half_.contains(h) || !half_.contains(key(to, from))) continue;  // closed meanwhile
+      if (!walk_hole(from, kMaxClosedLoop, loop) || !fits_ball(loop, largest_radius)) continue;
+      if (fill_loop(loop)) {
+        ++closed;
+        continue;
+      }
+      // Widen: drop the triangles along the hole and try the larger hole once.
+      removed.clear();
+      for (std::size_t i = 0; i < loop.size(); ++i) {
+        const auto it = half_.find(key(loop[(i + 1) % loop.size()], loop[i]));
+        if (it != half_.end() && std::find(removed.begin(), removed.end(), it->second) == removed.end()) removed.push_back(it->second);
+      }
+      for (const int t : removed) set_triangle(t, false);
+      const int start = loop.front();
+      if (walk_hole(start, 2 * kMaxClosedLoop, loop) && fits_ball(loop, largest_radius) && fill_loop(loop)) {
+        ++closed;
+        continue;
+      }
+      for (const int t : removed) set_triangle(t, true);
+    }
+    std::size_t out = 0;
+    for (std::size_t t = 0; t < triangles_.size(); ++t)
+      if (alive_[t]) triangles_[out++] = triangles_[t];
+    triangles_.resize(out);
+    return closed;
+  }
+
+  std::vector<Triangle> take_triangles() { return std::move(triangles_); }
+  const std::vector<std::uint8_t>& used() const { return used_; }
+
+private:
+  static std::uint64_t key(int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); }
+
+  void set_triangle(int t, bool alive) {
+    alive_[t] = alive ? 1 : 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t e = key(triangles_[t][k], triangles_[t][(k + 1) % 3]);
+      if (alive) half_[e] = t;
+      else half_.erase(e);
+    }
+  }
+
+  void push_triangle(int a, int b, int c) {
+    triangles_.emplace_back(a, b, c);
+    alive_.push_back(1);
+    set_triangle(int(triangles_.size()) - 1, true);
+  }
+
+  // A hole through vertex `start` of at most `max_size` vertices: loop[i] -> loop[i + 1] are
+  // hole half-edges (reverse of boundary edges), the direction the closing triangles take. At a
+  // pinched vertex (two holes meet) each way on is tried; no vertex appears twice.
+  bool walk_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
+    loop.assign(1, start);
+    return extend_hole(start, max_size, loop);
+  }
+
+  bool extend_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
+    const int at = loop.back();
+    for (int f = head_[at]; f >= 0;) {  // the pivoting edges hold every edge of the mesh
+      const Edge& edge = edges_[f];
+      f = edge.v0 == at ? edge.next0 : edge.next1;
+      const int next = edge.v0 == at ? edge.v1 : edge.v0;
+      if (half_.contains(key(at, next)) || !half_.contains(key(next, at))) continue;
+      if (next == start) {
+        if (loop.size() >= 3) return true;
+        continue;
+      }
+      if (loop.size() >= max_size || std::find(loop.begin(), loop.end(), next) != loop.end()) continue;
+      loop.push_back(next);
+      if (extend_hole(start, max_size, loop)) return true;
+      loop.pop_back();
+    }
+    return false;
+  }
+
+  bool fits_ball(const std::vector<int>& loop, double radius) const {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const int v : loop) centroid += local_[v];
+    centroid /= double(loop.size());
+    for (const int v : loop)
+      if ((local_[v] - centroid).norm() > radius) return false;
+    return true;
+  }
+
+  // Triangulates one hole, loop[i] -> loop[i + 1] being the direction the new triangles take:
+  // of all its triangulations, the one whose worst triangle agrees best with its corners'
+  // normals, every triangle obeying closes_hole() and no diagonal duplicating an existing edge
+  // (dynamic programme over the sub-polygons, O(k^3)). Returns false (and adds nothing) when
+  // none does.
+  bool fill_loop(const std::vector<int>& loop) {
+    const int k = int(loop.size());
+    constexpr double kInvalid = -3.0;
+    constexpr int kMax = 2 * int(kMaxClosedLoop);
+    // best[i][j]: the best worst-score of the polygon loop[i..j] closed by the chord (i, j);
+    // split[i][j]: its apex.
+    double best[kMax][kMax];
+    int split[kMax][kMax];
+    for (int len = 2; len < k; ++len)
+      for (int i = 0; i + len < k; ++i) {
+        const int j = i + len;
+        best[i][j] = kInvalid;
+        split[i][j] = -1;
+        if (!(i == 0 && j == k - 1) && (half_.contains(key(loop[i], loop[j])) || half_.contains(key(loop[j], loop[i]))))
+          continue;
+        for (int m = i + 1; m < j; ++m) {
+          const double left = m - i >= 2 ? best[i][m] : 1.0, right = j - m >= 2 ? best[m][j] : 1.0;
+          if (left == kInvalid || right == kInvalid) continue;
+          const int a = loop[i], b = loop[m], c = loop[j];
+          const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
+          if (!n || !closes_hole(*n, a, b, c)) continue;
+          const double score = std::min({left, right, n->dot((normals_[a] + normals_[b] + normals_[c]).normalized())});
+          if (score > best[i][j]) {
+            best[i][j] = score;
+            split[i][j] = m;
+          }
+        }
+      }
+    if (split[0][k - 1] < 0) return false;
+    int stack[kMax][2];
+    int top = 0;
+    stack[top][0] = 0;
+    stack[top++][1] = k - 1;
+    while (top > 0) {
+      --top;
+      const int i = stack[top][0], j = stack[top][1], m = split[i][j];
+      push_triangle(loop[i], loop[m], loop[j]);
+      if (m - i >= 2) {
+        stack[top][0] = i;
+        stack[top++][1] = m;
+      }
+      if (j - m >= 2) {
+        stack[top][0] = m;
+        stack[top++][1] = j;
+      }
+    }
+    return true;
+  }
+
+  void tick() {
+    reporter_.report(pass_begin_ + pass_span_ * double(used_count_) / double(local_.size()));
+    reporter_.throw_if_cancelled();
+  }
+
+  Eigen::Vector3d global(const Eigen::Vector3d& p) const { return p + origin_; }
+
+  // A vertex whose every edge has two triangles: the surface around it is finished. Balls pass
+  // through such vertices (neither hit nor blocked by them), so that a larger ball can close a
+  // hole whose rim it could otherwise not reach without touching the finished surface around.
+  bool inner(int v) const { return used_[v] && open_[v] == 0; }
+
+  int find_edge(int a, int b) const {
+    for (int e = head_[a]; e >= 0;) {
+      const Edge& edge = edges_[e];
+      if (edge.v0 == b || edge.v1 == b) return e;
+      e = edge.v0 == a ? edge.next0 : edge.next1;
+    }
+    return -1;
+  }
+
+  // The directed edge from -> to can be added to a triangle: it is new, or its one triangle
+  // runs the other way (so the two triangles are consistently oriented).
+  bool edge_fits(int from, int to) const {
+    const int e = find_edge(from, to);
+    if (e < 0) return true;
+    const Edge& edge = edges_[e];
+    return edge.state != EdgeState::Inner && edge.v0 == to && edge.v1 == from;
+  }
+
+  void add_edge_side(int from, int to, int opposite) {
+    const int e = find_edge(from, to);
+    if (e >= 0) {  // glue: the edge now has its second triangle
+      edges_[e].state = EdgeState::Inner;
+      --open_[from];
+      --open_[to];
+      return;
+    }
+    const int id = int(edges_.size());
+    edges_.push_back(Edge{from, to, opposite, EdgeState::Front, head_[from], head_[to]});
+    head_[from] = id;
+    head_[to] = id;
+    ++open_[from];
+    ++open_[to];
+    front_.push_back(id);
+  }
+
+  void add_triangle(int a, int b, int c) {
+    add_edge_side(a, b, c);
+    add_edge_side(b, c, a);
+    add_edge_side(c, a, b);
+    for (const int v : {a, b, c})
+      if (!used_[v]) {
+        used_[v] = 1;
+        ++used_count_;
+      }
+    triangles_.emplace_back(a, b, c);
+  }
+
+  // Unit normal of a -> b -> c (counter-clockwise), or nullopt when the triangle is degenerate.
+  std::optional<Eigen::Vector3d> triangle_normal(int a, int b, int c) const {
+    const Eigen::Vector3d u = local_[b] - local_[a];
+    const Eigen::Vector3d v = local_[c] - local_[a];
+    const Eigen::Vector3d w = u.cross(v);
+    const double norm = w.norm();
+    if (!(norm > kCollinearSine * u.norm() * v.norm())) return std::nullopt;
+    return Eigen::Vector3d(w / norm);
+  }
+
+  // Centre of the ball of radius_ through a, b, c on the side their counter-clockwise normal
+  // points to, or nullopt when the triangle is degenerate or its circumcircle is too wide.
+  std::optional<Eigen::Vector3d> ball_center(int a, int b, int c) const {
+    const Eigen::Vector3d u = local_[b] - local_[a];
+    const Eigen::Vector3d v = local_[c] - local_[a];
+    const Eigen::Vector3d w = u.cross(v);
+    const double w2 = w.squaredNorm();
+    if (!(std::sqrt(w2) > kCollinearSine * u.norm() * v.norm())) return std::nullopt;
+    const Eigen::Vector3d to_circumcenter = (u.squaredNorm() * v.cross(w) + v.squaredNorm() * w.cross(u)) / (2.0 * w2);
+    const double height2 = squared_radius_ - to_circumcenter.squaredNorm();
+    if (!(height2 >= 0.0)) return std::nullopt;
+    return Eigen::Vector3d(local_[a] + to_circumcenter + w * std::sqrt(height2 / w2));
+  }
+
+  // p and q lie on two different sheets: their normals are nearly parallel, but the chord
+  // between them leaves their common tangent plane steeply and by more than a spacing (two scans
+  // of a thin wall, stacked plates). On one smooth sheet the chord is perpendicular to the sum
+  // of the two normals (exactly so on a circle), whatever the curvature.
+  bool other_sheet(int p, int q) const {
+    static const double cos_parallel = std::cos(kSheetNormalDeg * kPi / 180.0);
+    static const double sin_chord = std::sin(kSheetChordDeg * kPi / 180.0);
+    if (!(normals_[p].dot(normals_[q]) > cos_parallel)) return false;
+    const Eigen::Vector3d d = local_[q] - local_[p];
+    const Eigen::Vector3d m = (normals_[p] + normals_[q]).normalized();
+    const double offset = std::abs(m.dot(d));
+    return offset > rules_.sheet_offset && offset > sin_chord * d.norm();
+  }
+
+  // The looser rule for the triangles that close a small hole, which the surrounding surface
+  // already bounds: on the side the normals point to (mean angle below 90 degrees), no two
+  // opposite normals, no two sheets. Where the samples across a sharp edge are nearly in line,
+  // the one triangle that closes the hole is almost perpendicular to both faces.
+  bool closes_hole(const Eigen::Vector3d& n, int a, int b, int c) const {
+    if (!(n.dot(normals_[a] + normals_[b] + normals_[c]) > 0.0)) return false;
+    if (normals_[a].dot(normals_[b]) < rules_.cos_opposite || normals_[b].dot(normals_[c]) < rules_.cos_opposite ||
+        normals_[c].dot(normals_[a]) < rules_.cos_opposite)
+      return false;
+    return !other_sheet(a, b) && !other_sheet(b, c) && !other_sheet(c, a);
+  }
+
+  // The triangle's normal agrees with the normals of its three vertices: within the vertex
+  // angle of each, within the mean angle of their mean; no two of them opposite; and the
+  // triangle does not join two sheets.
+  bool normals_agree(const Eigen::Vector3d& n, int a, int b, int c) const {
+    const Eigen::Vector3d sum = normals_[a] + normals_[b] + normals_[c];
+    if (!(n.dot(sum) >= rules_.cos_mean * sum.norm())) return false;
+    if (!(n.dot(normals_[a]) > rules_.cos_vertex && n.dot(normals_[b]) > rules_.cos_vertex &&
+          n.dot(normals_[c]) > rules_.cos_vertex))
+      return false;
+    if (normals_[a].dot(normals_[b]) < rules_.cos_opposite || normals_[b].dot(normals_[c]) < rules_.cos_opposite ||
+        normals_[c].dot(normals_[a]) < rules_.cos_opposite)
+      return false;
+    return !other_sheet(a, b) && !other_sheet(b, c) && !other_sheet(c, a);
+  }
+
+  // No neighbour other than a, b, c is strictly inside the ball at `center`. A finished
+  // (inner) vertex within `near_plane_` of the triangle's plane does not count: it belongs to
+  // the surface around a hole the ball is closing. Farther ones do. A point on another sheet
+  // than all three corners (other_sheet) does not count either: a ball wider than the gap
+  // between two parallel sheets may reach through one while it rolls on the other.
+  bool ball_empty(const Eigen::Vector3d& center, int a, int b, int c) const {
+    const double limit = squared_radius_ * (1.0 - kInsideTolerance);
+    const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
+    for (const Neighbor& nb : neighbors_) {
+      const int q = int(nb.index);
+      if (q == a || q == b || q == c || skip_[q]) continue;
+      if ((local_[q] - center).squaredNorm() >= limit) continue;
+      if (inner(q) && n && std::abs(n->dot(local_[q] - local_[a])) <= near_plane_) continue;
+      if (other_sheet(a, q) && other_sheet(b, q) && other_sheet(c, q)) continue;
+      return false;
+    }
+    return true;
+  }
+
+  // The ball of the current radius rests on the edge's triangle and holds no other point.
+  bool larger_ball_fits(const Edge& edge) {
+    const std::optional<Eigen::Vector3d> center = ball_center(edge.v0, edge.v1, edge.opposite);
+    if (!center) return false;
+    tree_.radius(global(*center), radius_, neighbors_);
+    return ball_empty(*center, edge.v0, edge.v1, edge.opposite);
+  }
+
+  // neighbors_ = the points within `reach` of `center`, which lies within reach / 2 of point
+  // `near`: from near's precomputed list when it covers them, else from the tree.
+  void gather(int near, const Eigen::Vector3d& center, double reach) {
+    if (!near_offsets_.empty() && 1.5 * reach <= near_radius_ * (1.0 + 1e-12)) {
+      neighbors_.clear();
+      const double reach2 = reach * reach;
+      for (std::size_t k = near_offsets_[near]; k < near_offsets_[near + 1]; ++k) {
+        const std::uint32_t q = near_index_[k];
+        const double d2 = (local_[q] - center).squaredNorm();
+        if (d2 <= reach2) neighbors_.emplace_back(q, d2);
+      }
+      return;
+    }
+    tree_.radius(global(center), reach, neighbors_);
+  }
+
+  bool try_seed(int v) {
+    gather(v, local_[v], 2.0 * radius_);
+    seed_candidates_.clear();
+    for (const Neighbor& nb : neighbors_) {
+      const int q = int(nb.index);
+      if (q == v || used_[q] || skip_[q]) continue;
+      seed_candidates_.push_back(q);
+      if (int(seed_candidates_.size()) == kSeedNeighbours) break;
+    }
+    for (std::size_t i = 0; i < seed_candidates_.size(); ++i)
+      for (std::size_t j = i + 1; j < seed_candidates_.size(); ++j) {
+        int a = seed_candidates_[i];
+        int b = seed_candidates_[j];
+        std::optional<Eigen::Vector3d> n = triangle_normal(v, a, b);
+        if (!n) continue;
+        if (n->dot(normals_[v] + normals_[a] + normals_[b]) < 0.0) {
+          std::swap(a, b);
+          *n = -*n;
+        }
+        if (!normals_agree(*n, v, a, b)) continue;
+        const std::optional<Eigen::Vector3d> center = ball_center(v, a, b);
+        if (!center || !ball_empty(*center, v, a, b)) continue;
+        add_triangle(v, a, b);
+        return true;
+      }
+    return false;
+  }
+
+  // Pivots the ball resting on the edge's triangle around the edge, away from that triangle,
+  // and returns true when it makes a new triangle.
+  bool pivot(const Edge& edge) {
+    const int a = edge.v0;
+    const int b = edge.v1;
+    const int o = edge.opposite;
+    const std::optional<Eigen::Vector3d> start = ball_center(a, b, o);
+    if (!start) return false;
+    const Eigen::Vector3d mid = 0.5 * (local_[a] + local_[b]);
+    const Eigen::Vector3d axis = (local_[b] - local_[a]).normalized();
+    Eigen::Vector3d from = *start - mid;
+    from -= axis * axis.dot(from);
+    if (!(from.squaredNorm() > 0.0)) return false;
+    from.normalize();
+    // The ball rolls over the edge away from the old triangle: rotation about `axis` that
+    // first moves `from` towards the side opposite to `o`.
+    Eigen::Vector3d towards_o = local_[o] - mid;
+    towards_o -= axis * axis.dot(towards_o);
+    const double sign = from.cross(-towards_o).dot(axis) >= 0.0 ? 1.0 : -1.0;
+
+    gather(a, mid, 2.0 * radius_);
+    candidates_.clear();
+    for (const Neighbor& nb : neighbors_) {
+      const int p = int(nb.index);
+      if (p == a || p == b || p == o || skip_[p] || inner(p) || (other_sheet(a, p) && other_sheet(b, p))) continue;
+      // The new triangle runs b -> a -> p, so the shared edge is traversed the other way.
+      const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, p);
+      if (!n || n->dot(normals_[a] + normals_[b] + normals_[p]) <= 0.0) continue;
+      const std::optional<Eigen::Vector3d> center = ball_center(b, a, p);
+      if (!center) continue;
+      Eigen::Vector3d to = *center - mid;
+      to -= axis * axis.dot(to);
+      double angle = std::atan2(sign * from.cross(to).dot(axis), from.dot(to));
+      if (angle < -1e-7) angle += 2.0 * kPi;  // rounding around 0 stays at 0 (co-circular points)
+      candidates_.push_back(Candidate{std::max(angle, 0.0), p, *center});
+    }
+    std::sort(candidates_.begin(), candidates_.end(),
+              [](const Candidate& x, const Candidate& y) { return x.angle < y.angle || (x.angle == y.angle && x.point < y.point); });
+    for (const Candidate& c : candidates_) {
+      if (!ball_empty(c.center, a, b, c.point)) continue;
+      // The first point the ball hits decides: if it cannot take a triangle the edge is a
+      // boundary (trying farther points would let the ball pass through this one).
+      const int p = c.point;
+      const std::optional<Eigen::Vector3d> n = triangle_normal(b, a, p);
+      if (!n || !normals_agree(*n, a, b, p)) return false;
+      if (!edge_fits(a, p) || !edge_fits(p, b)) return false;
+      add_triangle(b, a, p);
+      return true;
+    }
+    return false;
+  }
+
+  void advance_front() {
+    std::size_t processed = 0;
+    while (front_head_ < front_.size()) {
+      const int e = front_[front_head_++];
+      if (edges_[e].state != EdgeState::Front) continue;
+      const Edge edge = edges_[e];
+      if (!pivot(edge)) {
+        // pivot() made no triangle, so edges_ did not move and `e` is still this edge.
+        edges_[e].state = EdgeState::Boundary;
+      }
+      if ((++processed & 4095) == 0) tick();
+    }
+    front_.clear();
+    front_head_ = 0;
+  }
+
+  const KdTree& tree_;
+  std::vector<std::size_t> near_offsets_;   // precompute_neighbours(): CSR rows per point
+  std::vector<std::uint32_t> near_index_;   // their points, nearest first
+  double near_radius_ = 0.0;
+  std::vector<Eigen::Vector3d> local_;    // positions minus origin_
+  std::vector<Eigen::Vector3d> normals_;  // unit (zero where undefined)
+  std::vector<std::uint8_t> skip_;        // duplicates and points without a usable normal
+  Eigen::Vector3d origin_;
+  Rules rules_;
+  detail::ProgressReporter& reporter_;
+
+  double radius_ = 0.0, squared_radius_ = 0.0;
+  double near_plane_ = 0.0;  // half the smallest radius, cloud units
+  double pass_begin_ = 0.0, pass_span_ = 1.0;
+  std::vector<Edge> edges_;
+  std::vector<int> head_;          // first edge of each vertex, -1 if none
+  std::vector<int> open_;          // edges with one triangle (front or boundary) at each vertex
+  std::vector<std::uint8_t> used_;  // vertex belongs to a triangle
+  std::size_t used_count_ = 0;
+  std::vector<int> front_;
+  std::size_t front_head_ = 0;
+  std::vector<Triangle> triangles_;
+  std::unordered_map<std::uint64_t, int> half_;  // small-hole pass: directed edge -> triangle
+  std::vector<std::uint8_t> alive_;               // small-hole pass: triangle kept
+  std::vector<Neighbor> neighbors_;
+  std::vector<Candidate> candidates_;
+  std::vector<int> seed_candidates_;
+};
+
+}  // namespace
+
+ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
+                                               const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  if (n < 3) throw UsageError(fmt::format("reconstruct_ball_pivoting: needs at least 3 points, got {}", n));
+  if (n > std::size_t(std::numeric_limits<int>::max() / 4))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: at most {} points, got {}", std::numeric_limits<int>::max() / 4, n));
+  if (!cloud.has_normals())
+    throw UsageError("reconstruct_ball_pivoting: the cloud has no normals; ball pivoting needs oriented normals "
+                     "(estimate and orient them first)");
+  if (cloud.normals.size() != n)
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  for (const double r : params.radii)
+    if (!(r > 0.0 && std::isfinite(r)))
+      throw UsageError(fmt::format("reconstruct_ball_pivoting: radii must be > 0 and finite, got {}", r));
+  if (params.radii.empty()) {
+    if (params.radii_in_spacings.empty())
+      throw UsageError("reconstruct_ball_pivoting: radii and radii_in_spacings are both empty; give at least one radius");
+    for (const double r : params.radii_in_spacings)
+      if (!(r > 0.0 && std::isfinite(r)))
+        throw UsageError(fmt::format("reconstruct_ball_pivoting: radii_in_spacings must be > 0 and finite, got {}", r));
+  }
+  if (!(params.max_normal_angle_deg > 0.0 && params.max_normal_angle_deg <= 180.0))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: max_normal_angle_deg must be in (0, 180], got {}",
+                                 params.max_normal_angle_deg));
+  if (!(params.max_mean_normal_angle_deg > 0.0 && params.max_mean_normal_angle_deg <= 180.0))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: max_mean_normal_angle_deg must be in (0, 180], got {}",
+                                 params.max_mean_normal_angle_deg));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite())
+      throw InputError(fmt::format("reconstruct_ball_pivoting: point {} has a non-finite coordinate", i));
+
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
+
+  ReconstructionResult result;
+  result.mean_spacing = mean_spacing(*tree);
+  if (!(result.mean_spacing > 0.0))
+    throw ComputeError(fmt::format("reconstruct_ball_pivoting: all {} points coincide; there is no surface", n));
+  std::vector<double> radii = params.radii;
+  if (radii.empty())
+    for (const double s : params.radii_in_spacings) radii.push_back(s * result.mean_spacing);
+  std::sort(radii.begin(), radii.end());
+  radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+
+  // Local coordinates keep georeferenced clouds precise in the circumcentre computations.
+  const Eigen::Vector3d origin = bounding_box(cloud.positions).center();
+  std::vector<Eigen::Vector3d> local(n), normals(n);
+  std::vector<std::uint8_t> skip(n, 0);
+  const double duplicate_distance = kDuplicateInSpacings * result.mean_spacing;
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Neighbor>& nbs = buffers.local();
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      local[i] = cloud.positions[i] - origin;
+      const Eigen::Vector3d& nrm = cloud.normals[i];
+      const double len = nrm.norm();
+      normals[i] = len > 0.0 && std::isfinite(len) ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
+      if (normals[i].isZero()) skip[i] = 1;
+      tree->radius(cloud.positions[i], duplicate_distance, nbs);
+      for (const Neighbor& nb : nbs)
+        if (nb.index < i) skip[i] = 1;
+    }
+  });
+
+  Rules rules;
+  rules.cos_vertex = std::cos(params.max_normal_angle_deg * kPi / 180.0);
+  rules.cos_mean = std::cos(params.max_mean_normal_angle_deg * kPi / 180.0);
+  rules.cos_opposite = std::cos(kOppositeNormalsDeg * kPi / 180.0);
+  rules.sheet_offset = kSheetOffsetInSpacings * result.mean_spacing;
+  BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, rules, reporter);
+  // Lists of about 30 points each at the default 1.5 spacings; a first radius beyond
+  // kPrecomputeInSpacings would make them large (they grow with its square), so the tree
+  // answers instead.
+  if (radii.front() <= kPrecomputeInSpacings * result.mean_spacing) pivoter.precompute_neighbours(radii.front());
+  for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
+  if (params.close_small_holes) pivoter.close_small_loops(radii.back());
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+
+  const std::vector<std::uint8_t>& used = pivoter.used();
+  result.unused_points = std::size_t(std::count(used.begin(), used.end(), std::uint8_t(0)));
+  result.mesh = TriangleMesh::from_cloud(cloud, pivoter.take_triangles());
+  result.topology = analyze_topology(result.mesh);
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Directed edges (half-edges) of a growing triangle mesh in one open-addressing hash table:
+// (from, to) -> triangle. One flat array instead of per-vertex lists, so that a million-point
+// selection makes no per-vertex heap allocation.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace pointsurf::detail {
+
+class HalfEdgeMap {
+public:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+
+  explicit HalfEdgeMap(std::size_t expected = 1024) { rehash(capacity_for(expected)); }
+
+  /// The triangle holding the directed edge from -> to, or kNone.
+  std::uint32_t find(std::uint32_t from, std::uint32_t to) const noexcept {
+    const std::uint64_t key = make_key(from, to);
+    for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
+      if (keys_[slot] == key) return values_[slot];
+      if (keys_[slot] == kEmpty) return kNone;
+    }
+  }
+  bool contains(std::uint32_t from, std::uint32_t to) const noexcept { return find(from, to) != kNone; }
+
+  /// Records from -> to as an edge of `triangle` (the caller checked it is not there yet).
+  void insert(std::uint32_t from, std::uint32_t to, std::uint32_t triangle) {
+    if (2 * (count_ + 1) > keys_.size()) grow();
+    place(make_key(from, to), triangle);
+    ++count_;
+  }
+
+private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  static std::uint64_t make_key(std::uint32_t from, std::uint32_t to) noexcept {
+    return (std::uint64_t{from} << 32) | std::uint64_t{to};
+  }
+  static std::size_t hash(std::uint64_t key) noexcept {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return static_cast<std::size_t>(key);
+  }
+  static std::size_t capacity_for(std::size_t expected) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * expected) capacity *= 2;
+    return capacity;
+  }
+  void place(std::uint64_t key, std::uint32_t value) noexcept {
+    std::size_t slot = hash(key) & mask_;
+    while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+    keys_[slot] = key;
+    values_[slot] = value;
+  }
+  void rehash(std::size_t capacity) {
+    std::vector<std::uint64_t> old_keys(capacity, kEmpty);
+    std::vector<std::uint32_t> old_values(capacity, kNone);
+    old_keys.swap(keys_);
+    old_values.swap(values_);
+    mask_ = capacity - 1;
+    for (std::size_t i = 0; i < old_keys.size(); ++i)
+      if (old_keys[i] != kEmpty) place(old_keys[i], old_values[i]);
+  }
+  void grow() { rehash(keys_.size() * 2); }
+
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> values_;
+  std::size_t mask_ = 0;
+  std::size_t count_ = 0;
+};
+
+}  // namespace pointsurf::detail

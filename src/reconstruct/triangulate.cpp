@@ -1,0 +1,643 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/reconstruct/triangulate.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <optional>
+#include <queue>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "normals/detail/progress_reporter.h"
+#include "pointsurf/core/error.h"
+#include "reconstruct/detail/triangulate_half_edges.h"
+
+namespace pointsurf {
+namespace {
+
+using Eigen::Vector2d;
+using detail::HalfEdgeMap;
+
+constexpr std::uint32_t kNone = HalfEdgeMap::kNone;
+// Points closer than this fraction of the mean spacing are the same point.
+constexpr double kDuplicateFraction = 1e-9;
+// Neighbours searched for the local spacing (the 3 nearest distinct ones are averaged).
+constexpr std::size_t kSpacingNeighbours = 8;
+constexpr std::size_t kSpacingAveraged = 3;
+// Holes with more corners than this are left open (ear clipping is cubic in the corner count).
+constexpr std::size_t kMaxHoleCorners = 64;
+
+double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
+
+// A triangle proposed by an umbrella, as (smallest index, next, next) in its orientation.
+struct Candidate {
+  std::array<std::uint32_t, 3> v;
+  float min_angle_deg;
+  std::uint8_t votes;
+};
+
+Candidate make_candidate(std::uint32_t a, std::uint32_t b, std::uint32_t c, double min_angle_deg) {
+  Candidate cand{};
+  if (a < b && a < c) cand.v = {a, b, c};
+  else if (b < a && b < c) cand.v = {b, c, a};
+  else cand.v = {c, a, b};
+  cand.min_angle_deg = static_cast<float>(min_angle_deg);
+  cand.votes = 1;
+  return cand;
+}
+
+// Inner angles of triangle abc, degrees; false if it is degenerate.
+bool inner_angles(const Vector3d& a, const Vector3d& b, const Vector3d& c, double& smallest, double& largest) {
+  const std::array<Vector3d, 3> p{a, b, c};
+  smallest = 180.0;
+  largest = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const Vector3d u = p[(i + 1) % 3] - p[i], v = p[(i + 2) % 3] - p[i];
+    const double nu = u.norm(), nv = v.norm();
+    if (!(nu > 0.0) || !(nv > 0.0)) return false;
+    const double angle = std::acos(std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    smallest = std::min(smallest, angle);
+    largest = std::max(largest, angle);
+  }
+  return true;
+}
+
+// One neighbour in the tangent plane of the umbrella's centre.
+struct Planar {
+  Vector2d u;
+  std::uint32_t index;
+};
+
+// Per-thread buffers of the umbrella pass: no allocation per point once warmed up.
+struct UmbrellaBuffers {
+  std::vector<Neighbor> neighbors;
+  std::vector<Planar> planar;
+  std::vector<Vector2d> cell, next_cell;
+  std::vector<int> labels, next_labels;
+  std::vector<Candidate> candidates;
+};
+
+// Clips the convex polygon (cell, labels) by the half-plane x.u <= |u|^2 / 2 (the side of the
+// origin of the bisector between the origin and u). labels[i] names the edge cell[i] -> cell[i+1]:
+// -1 for the initial square, otherwise the neighbour whose bisector it lies on.
+void clip_cell(UmbrellaBuffers& b, const Vector2d& u, int label) {
+  const double offset = 0.5 * u.squaredNorm();
+  const std::size_t m = b.cell.size();
+  b.next_cell.clear();
+  b.next_labels.clear();
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vector2d& p = b.cell[i];
+    const Vector2d& q = b.cell[(i + 1) % m];
+    const double fp = p.dot(u) - offset, fq = q.dot(u) - offset;
+    const bool p_in = fp <= 0.0, q_in = fq <= 0.0;
+    if (p_in) {
+      b.next_cell.push_back(p);
+      b.next_labels.push_back(b.labels[i]);
+    }
+    if (p_in != q_in) {
+      const Vector2d crossing = p + (q - p) * (fp / (fp - fq));
+      b.next_cell.push_back(crossing);
+      // Leaving the half-plane: the edge from here on runs along the bisector. Entering it:
+      // the rest of the old edge keeps its label.
+      b.next_labels.push_back(p_in ? label : b.labels[i]);
+    }
+  }
+  b.cell.swap(b.next_cell);
+  b.labels.swap(b.next_labels);
+}
+
+struct Setup {
+  const PointCloud& cloud;
+  const TriangulateParams& params;
+  const KdTree& tree;
+  const std::vector<Vector3d>& normals;   // unit, or zero where unusable
+  const std::vector<double>& local_spacing;
+  const std::vector<std::uint8_t>& usable;
+};
+
+// The Delaunay umbrella of point i in its tangent plane; appends accepted candidates.
+void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
+  if (!s.usable[i]) return;
+  const Vector3d& p = s.cloud.positions[i];
+  const Vector3d& n = s.normals[i];
+  const double radius = s.params.radius > 0.0 ? s.params.radius : s.params.radius_in_spacings * s.local_spacing[i];
+  const double max_offset = s.params.max_offset_in_spacings * s.local_spacing[i];
+  const double min_normal_dot = std::cos(radians(s.params.max_normal_angle_deg));
+  s.tree.hybrid(p, static_cast<std::size_t>(s.params.k) + 1, radius, b.neighbors);
+
+  const Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  b.planar.clear();
+  for (const Neighbor& nb : b.neighbors) {
+    const std::uint32_t j = nb.index;
+    if (j == i || !s.usable[j]) continue;
+    const Vector3d d = s.cloud.positions[j] - p;
+    const double height = d.dot(n);
+    if (std::abs(height) > max_offset) continue;
+    if (s.normals[j].dot(n) < min_normal_dot) continue;
+    const Vector3d tangent = d - height * n;
+    const double tangent_length = tangent.norm(), distance = std::sqrt(nb.squared_distance);
+    if (!(tangent_length > 1e-9 * distance) || !(distance > 0.0)) continue;
+    // Unfold: keep the 3D distance in the direction of the projection, so that the points of
+    // a face meeting this one at a sharp edge do not all land on the edge line.
+    const double scale = distance / tangent_length;
+    b.planar.push_back({Vector2d(tangent.dot(e1) * scale, tangent.dot(e2) * scale), j});
+  }
+  if (b.planar.size() < 2) return;
+
+  b.cell.assign({Vector2d(-radius, -radius), Vector2d(radius, -radius), Vector2d(radius, radius), Vector2d(-radius, radius)});
+  b.labels.assign({-1, -1, -1, -1});
+  double cell_reach2 = 2.0 * radius * radius;  // largest squared distance of a cell corner
+  for (std::size_t q = 0; q < b.planar.size(); ++q) {
+    const Vector2d& u = b.planar[q].u;
+    // Neighbours come nearest first and keep their distance: once a bisector lies beyond the
+    // cell's farthest corner, no later one can cut it.
+    if (0.25 * u.squaredNorm() > cell_reach2) break;
+    bool cuts = false;
+    const double offset = 0.5 * u.squaredNorm();
+    for (const Vector2d& corner : b.cell) cuts = cuts || corner.dot(u) > offset;
+    if (!cuts) continue;
+    clip_cell(b, u, static_cast<int>(q));
+    cell_reach2 = 0.0;
+    for (const Vector2d& corner : b.cell) cell_reach2 = std::max(cell_reach2, corner.squaredNorm());
+  }
+
+  const std::size_t m = b.labels.size();
+  const double radius2 = radius * radius;
+  for (std::size_t e = 0; e < m; ++e) {
+    const int l1 = b.labels[e], l2 = b.labels[(e + 1) % m];
+    if (l1 < 0 || l2 < 0 || l1 == l2) continue;
+    const std::uint32_t j1 = b.planar[static_cast<std::size_t>(l1)].index, j2 = b.planar[static_cast<std::size_t>(l2)].index;
+    const Vector3d& q1 = s.cloud.positions[j1];
+    const Vector3d& q2 = s.cloud.positions[j2];
+    if ((q2 - q1).squaredNorm() > radius2) continue;
+    double smallest = 0.0, largest = 0.0;
+    if (!inner_angles(p, q1, q2, smallest, largest)) continue;
+    if (smallest < s.params.min_angle_deg || largest > s.params.max_angle_deg) continue;
+    const Vector3d face = (q1 - p).cross(q2 - p);
+    if (!(face.dot(n) > 0.0) || !(face.dot(s.normals[j1]) > 0.0) || !(face.dot(s.normals[j2]) > 0.0)) continue;
+    b.candidates.push_back(make_candidate(i, j1, j2, smallest));
+  }
+}
+
+void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdTree* tree) {
+  const auto bad = [](const char* name, double value, const char* expected) {
+    return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
+  };
+  if (p.k < 3) throw bad("k", p.k, ">= 3");
+  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
+  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
+    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
+  if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
+    throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
+  if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
+    throw bad("max_normal_angle_deg", p.max_normal_angle_deg, "in (0, 180]");
+  if (!(p.min_angle_deg >= 0.0 && p.min_angle_deg < 60.0)) throw bad("min_angle_deg", p.min_angle_deg, "in [0, 60)");
+  if (!(p.max_angle_deg > 60.0 && p.max_angle_deg <= 180.0)) throw bad("max_angle_deg", p.max_angle_deg, "in (60, 180]");
+  if (!(p.max_dihedral_deg > 0.0 && p.max_dihedral_deg <= 180.0))
+    throw bad("max_dihedral_deg", p.max_dihedral_deg, "in (0, 180]");
+  if (!(p.max_front_angle_deg >= 0.0 && p.max_front_angle_deg < 180.0))
+    throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
+  if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
+    throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+  const std::size_t n = cloud.size();
+  if (n < 3) throw UsageError(fmt::format("reconstruct_region_growing: needs at least 3 points, got {}", n));
+  if (n >= std::size_t{kNone})
+    throw UsageError(fmt::format("reconstruct_region_growing: at most {} points, got {}", kNone - 1, n));
+  if (!cloud.has_normals())
+    throw UsageError("reconstruct_region_growing: the cloud has no normals; estimate and orient them first "
+                     "(estimate_normals, orient_normals)");
+  if (cloud.normals.size() != n)
+    throw UsageError(fmt::format("reconstruct_region_growing: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("reconstruct_region_growing: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+}
+
+// The selected triangles and their unit normals, with the half-edge map they fill.
+struct Selection {
+  std::vector<Triangle> triangles;
+  std::vector<Vector3d> normals;
+  HalfEdgeMap edges;
+  explicit Selection(std::size_t expected) : edges(3 * expected) {}
+
+  bool free_edges(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    return !edges.contains(a, b) && !edges.contains(b, c) && !edges.contains(c, a);
+  }
+  void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vector3d& normal) {
+    const auto t = static_cast<std::uint32_t>(triangles.size());
+    triangles.emplace_back(int(a), int(b), int(c));
+    normals.push_back(normal);
+    edges.insert(a, b, t);
+    edges.insert(b, c, t);
+    edges.insert(c, a, t);
+  }
+};
+
+// Closes the front where it turns sharply: at a boundary vertex v between boundary edges
+// u -> v -> w whose opening angle on the hole side (in v's tangent plane) is below
+// `max_angle_deg`, adds the triangle (v, u, w), smallest angle first, while the new edge u-w is
+// at most the local search radius. This zips up the narrow gaps and small holes left where
+// growing fronts met with umbrellas that disagree, without crossing a straight rim of an open
+// surface. Returns the triangles added.
+std::size_t close_front(const PointCloud& cloud, const std::vector<Vector3d>& normals, const std::vector<double>& radius_of,
+                        double max_angle_deg, double min_dihedral_cos, Selection& sel) {
+  const std::size_t n = cloud.size();
+  std::vector<std::uint32_t> next(n, kNone), prev(n, kNone);
+  std::vector<std::uint8_t> out_degree(n, 0), in_degree(n, 0);
+  for (std::size_t t = 0; t < sel.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const auto x = std::uint32_t(sel.triangles[t][c]), y = std::uint32_t(sel.triangles[t][(c + 1) % 3]);
+      if (sel.edges.contains(y, x)) continue;
+      next[x] = y;
+      prev[y] = x;
+      out_degree[x] = std::uint8_t(std::min(out_degree[x] + 1, 2));
+      in_degree[y] = std::uint8_t(std::min(in_degree[y] + 1, 2));
+    }
+  const double max_angle = radians(max_angle_deg);
+  // Hole-side angle at v, or infinity when v cannot be an ear tip.
+  const auto hole_angle = [&](std::uint32_t v) {
+    if (out_degree[v] != 1 || in_degree[v] != 1) return double(INFINITY);
+    const std::uint32_t u = prev[v], w = next[v];
+    if (u == kNone || w == kNone || u == w) return double(INFINITY);
+    const Vector3d& nv = normals[v];
+    const Vector3d e1 = nv.unitOrthogonal(), e2 = nv.cross(e1);
+    const Vector3d a3 = cloud.positions[u] - cloud.positions[v], b3 = cloud.positions[w] - cloud.positions[v];
+    const Vector2d a(a3.dot(e1), a3.dot(e2)), b(b3.dot(e1), b3.dot(e2));
+    double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    if (angle < 0.0) angle += 2.0 * std::numbers::pi;
+    return angle;
+  };
+  using Entry = std::pair<double, std::uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const double angle = hole_angle(v);
+    if (angle < max_angle) queue.emplace(angle, v);
+  }
+  std::size_t added = 0;
+  while (!queue.empty()) {
+    const auto [angle, v] = queue.top();
+    queue.pop();
+    if (hole_angle(v) != angle) continue;  // stale entry
+    const std::uint32_t u = prev[v], w = next[v];
+    if (sel.edges.contains(u, w)) continue;
+    const Vector3d &pv = cloud.positions[v], &pu = cloud.positions[u], &pw = cloud.positions[w];
+    if ((pw - pu).norm() > 2.0 * std::max(radius_of[u], radius_of[w])) continue;
+    const Vector3d face = (pu - pv).cross(pw - pv);
+    if (!(face.norm() > 0.0)) continue;
+    const Vector3d unit = face.normalized();
+    if (!(unit.dot(normals[v]) > 0.0) || !(unit.dot(normals[u]) > 0.0) || !(unit.dot(normals[w]) > 0.0)) continue;
+    const std::uint32_t t1 = sel.edges.find(u, v), t2 = sel.edges.find(v, w);
+    if ((t1 != kNone && unit.dot(sel.normals[t1]) < min_dihedral_cos) || (t2 != kNone && unit.dot(sel.normals[t2]) < min_dihedral_cos))
+      continue;
+    const std::uint32_t closing = sel.edges.find(w, u);  // the hole was the triangle u v w
+    sel.add(v, u, w, unit);
+    ++added;
+    out_degree[v] = in_degree[v] = 0;
+    next[v] = prev[v] = kNone;
+    if (closing != kNone) {
+      // The hole was the triangle u v w and is gone: u lost u -> v and w -> u, w lost v -> w
+      // and w -> u. A vertex with boundary edges left was pinched; its other neighbours are
+      // not tracked, so it stays barred as an ear tip.
+      for (std::uint32_t x : {u, w}) {
+        out_degree[x] = std::uint8_t(out_degree[x] - 1);
+        in_degree[x] = std::uint8_t(in_degree[x] - 1);
+        if (out_degree[x] != 0 || in_degree[x] != 0) out_degree[x] = in_degree[x] = 2;
+        next[x] = prev[x] = kNone;
+      }
+    } else {
+      next[u] = w;
+      prev[w] = u;
+    }
+    for (std::uint32_t x : {u, w}) {
+      const double a = hole_angle(x);
+      if (a < max_angle) queue.emplace(a, x);
+    }
+  }
+  return added;
+}
+
+// Closes the holes whose perimeter is at most `max_perimeter_in_spacings` local spacings by ear
+// clipping in their best-fit plane. Returns the number of holes closed.
+std::size_t fill_small_holes(const PointCloud& cloud, const std::vector<double>& local_spacing, double max_perimeter_in_spacings,
+                             Selection& sel, std::size_t& added) {
+  const std::size_t n = cloud.size();
+  // Hole half-edges run opposite to the boundary edges of the mesh: y -> x for an edge x -> y
+  // without twin. The filling triangles use them in that direction.
+  // Up to two hole edges leave a vertex (two at a pinch, where two fans touch); more are
+  // left alone.
+  std::vector<std::array<std::uint32_t, 2>> hole_out(n, {kNone, kNone});
+  const std::size_t triangle_count = sel.triangles.size();
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const auto x = static_cast<std::uint32_t>(sel.triangles[t][c]), y = static_cast<std::uint32_t>(sel.triangles[t][(c + 1) % 3]);
+      if (sel.edges.contains(y, x)) continue;
+      std::array<std::uint32_t, 2>& slots = hole_out[y];
+      if (slots[0] == kNone) slots[0] = x;
+      else if (slots[1] == kNone) slots[1] = x;
+    }
+  }
+  // Interior angle of the hole at v between the edges p -> v and v -> w, in v's tangent plane:
+  // at a pinch the walk takes the tighter turn, which keeps each loop small and simple.
+  const auto turn = [&](std::uint32_t p, std::uint32_t v, std::uint32_t w) {
+    const Vector3d nv = cloud.normals[v].norm() > 0.0 ? Vector3d(cloud.normals[v].normalized()) : Vector3d::UnitZ();
+    const Vector3d e1 = nv.unitOrthogonal(), e2 = nv.cross(e1);
+    const Vector3d a3 = cloud.positions[w] - cloud.positions[v], b3 = cloud.positions[p] - cloud.positions[v];
+    const Vector2d a(a3.dot(e1), a3.dot(e2)), b(b3.dot(e1), b3.dot(e2));
+    double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    if (angle < 0.0) angle += 2.0 * std::numbers::pi;
+    return angle;
+  };
+  std::vector<std::uint8_t> in_loop(n, 0);
+  std::vector<std::uint32_t> loop;
+  std::vector<Vector2d> flat;
+  std::vector<std::size_t> alive;
+  std::size_t filled = 0;
+  for (std::size_t start = 0; start < n; ++start) while (hole_out[start][0] != kNone) {
+    // Walk one loop, consuming its hole edges; give up when it revisits a vertex or grows too
+    // long.
+    loop.clear();
+    bool simple = false;
+    double perimeter = 0.0, spacing_sum = 0.0;
+    std::uint32_t v = static_cast<std::uint32_t>(start), from = kNone;
+    while (loop.size() <= kMaxHoleCorners) {
+      std::array<std::uint32_t, 2>& slots = hole_out[v];
+      int pick = slots[0] != kNone ? 0 : 1;
+      if (slots[0] != kNone && slots[1] != kNone && from != kNone && turn(from, v, slots[1]) < turn(from, v, slots[0])) pick = 1;
+      const std::uint32_t w = slots[std::size_t(pick)];
+      if (w == kNone) break;
+      slots[std::size_t(pick)] = kNone;
+      if (pick == 0) std::swap(slots[0], slots[1]);
+      loop.push_back(v);
+      in_loop[v] = 1;
+      perimeter += (cloud.positions[w] - cloud.positions[v]).norm();
+      spacing_sum += local_spacing[v];
+      if (w == start) { simple = loop.size() >= 3; break; }
+      if (in_loop[w]) break;
+      from = v;
+      v = w;
+    }
+    for (std::uint32_t x : loop) in_loop[x] = 0;
+    if (!simple || loop.size() > kMaxHoleCorners) continue;
+    if (perimeter > max_perimeter_in_spacings * spacing_sum / double(loop.size())) continue;
+
+    // Best-fit plane: Newell's normal of the loop in its fill orientation, around a local origin.
+    const Vector3d origin = cloud.positions[loop[0]];
+    Vector3d normal = Vector3d::Zero();
+    for (std::size_t i = 0; i < loop.size(); ++i)
+      normal += (cloud.positions[loop[i]] - origin).cross(cloud.positions[loop[(i + 1) % loop.size()]] - origin);
+    if (!(normal.norm() > 0.0)) continue;
+    normal.normalize();
+    // The hole must face the way its points do; otherwise the loop is the rim of a small
+    // piece, and closing it would glue a back face onto that piece.
+    Vector3d facing = Vector3d::Zero();
+    for (std::uint32_t w : loop) facing += cloud.normals[w];
+    if (!(normal.dot(facing) > 0.0)) continue;
+    const Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+    flat.clear();
+    for (std::uint32_t w : loop) {
+      const Vector3d d = cloud.positions[w] - origin;
+      flat.emplace_back(d.dot(e1), d.dot(e2));
+    }
+    alive.resize(loop.size());
+    for (std::size_t i = 0; i < loop.size(); ++i) alive[i] = i;
+    const auto cross2 = [](const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); };
+    const std::size_t before = sel.triangles.size();
+    while (alive.size() >= 3) {
+      const std::size_t m = alive.size();
+      std::size_t best = m;
+      double best_angle = -1.0;
+      for (std::size_t i = 0; i < m; ++i) {
+        const std::size_t ia = alive[(i + m - 1) % m], ib = alive[i], ic = alive[(i + 1) % m];
+        const Vector2d &a = flat[ia], &b = flat[ib], &c = flat[ic];
+        if (!(cross2(b - a, c - b) > 0.0)) continue;  // reflex or flat corner
+        if (!sel.free_edges(loop[ia], loop[ib], loop[ic])) continue;
+        if (m > 3 && (sel.edges.contains(loop[ic], loop[ia]) || sel.edges.contains(loop[ia], loop[ic]))) continue;
+        bool empty = true;
+        for (std::size_t o = 0; o < m && empty; ++o) {
+          const std::size_t io = alive[o];
+          if (io == ia || io == ib || io == ic) continue;
+          const Vector2d& q = flat[io];
+          empty = !(cross2(b - a, q - a) >= 0.0 && cross2(c - b, q - b) >= 0.0 && cross2(a - c, q - c) >= 0.0);
+        }
+        if (!empty) continue;
+        double smallest = 0.0, largest = 0.0;
+        if (!inner_angles(cloud.positions[loop[ia]], cloud.positions[loop[ib]], cloud.positions[loop[ic]], smallest, largest)) continue;
+        if (smallest > best_angle) { best_angle = smallest; best = i; }
+      }
+      if (best == m) break;
+      const std::uint32_t a = loop[alive[(best + m - 1) % m]], b = loop[alive[best]], c = loop[alive[(best + 1) % m]];
+      const Vector3d face = (cloud.positions[b] - cloud.positions[a]).cross(cloud.positions[c] - cloud.positions[a]);
+      sel.add(a, b, c, face.normalized());
+      alive.erase(alive.begin() + std::ptrdiff_t(best));
+    }
+    // An unfinished loop keeps the triangles already added: each one only shrinks the hole.
+    added += sel.triangles.size() - before;
+    if (alive.size() < 3) ++filled;
+  }
+  return filled;
+}
+
+}  // namespace
+
+TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
+                                             const ProgressCallback& progress) {
+  check_params(cloud, params, tree);
+  const std::size_t n = cloud.size();
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, 0);
+
+  TriangulateResult result;
+  result.mean_spacing = mean_spacing(*tree);
+  const double duplicate2 = std::pow(kDuplicateFraction * result.mean_spacing, 2);
+
+  // Pass 1: unit normals, duplicates, local spacing.
+  std::vector<Vector3d> normals(n);
+  std::vector<double> local_spacing(n, result.mean_spacing);
+  std::vector<std::uint8_t> usable(n, 0);
+  const std::span<const std::uint32_t> order = tree->spatial_order();
+  {
+    detail::ProgressReporter pass(progress, 0.0, 0.1, n);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (pass.cancelled()) return;
+      std::vector<Neighbor>& nb = buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+        const std::uint32_t i = order[pos];
+        tree->knn(cloud.positions[i], kSpacingNeighbours, nb);
+        bool duplicate = false;
+        double sum = 0.0;
+        std::size_t count = 0;
+        for (const Neighbor& x : nb) {
+          if (x.index == i) continue;
+          if (x.squared_distance <= duplicate2) {
+            duplicate = duplicate || x.index < i;
+            continue;
+          }
+          if (count < kSpacingAveraged) { sum += std::sqrt(x.squared_distance); ++count; }
+        }
+        if (count > 0) local_spacing[i] = sum / double(count);
+        const double length = cloud.normals[i].norm();
+        const bool has_normal = length > 0.0 && std::isfinite(length);
+        normals[i] = has_normal ? Vector3d(cloud.normals[i] / length) : Vector3d::Zero();
+        usable[i] = static_cast<std::uint8_t>(has_normal && !duplicate && result.mean_spacing > 0.0);
+      }
+      pass.advance(r.size());
+    });
+    pass.throw_if_cancelled();
+  }
+  double spacing_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    spacing_sum += local_spacing[i];
+    // Duplicates are counted by their later copies: the first of a group stays usable.
+    if (!usable[i] && normals[i] != Vector3d::Zero()) ++result.duplicate_points;
+  }
+  result.local_spacing_mean = spacing_sum / double(n);
+
+  // Pass 2: umbrellas, in parallel; candidates gathered per thread.
+  const Setup setup{cloud, params, *tree, normals, local_spacing, usable};
+  tbb::enumerable_thread_specific<UmbrellaBuffers> umbrella_buffers;
+  {
+    detail::ProgressReporter pass(progress, 0.1, 0.7, n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (pass.cancelled()) return;
+      UmbrellaBuffers& b = umbrella_buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) umbrella(setup, order[pos], b);
+      pass.advance(r.size());
+    });
+    pass.throw_if_cancelled();
+  }
+  std::vector<Candidate> candidates;
+  {
+    std::size_t total = 0;
+    for (const UmbrellaBuffers& b : umbrella_buffers) total += b.candidates.size();
+    candidates.reserve(total);
+    for (UmbrellaBuffers& b : umbrella_buffers) {
+      candidates.insert(candidates.end(), b.candidates.begin(), b.candidates.end());
+      std::vector<Candidate>().swap(b.candidates);
+    }
+  }
+  reporter.report(0.72);
+  reporter.throw_if_cancelled();
+
+  // Merge the proposals of the three umbrellas of each triangle: votes = how many proposed it.
+  tbb::parallel_sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) { return x.v < y.v; });
+  std::size_t unique = 0;
+  for (std::size_t i = 0; i < candidates.size();) {
+    std::size_t j = i + 1;
+    while (j < candidates.size() && candidates[j].v == candidates[i].v) ++j;
+    Candidate merged = candidates[i];
+    merged.votes = static_cast<std::uint8_t>(std::min<std::size_t>(j - i, 255));
+    candidates[unique++] = merged;
+    i = j;
+  }
+  candidates.resize(unique);
+  result.candidate_triangles = unique;
+  tbb::parallel_sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    if (x.votes != y.votes) return x.votes > y.votes;
+    if (x.min_angle_deg != y.min_angle_deg) return x.min_angle_deg > y.min_angle_deg;
+    return x.v < y.v;
+  });
+  reporter.report(0.8);
+  reporter.throw_if_cancelled();
+
+  // Pass 3: region growing over the candidates. Seeds are taken best first among candidates
+  // whose vertices are all new; from each accepted triangle the front grows, best candidate
+  // first, across its edges. A triangle is accepted when none of its directed edges is used
+  // yet (every edge then has at most two triangles, traversed in opposite directions:
+  // edge-manifold and consistently oriented by construction), when at every vertex already in
+  // the mesh it continues that vertex's fan across an edge (no pinched vertex, no tunnel), and
+  // when its normal is within max_dihedral_deg of each neighbour across a shared edge.
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_edge(3 * unique);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, unique, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c != r.end(); ++c)
+      for (int e = 0; e < 3; ++e)
+        by_edge[3 * c + std::size_t(e)] = {(std::uint64_t{candidates[c].v[e]} << 32) | candidates[c].v[(e + 1) % 3], std::uint32_t(c)};
+  });
+  tbb::parallel_sort(by_edge.begin(), by_edge.end());
+  Selection sel(std::min<std::size_t>(unique, 2 * n + 16));
+  std::vector<std::uint8_t> in_mesh(n, 0), accepted(unique, 0);
+  const double min_dihedral_cos = std::cos(radians(params.max_dihedral_deg));
+  // mode 0: seed (all vertices new); 1: growth (fans continue at every old vertex);
+  // 2: closing (attached by at least one edge; closes fronts that met out of step).
+  const auto try_accept = [&](std::uint32_t id, int mode) {
+    const bool seed = mode == 0;
+    const std::array<std::uint32_t, 3>& v = candidates[id].v;
+    if (!sel.free_edges(v[0], v[1], v[2])) return false;
+    std::array<std::uint32_t, 3> twin{};
+    for (int e = 0; e < 3; ++e) twin[std::size_t(e)] = sel.edges.find(v[(e + 1) % 3], v[e]);
+    for (int c = 0; c < 3; ++c) {
+      if (!in_mesh[v[c]]) continue;
+      if (seed) return false;
+      // Corner c lies on edges c-1 -> c and c -> c+1.
+      if (mode == 1 && twin[std::size_t((c + 2) % 3)] == kNone && twin[std::size_t(c)] == kNone) return false;
+    }
+    if (mode == 2 && twin[0] == kNone && twin[1] == kNone && twin[2] == kNone) return false;
+    const Vector3d face =
+        (cloud.positions[v[1]] - cloud.positions[v[0]]).cross(cloud.positions[v[2]] - cloud.positions[v[0]]).normalized();
+    for (std::uint32_t t : twin)
+      if (t != kNone && face.dot(sel.normals[t]) < min_dihedral_cos) return false;
+    sel.add(v[0], v[1], v[2], face);
+    for (std::uint32_t w : v) in_mesh[w] = 1;
+    accepted[id] = 1;
+    return true;
+  };
+  // Candidates sit in priority order, so a smaller id is a better one: a min-heap of ids.
+  std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> front;
+  const auto push_neighbours = [&](std::uint32_t id) {
+    const std::array<std::uint32_t, 3>& v = candidates[id].v;
+    for (int e = 0; e < 3; ++e) {
+      const std::uint64_t key = (std::uint64_t{v[(e + 1) % 3]} << 32) | v[e];
+      auto it = std::lower_bound(by_edge.begin(), by_edge.end(), std::make_pair(key, std::uint32_t{0}));
+      for (; it != by_edge.end() && it->first == key; ++it)
+        if (!accepted[it->second]) front.push(it->second);
+    }
+  };
+  for (std::uint32_t seed = 0; seed < unique; ++seed) {
+    if (accepted[seed] || !try_accept(seed, 0)) continue;
+    push_neighbours(seed);
+    while (!front.empty()) {
+      const std::uint32_t id = front.top();
+      front.pop();
+      if (accepted[id] || !try_accept(id, 1)) continue;
+      push_neighbours(id);
+    }
+  }
+  // Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
+  // them with the remaining candidates that share an edge with the mesh.
+  for (std::uint32_t id = 0; id < unique; ++id)
+    if (!accepted[id]) try_accept(id, 2);
+  std::vector<Candidate>().swap(candidates);
+  result.selected_triangles = sel.triangles.size();
+  reporter.report(0.9);
+  reporter.throw_if_cancelled();
+
+  // Pass 4: zip up the front where it turns sharply, then close small holes.
+  std::vector<double> radius_of(n);
+  for (std::size_t i = 0; i < n; ++i) radius_of[i] = params.radius > 0.0 ? params.radius : params.radius_in_spacings * local_spacing[i];
+  result.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
+  if (params.max_hole_perimeter_in_spacings > 0.0)
+    result.holes_filled = fill_small_holes(cloud, local_spacing, params.max_hole_perimeter_in_spacings, sel, result.fill_triangles);
+
+  result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
+  result.topology = analyze_topology(result.mesh);
+  std::vector<std::uint8_t> used(n, 0);
+  for (const Triangle& t : result.mesh.triangles)
+    for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(t[c])] = 1;
+  result.unused_points = n - static_cast<std::size_t>(std::count(used.begin(), used.end(), std::uint8_t{1}));
+  reporter.report(1.0);
+  reporter.throw_if_cancelled();
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End-to-end tests of `pointsurf reconstruct`: the mesh written, the topology in the report,
+// normals estimated when absent, and the error paths (exit codes, messages, no output left).
+// The command-line tool must be built (target pointsurf_cli) before these run.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/io/io.h"
+#include "support/files.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string err;
+};
+
+RunResult run_cli(const std::string& args, const std::filesystem::path& dir) {
+  const std::filesystem::path err = dir / "stderr.txt";
+  const std::string command = std::string(POINTSURF_CLI_PATH) + " " + args + " >/dev/null 2>" + err.string();
+  const int status = std::system(command.c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::read_bytes(err)};
+}
+
+class ReconstructCli : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = test::temp_dir(std::string("reconstruct_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  nlohmann::json stage(const std::string& report, const std::string& name) const {
+    const nlohmann::json json = nlohmann::json::parse(test::read_bytes(dir_ / report));
+    for (const auto& s : json["stages"])
+      if (s["name"] == name) return s;
+    return nullptr;
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(ReconstructCli, BallPivotWritesAClosedSphereWithNormalsAndReportsItsTopology) {
+  const PointCloud sphere = test::sample_sphere(4000, 1.0, Vector3d(10.0, -5.0, 2.0));
+  write_point_cloud(path("sphere.ply"), sphere);
+  const RunResult r =
+      run_cli("reconstruct " + path("sphere.ply") + " " + path("mesh.ply") + " --method ball-pivot --report " + path("run.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "ball-pivot")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "0 holes")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "genus 0")) << r.err;
+
+  const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
+  ASSERT_EQ(mesh.vertex_count(), sphere.size());
+  ASSERT_EQ(mesh.vertex_normals.size(), sphere.size());  // the input normals are kept
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.genus(), 0);
+
+  const nlohmann::json bp = stage("run.json", "ball-pivot");
+  ASSERT_FALSE(bp.is_null());
+  const nlohmann::json& m = bp["metrics"];
+  EXPECT_EQ(m["holes"], 0);
+  EXPECT_EQ(m["holes_total_perimeter"], 0.0);
+  EXPECT_EQ(m["non_manifold_edges"], 0);
+  EXPECT_EQ(m["components"], 1);
+  EXPECT_EQ(m["genus"], 0);
+  EXPECT_EQ(m["triangles"], mesh.triangle_count());
+  // Default radii: 1.5, 3 and 6 mean spacings, in cloud units.
+  const double spacing = m["mean_spacing"].get<double>();
+  ASSERT_EQ(bp["counts"]["radii_used"].size(), 3u);
+  EXPECT_NEAR(bp["counts"]["radii_used"][0].get<double>(), 1.5 * spacing, 1e-12);
+  EXPECT_NEAR(bp["counts"]["radii_used"][2].get<double>(), 6.0 * spacing, 1e-12);
+  EXPECT_TRUE(stage("run.json", "normals").is_null());  // the input had normals
+}
+
+TEST_F(ReconstructCli, EstimatesMissingNormalsAndSaysSo) {
+  PointCloud torus = test::sample_torus(6000, 1.0, 0.35);
+  torus.normals.clear();
+  write_point_cloud(path("torus.xyz"), torus);
+  const RunResult r = run_cli("reconstruct " + path("torus.xyz") + " " + path("mesh.ply") + " --method ball-pivot --report " +
+                                  path("run.json"),
+                              dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "no normals in the input; estimated")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "(normals estimated)")) << r.err;
+  ASSERT_FALSE(stage("run.json", "normals").is_null());
+  const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
+  EXPECT_EQ(mesh.vertex_normals.size(), torus.size());
+  const MeshTopology t = analyze_topology(mesh);
+  EXPECT_TRUE(t.edge_manifold());
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(stage("run.json", "ball-pivot")["metrics"]["non_manifold_edges"], 0);
+}
+
+TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
+  const PointCloud sphere = test::sample_sphere(2000, 1.0);
+  write_point_cloud(path("sphere.ply"), sphere);
+  const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path("mesh.off") + " --method ball-pivot --radii 0.2,0.1 --report " +
+                                  path("run.json"),
+                              dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json bp = stage("run.json", "ball-pivot");
+  EXPECT_EQ(bp["counts"]["radii_used"], nlohmann::json::parse("[0.1, 0.2]"));
+  EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
+}
+
+TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommand) {
+  const PointCloud sphere = test::sample_sphere(2000, 1.0);
+  write_point_cloud(path("sphere.ply"), sphere);
+  for (const std::string method : {"triangulate", "crust", "ball-pivot"}) {
+    const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path(method + ".ply") + " --method " + method, dir_);
+    ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
+    EXPECT_TRUE(test::contains(r.err, method + " ")) << r.err;
+    EXPECT_GT(read_mesh(path(method + ".ply")).mesh.triangle_count(), 0u) << method;
+  }
+}
+
+TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
+  test::write_bytes(dir_ / "two.xyz", "0 0 0 0 0 1\n1 0 0 0 0 1\n");
+  RunResult r = run_cli("reconstruct " + path("two.xyz") + " " + path("out.ply") + " --method ball-pivot", dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(test::contains(r.err, "2 points; a surface needs at least 3")) << r.err;
+
+  PointCloud line;
+  for (int i = 0; i < 20; ++i) {
+    line.positions.emplace_back(0.1 * i, 0.0, 0.0);
+    line.normals.emplace_back(0.0, 0.0, 1.0);
+  }
+  write_point_cloud(path("line.ply"), line);
+  r = run_cli("reconstruct " + path("line.ply") + " " + path("out.ply") + " --method ball-pivot", dir_);
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_TRUE(test::contains(r.err, "no triangle could be formed from 20 points")) << r.err;
+
+  write_point_cloud(path("sphere.ply"), test::sample_sphere(500, 1.0));
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method poisson", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--method: 'poisson': expected triangulate, crust or ball-pivot")) << r.err;
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --radii 0.1,abc", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--radii: '0.1,abc': expected positive numbers separated by commas")) << r.err;
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --ball-normal-angle 0", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--ball-normal-angle: 0 must be in (0, 180]")) << r.err;
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.xyzw") + " --method ball-pivot", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "out.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "out.xyzw"));
+}
+
+}  // namespace
+}  // namespace pointsurf
