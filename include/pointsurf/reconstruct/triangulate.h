@@ -40,6 +40,7 @@ struct TriangulateResult : ReconstructionResult {
   std::size_t selected_triangles = 0;    // triangles kept by the region growing
   std::size_t front_triangles = 0;       // triangles added where the front turned sharply
   std::size_t holes_filled = 0;          // small holes closed by the final pass
+  std::size_t pinch_triangles_removed = 0;  // triangles removed where fans touched at a vertex
   std::size_t fill_triangles = 0;        // triangles added to close them
 };
 

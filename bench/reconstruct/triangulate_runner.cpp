@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stage runner for bench/reconstruct/run_triangulate_bench.sh.
+//   triangulate_runner run CLOUD.ply OUT.ply          the cloud's own (oriented) normals
+//   triangulate_runner shape NAME N OUT.ply [SEED]    NAME: sphere, torus, cube, plane; exact normals
+// Runs reconstruct_region_growing with default parameters and writes the mesh. Prints one JSON
+// line: seconds (whole reconstruction, file reading excluded), peak_rss_mb (whole process), the
+// stage counts, the mesh topology and the boundary loops (corner count, perimeter in mean
+// spacings, centroid), longest first, at most 20.
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/reconstruct/triangulate.h"
+
+namespace {
+
+using namespace pointsurf;
+using Clock = std::chrono::steady_clock;
+
+double peak_rss_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+// The same samplers (and RNG draw order) as tests/support/shapes.cpp, so that a shape here is
+// the cloud of the test of the same size and seed.
+PointCloud sample(const std::string& name, std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  PointCloud cloud;
+  if (name == "sphere") {
+    std::normal_distribution<double> g(0.0, 1.0);
+    while (cloud.positions.size() < n) {
+      Vector3d v(g(rng), g(rng), g(rng));
+      const double len = v.norm();
+      if (len < 1e-12) continue;
+      v /= len;
+      cloud.positions.push_back(v);
+      cloud.normals.push_back(v);
+    }
+  } else if (name == "plane") {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = u(rng);
+      const double y = u(rng);
+      cloud.positions.emplace_back(x, y, 0.0);
+      cloud.normals.emplace_back(0.0, 0.0, 1.0);
+    }
+  } else if (name == "cube") {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::uniform_int_distribution<int> face(0, 5);
+    for (std::size_t i = 0; i < n; ++i) {
+      const int f = face(rng);
+      const int axis = f / 2;
+      const double sign = (f % 2 == 0) ? 1.0 : -1.0;
+      const double a = u(rng);
+      const double b = u(rng);
+      Vector3d p, nrm = Vector3d::Zero();
+      p[axis] = sign;
+      p[(axis + 1) % 3] = a;
+      p[(axis + 2) % 3] = b;
+      nrm[axis] = sign;
+      cloud.positions.push_back(p);
+      cloud.normals.push_back(nrm);
+    }
+  } else if (name == "torus") {
+    const double major = 1.0, minor = 0.35;
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    while (cloud.positions.size() < n) {
+      const double a = 2.0 * std::numbers::pi * u01(rng);
+      const double v = 2.0 * std::numbers::pi * u01(rng);
+      const double w = u01(rng);
+      if (w * (major + minor) > major + minor * std::cos(v)) continue;
+      const Vector3d radial(std::cos(a), std::sin(a), 0.0);
+      const Vector3d nrm = std::cos(v) * radial + std::sin(v) * Vector3d::UnitZ();
+      cloud.positions.push_back(major * radial + minor * nrm);
+      cloud.normals.push_back(nrm);
+    }
+  } else {
+    throw UsageError(fmt::format("triangulate_runner: unknown shape '{}' (sphere, torus, cube, plane)", name));
+  }
+  return cloud;
+}
+
+int run(const PointCloud& cloud, const std::string& out_path) {
+  const Clock::time_point start = Clock::now();
+  const TriangulateResult result = reconstruct_region_growing(cloud);
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const double rss = peak_rss_mb();
+  if (!out_path.empty() && out_path != "-") write_mesh(out_path, result.mesh);
+  const MeshTopology& t = result.topology;
+  nlohmann::json out;
+  out["tool"] = "pointsurf";
+  out["points"] = cloud.size();
+  out["seconds"] = seconds;
+  out["peak_rss_mb"] = rss;
+  out["mean_spacing"] = result.mean_spacing;
+  out["candidate_triangles"] = result.candidate_triangles;
+  out["selected_triangles"] = result.selected_triangles;
+  out["front_triangles"] = result.front_triangles;
+  out["holes_filled"] = result.holes_filled;
+  out["fill_triangles"] = result.fill_triangles;
+  out["pinch_triangles_removed"] = result.pinch_triangles_removed;
+  out["triangles"] = t.triangles;
+  out["unused_points"] = result.unused_points;
+  out["boundary_edges"] = t.boundary_edges;
+  out["boundary_loops"] = t.boundary_loops.size();
+  out["non_manifold_edges"] = t.non_manifold_edges;
+  out["non_manifold_vertices"] = t.non_manifold_vertices;
+  out["inconsistent_edges"] = t.inconsistent_edges;
+  out["components"] = t.components;
+  out["euler_characteristic"] = t.euler_characteristic;
+  nlohmann::json loops = nlohmann::json::array();
+  for (std::size_t i = 0; i < t.boundary_loops.size() && i < 20; ++i) {
+    const BoundaryLoop& loop = t.boundary_loops[i];
+    Vector3d centroid = Vector3d::Zero();
+    for (int v : loop.vertices) centroid += result.mesh.vertices[std::size_t(v)];
+    centroid /= double(loop.vertices.size());
+    loops.push_back({{"corners", loop.vertices.size()},
+                     {"perimeter_in_spacings", loop.length / result.mean_spacing},
+                     {"centroid", {centroid.x(), centroid.y(), centroid.z()}}});
+  }
+  out["loops"] = loops;
+  fmt::print("{}\n", out.dump());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    const std::string mode = argc > 1 ? argv[1] : "";
+    if (mode == "run" && argc == 4) return run(read_point_cloud(argv[2]).cloud, argv[3]);
+    if (mode == "shape" && (argc == 5 || argc == 6))
+      return run(sample(argv[2], std::stoul(argv[3]), argc == 6 ? std::stoull(argv[5]) : 1), argv[4]);
+    fmt::print(stderr, "usage: triangulate_runner run CLOUD.ply OUT.ply | shape sphere|torus|cube|plane N OUT.ply [SEED]\n");
+    return 1;
+  } catch (const Error& e) {
+    fmt::print(stderr, "triangulate_runner: {}\n", e.what());
+    return e.exit_code();
+  }
+}
