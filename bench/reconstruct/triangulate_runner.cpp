@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Stage runner for bench/reconstruct/run_triangulate_bench.sh.
-//   triangulate_runner run CLOUD.ply OUT.ply          the cloud's own (oriented) normals
-//   triangulate_runner shape NAME N OUT.ply [SEED]    NAME: sphere, torus, cube, plane; exact normals
-// Runs reconstruct_region_growing with default parameters and writes the mesh. Prints one JSON
+//   triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...]        the cloud's own oriented normals
+//   triangulate_runner shape NAME N OUT.ply SEED [KEY=VALUE...]    sphere, torus, cube, plane; exact normals
+// Runs reconstruct_region_growing (default parameters unless a TriangulateParams field is set as
+// KEY=VALUE) and writes the mesh ("-": not written). Prints one JSON
 // line: seconds (whole reconstruction, file reading excluded), peak_rss_mb (whole process), the
 // stage counts, the mesh topology and the boundary loops (corner count, perimeter in mean
 // spacings, centroid), longest first, at most 20.
@@ -91,9 +92,32 @@ PointCloud sample(const std::string& name, std::size_t n, std::uint64_t seed) {
   return cloud;
 }
 
-int run(const PointCloud& cloud, const std::string& out_path) {
+// KEY=VALUE overrides of the defaults, for experiments.
+TriangulateParams parse_params(int argc, char** argv, int first) {
+  TriangulateParams p;
+  for (int i = first; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const std::size_t eq = arg.find('=');
+    if (eq == std::string::npos) throw UsageError(fmt::format("triangulate_runner: expected KEY=VALUE, got '{}'", arg));
+    const std::string key = arg.substr(0, eq);
+    const double value = std::stod(arg.substr(eq + 1));
+    if (key == "k") p.k = int(value);
+    else if (key == "radius_in_spacings") p.radius_in_spacings = value;
+    else if (key == "max_offset_in_spacings") p.max_offset_in_spacings = value;
+    else if (key == "max_normal_angle_deg") p.max_normal_angle_deg = value;
+    else if (key == "min_angle_deg") p.min_angle_deg = value;
+    else if (key == "max_angle_deg") p.max_angle_deg = value;
+    else if (key == "max_dihedral_deg") p.max_dihedral_deg = value;
+    else if (key == "max_front_angle_deg") p.max_front_angle_deg = value;
+    else if (key == "max_hole_perimeter_in_spacings") p.max_hole_perimeter_in_spacings = value;
+    else throw UsageError(fmt::format("triangulate_runner: unknown parameter '{}'", key));
+  }
+  return p;
+}
+
+int run(const PointCloud& cloud, const std::string& out_path, const TriangulateParams& params) {
   const Clock::time_point start = Clock::now();
-  const TriangulateResult result = reconstruct_region_growing(cloud);
+  const TriangulateResult result = reconstruct_region_growing(cloud, params);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   const double rss = peak_rss_mb();
   if (!out_path.empty() && out_path != "-") write_mesh(out_path, result.mesh);
@@ -139,10 +163,11 @@ int run(const PointCloud& cloud, const std::string& out_path) {
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "run" && argc == 4) return run(read_point_cloud(argv[2]).cloud, argv[3]);
-    if (mode == "shape" && (argc == 5 || argc == 6))
-      return run(sample(argv[2], std::stoul(argv[3]), argc == 6 ? std::stoull(argv[5]) : 1), argv[4]);
-    fmt::print(stderr, "usage: triangulate_runner run CLOUD.ply OUT.ply | shape sphere|torus|cube|plane N OUT.ply [SEED]\n");
+    if (mode == "run" && argc >= 4) return run(read_point_cloud(argv[2]).cloud, argv[3], parse_params(argc, argv, 4));
+    if (mode == "shape" && argc >= 6)
+      return run(sample(argv[2], std::stoul(argv[3]), std::stoull(argv[5])), argv[4], parse_params(argc, argv, 6));
+    fmt::print(stderr, "usage: triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...] | "
+                       "shape sphere|torus|cube|plane N OUT.ply SEED [KEY=VALUE...]\n");
     return 1;
   } catch (const Error& e) {
     fmt::print(stderr, "triangulate_runner: {}\n", e.what());

@@ -39,6 +39,12 @@ constexpr std::size_t kSpacingAveraged = 3;
 constexpr std::size_t kMaxHoleCorners = 64;
 // Rounds of opening pinched vertices and filling the holes again.
 constexpr int kRepairRounds = 3;
+// Holes that the repair opened around a small unfillable one are closed up to this many times
+// max_hole_perimeter_in_spacings.
+constexpr double kRepairedPerimeterFactor = 2.0;
+// Neighbours whose normal agrees with the centre's may lie this many local spacings off its
+// tangent plane (plus what the turn of the normals explains).
+constexpr double kFlatOffsetInSpacings = 0.5;
 // A triangle closing a hole may deviate at most this far from each corner's normal.
 constexpr double kFillMaxDeviationDeg = 120.0;
 const double kFillMinCos = std::cos(kFillMaxDeviationDeg * std::numbers::pi / 180.0);
@@ -149,7 +155,15 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
     const Vector3d d = s.cloud.positions[j] - p;
     const double height = d.dot(n);
     if (std::abs(height) > max_offset) continue;
-    if (s.normals[j].dot(n) < min_normal_dot) continue;
+    const double normal_dot = s.normals[j].dot(n);
+    if (normal_dot < min_normal_dot) continue;
+    // A neighbour whose normal agrees with p's lies on the same smooth sheet only if it is near
+    // p's tangent plane: on a curve of radius R a neighbour at distance d sits d^2 / 2R off the
+    // plane while its normal turns by d / R, so the offset allowed grows with the sine of the
+    // normals' angle (a sharp edge allows the whole max_offset). This keeps a parallel sheet a
+    // few spacings away (a floor under a table) out of the umbrella.
+    const double sine = s.normals[j].cross(n).norm();
+    if (std::abs(height) > std::max(kFlatOffsetInSpacings * s.local_spacing[i], std::sqrt(nb.squared_distance) * sine)) continue;
     const Vector3d tangent = d - height * n;
     const double tangent_length = tangent.norm(), distance = std::sqrt(nb.squared_distance);
     if (!(tangent_length > 1e-9 * distance) || !(distance > 0.0)) continue;
@@ -429,8 +443,24 @@ private:
 // close in `reopen`.
 std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                              const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
-                             LoopFiller& filler, std::vector<std::uint8_t>& reopen, std::size_t& added) {
+                             LoopFiller& filler, const std::vector<std::uint8_t>& repaired, std::vector<std::uint8_t>& reopen,
+                             std::size_t& added) {
   const std::size_t n = positions.size();
+  // Triangles per edge-connected piece (union-find), to tell the rim of a tiny isolated piece
+  // from a hole.
+  const std::size_t triangle_total = sel.triangles.size();
+  std::vector<std::uint32_t> parent(triangle_total), piece_size(triangle_total, 0);
+  for (std::size_t t = 0; t < triangle_total; ++t) parent[t] = static_cast<std::uint32_t>(t);
+  const auto root = [&](std::uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  for (std::size_t t = 0; t < triangle_total; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t twin = sel.edges.find(std::uint32_t(sel.triangles[t][(c + 1) % 3]), std::uint32_t(sel.triangles[t][c]));
+      if (twin != kNone) parent[root(twin)] = root(static_cast<std::uint32_t>(t));
+    }
+  for (std::size_t t = 0; t < triangle_total; ++t) ++piece_size[root(static_cast<std::uint32_t>(t))];
   // Hole half-edges run opposite to the boundary edges of the mesh: y -> x for an edge x -> y
   // without twin. The filling triangles use them in that direction. Up to three hole edges
   // leave a vertex (more than one at a pinch, where fans touch); more are left alone.
@@ -499,15 +529,22 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
         if (first == 0 && hole_out[w][0] == kNone) path.clear();
         if (cycle.size() < 3 || cycle.size() > kMaxHoleCorners) continue;
         double perimeter = 0.0, spacing_sum = 0.0;
+        bool grown = false;
         for (std::size_t i = 0; i < cycle.size(); ++i) {
           perimeter += (positions[cycle[(i + 1) % cycle.size()]] - positions[cycle[i]]).norm();
           spacing_sum += local_spacing[cycle[i]];
+          grown = grown || repaired[cycle[i]];
         }
-        if (perimeter > max_perimeter_in_spacings * spacing_sum / double(cycle.size())) continue;
+        // A hole that the repair grew from a small one keeps being closed up to twice the limit.
+        const double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        if (perimeter > limit * spacing_sum / double(cycle.size())) continue;
         const std::size_t before = sel.triangles.size();
         if (filler.fill(cycle, positions, normals, sel)) ++filled;
         else {
-          for (std::uint32_t x : cycle) reopen[x] = 1;
+          const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
+          const bool tiny_piece = beside < triangle_total && piece_size[root(beside)] <= 2 * cycle.size();
+          if (!tiny_piece)
+            for (std::uint32_t x : cycle) reopen[x] = 1;
         }
         added += sel.triangles.size() - before;
       }
@@ -523,7 +560,8 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
 // the next pass sees one larger, simpler hole; at a vertex whose triangles form more than one fan
 // (fronts that met there only), keeps the fan with the largest angle at the vertex and removes
 // the others. Clears `reopen`; returns the number of triangles removed.
-std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std::uint8_t>& reopen, Selection& sel) {
+std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std::uint8_t>& reopen, std::vector<std::uint8_t>& repaired,
+                         Selection& sel) {
   const std::size_t n = positions.size(), f = sel.triangles.size();
   std::vector<std::uint32_t> offset(n + 1, 0), around(3 * f);
   for (const Triangle& t : sel.triangles)
@@ -593,11 +631,11 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
   }
   if (count == 0) return 0;
   Selection kept(f);
-  for (std::size_t t = 0; t < f; ++t)
-    if (!removed[t]) {
-      const Triangle& tri = sel.triangles[t];
-      kept.add(std::uint32_t(tri[0]), std::uint32_t(tri[1]), std::uint32_t(tri[2]), sel.normals[t]);
-    }
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = sel.triangles[t];
+    if (!removed[t]) kept.add(std::uint32_t(tri[0]), std::uint32_t(tri[1]), std::uint32_t(tri[2]), sel.normals[t]);
+    else for (int c = 0; c < 3; ++c) repaired[std::size_t(tri[c])] = 1;
+  }
   sel = std::move(kept);
   return count;
 }
@@ -784,12 +822,12 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   if (params.max_hole_perimeter_in_spacings > 0.0) {
     // Fill, then open the pinches that remain (vertices where fans touch) and fill again.
     LoopFiller filler;
-    std::vector<std::uint8_t> reopen(n, 0);
+    std::vector<std::uint8_t> reopen(n, 0), repaired(n, 0);
     for (int round = 0;; ++round) {
       result.holes_filled += fill_small_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel,
-                                              filler, reopen, result.fill_triangles);
+                                              filler, repaired, reopen, result.fill_triangles);
       if (round == kRepairRounds) break;
-      const std::size_t removed = open_pinches(cloud.positions, reopen, sel);
+      const std::size_t removed = open_pinches(cloud.positions, reopen, repaired, sel);
       result.pinch_triangles_removed += removed;
       if (removed == 0) break;
     }
