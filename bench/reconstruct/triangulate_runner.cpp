@@ -134,6 +134,7 @@ int run(const PointCloud& cloud, const std::string& out_path, const TriangulateP
   out["holes_filled"] = result.holes_filled;
   out["fill_triangles"] = result.fill_triangles;
   out["pinch_triangles_removed"] = result.pinch_triangles_removed;
+  out["inserted_points"] = result.inserted_points;
   out["triangles"] = t.triangles;
   out["unused_points"] = result.unused_points;
   out["boundary_edges"] = t.boundary_edges;

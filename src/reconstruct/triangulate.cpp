@@ -39,6 +39,10 @@ constexpr std::size_t kSpacingAveraged = 3;
 constexpr std::size_t kMaxHoleCorners = 64;
 // Rounds of opening pinched vertices and filling the holes again.
 constexpr int kRepairRounds = 3;
+// Unused points are inserted in this many rounds (one per triangle and round), each looking at
+// the triangles of this many nearest points.
+constexpr int kInsertRounds = 3;
+constexpr std::size_t kInsertNeighbours = 8;
 // Holes that the repair opened around a small unfillable one are closed up to this many times
 // max_hole_perimeter_in_spacings.
 constexpr double kRepairedPerimeterFactor = 2.0;
@@ -640,6 +644,132 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
   return count;
 }
 
+// Inserts the usable points that no triangle uses (their umbrella triangles lost to
+// neighbouring ones, or they sat in a hole that was filled without them) into the mesh: into
+// the triangle whose plane they project into (along its normal), split in three, or else onto
+// the interior edge they project onto, whose two triangles are split in two each. The point
+// must lie within its search radius of the plane and face the way the new triangles do. Both
+// moves keep the mesh edge-manifold and oriented. Returns the number of points inserted.
+std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                                 const std::vector<std::uint8_t>& usable, const std::vector<double>& radius_of, const KdTree& tree,
+                                 Selection& sel) {
+  const std::size_t n = positions.size();
+  std::size_t inserted = 0;
+  std::vector<std::uint8_t> used(n), taken;
+  std::vector<std::uint32_t> unused, offset(n + 1), around;
+  std::vector<Neighbor> neighbors;
+  std::vector<Triangle> next_triangles;
+  for (int round = 0; round < kInsertRounds; ++round) {
+    std::fill(used.begin(), used.end(), std::uint8_t{0});
+    for (const Triangle& t : sel.triangles)
+      for (int c = 0; c < 3; ++c) used[std::size_t(t[c])] = 1;
+    unused.clear();
+    for (std::uint32_t i = 0; i < n; ++i)
+      if (usable[i] && !used[i]) unused.push_back(i);
+    if (unused.empty() || sel.triangles.empty()) break;
+    const std::size_t f = sel.triangles.size();
+    std::fill(offset.begin(), offset.end(), 0u);
+    for (const Triangle& t : sel.triangles)
+      for (int c = 0; c < 3; ++c) ++offset[std::size_t(t[c]) + 1];
+    for (std::size_t v = 0; v < n; ++v) offset[v + 1] += offset[v];
+    around.resize(3 * f);
+    {
+      std::vector<std::uint32_t> cursor(offset.begin(), offset.end() - 1);
+      for (std::size_t t = 0; t < f; ++t)
+        for (int c = 0; c < 3; ++c) around[cursor[std::size_t(sel.triangles[t][c])]++] = static_cast<std::uint32_t>(t);
+    }
+    taken.assign(f, 0);
+    next_triangles.clear();
+    const auto corner = [&](std::uint32_t t, int c) { return std::uint32_t(sel.triangles[t][c]); };
+    const auto faces = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vector3d& n_p) {
+      const Vector3d face = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+      return face.dot(n_p) > 0.0 && face.dot(normals[a] + normals[b] + normals[c]) > 0.0;
+    };
+    std::size_t placed = 0;
+    for (const std::uint32_t p : unused) {
+      const Vector3d& x = positions[p];
+      const Vector3d& n_p = normals[p];
+      tree.knn(x, kInsertNeighbours, neighbors);
+      // Best triangle: smallest distance to its plane among those the point projects into.
+      std::uint32_t best = kNone;
+      double best_height = radius_of[p];
+      for (const Neighbor& nb : neighbors)
+        for (std::uint32_t i = offset[nb.index]; i < offset[nb.index + 1]; ++i) {
+          const std::uint32_t t = around[i];
+          if (taken[t]) continue;
+          const Vector3d &a = positions[corner(t, 0)], &b = positions[corner(t, 1)], &c = positions[corner(t, 2)];
+          const Vector3d face = (b - a).cross(c - a);
+          const double twice_area = face.norm();
+          if (!(twice_area > 0.0)) continue;
+          const Vector3d unit = face / twice_area;
+          if (!(unit.dot(n_p) > 0.0)) continue;
+          const double height = std::abs((x - a).dot(unit));
+          if (!(height < best_height)) continue;
+          const bool inside = (b - a).cross(x - a).dot(unit) >= 0.0 && (c - b).cross(x - b).dot(unit) >= 0.0 &&
+                              (a - c).cross(x - c).dot(unit) >= 0.0;
+          if (!inside) continue;
+          best = t;
+          best_height = height;
+        }
+      if (best != kNone) {
+        const std::uint32_t a = corner(best, 0), b = corner(best, 1), c = corner(best, 2);
+        if (faces(a, b, p, n_p) && faces(b, c, p, n_p) && faces(c, a, p, n_p)) {
+          taken[best] = 1;
+          next_triangles.insert(next_triangles.end(), {Triangle(int(a), int(b), int(p)), Triangle(int(b), int(c), int(p)),
+                                                       Triangle(int(c), int(a), int(p))});
+          ++placed;
+          continue;
+        }
+      }
+      // Otherwise the nearest interior edge a -> b whose span the point projects into.
+      std::uint32_t t1 = kNone, t2 = kNone, ea = kNone, eb = kNone;
+      double best_distance = radius_of[p];
+      for (const Neighbor& nb : neighbors)
+        for (std::uint32_t i = offset[nb.index]; i < offset[nb.index + 1]; ++i) {
+          const std::uint32_t t = around[i];
+          if (taken[t]) continue;
+          for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = corner(t, e), b = corner(t, (e + 1) % 3);
+            const std::uint32_t twin = sel.edges.find(b, a);
+            if (twin == kNone || taken[twin]) continue;
+            const Vector3d ab = positions[b] - positions[a];
+            const double along = (x - positions[a]).dot(ab) / ab.squaredNorm();
+            if (!(along > 0.0 && along < 1.0)) continue;
+            const double distance = (x - positions[a] - along * ab).norm();
+            if (!(distance < best_distance)) continue;
+            best_distance = distance;
+            t1 = t;
+            t2 = twin;
+            ea = a;
+            eb = b;
+          }
+        }
+      if (t1 == kNone) continue;
+      const std::uint32_t c = corner(t1, 0) != ea && corner(t1, 0) != eb ? corner(t1, 0)
+                              : corner(t1, 1) != ea && corner(t1, 1) != eb ? corner(t1, 1) : corner(t1, 2);
+      const std::uint32_t d = corner(t2, 0) != ea && corner(t2, 0) != eb ? corner(t2, 0)
+                              : corner(t2, 1) != ea && corner(t2, 1) != eb ? corner(t2, 1) : corner(t2, 2);
+      if (!(faces(ea, p, c, n_p) && faces(p, eb, c, n_p) && faces(eb, p, d, n_p) && faces(p, ea, d, n_p))) continue;
+      taken[t1] = taken[t2] = 1;
+      next_triangles.insert(next_triangles.end(), {Triangle(int(ea), int(p), int(c)), Triangle(int(p), int(eb), int(c)),
+                                                   Triangle(int(eb), int(p), int(d)), Triangle(int(p), int(ea), int(d))});
+      ++placed;
+    }
+    if (placed == 0) break;
+    inserted += placed;
+    Selection kept(f + next_triangles.size());
+    const auto add = [&](const Triangle& t) {
+      const auto a = std::uint32_t(t[0]), b = std::uint32_t(t[1]), c = std::uint32_t(t[2]);
+      kept.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+    };
+    for (std::size_t t = 0; t < f; ++t)
+      if (!taken[t]) add(sel.triangles[t]);
+    for (const Triangle& t : next_triangles) add(t);
+    sel = std::move(kept);
+  }
+  return inserted;
+}
+
 }  // namespace
 
 TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
@@ -832,6 +962,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
       if (removed == 0) break;
     }
   }
+  result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
 
   result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
   result.topology = analyze_topology(result.mesh);

@@ -41,6 +41,8 @@ struct TriangulateResult : ReconstructionResult {
   std::size_t front_triangles = 0;       // triangles added where the front turned sharply
   std::size_t holes_filled = 0;          // small holes closed by the final pass
   std::size_t pinch_triangles_removed = 0;  // triangles removed where fans touched at a vertex
+  std::size_t inserted_points = 0;       // unused points inserted at the end into the triangle
+                                         // or edge they project onto
   std::size_t fill_triangles = 0;        // triangles added to close them
 };
 
