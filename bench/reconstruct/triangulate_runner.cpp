@@ -2,6 +2,7 @@
 // Stage runner for bench/reconstruct/run_triangulate_bench.sh.
 //   triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...]        the cloud's own oriented normals
 //   triangulate_runner shape NAME N OUT.ply SEED [KEY=VALUE...]    sphere, torus, cube, plane; exact normals
+//                                                                  (NAME_estimated: PCA normals, k = 15, oriented)
 // Runs reconstruct_region_growing (default parameters unless a TriangulateParams field is set as
 // KEY=VALUE) and writes the mesh ("-": not written). Prints one JSON
 // line: seconds (whole reconstruction, file reading excluded), peak_rss_mb (whole process), the
@@ -20,6 +21,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
+#include "pointsurf/normals/normals.h"
 #include "pointsurf/reconstruct/triangulate.h"
 
 namespace {
@@ -165,8 +167,22 @@ int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
     if (mode == "run" && argc >= 4) return run(read_point_cloud(argv[2]).cloud, argv[3], parse_params(argc, argv, 4));
-    if (mode == "shape" && argc >= 6)
-      return run(sample(argv[2], std::stoul(argv[3]), std::stoull(argv[5])), argv[4], parse_params(argc, argv, 6));
+    if (mode == "shape" && argc >= 6) {
+      // A NAME ending in "_estimated" replaces the exact normals by PCA normals (k = 15), oriented.
+      std::string name = argv[2];
+      const std::string suffix = "_estimated";
+      const bool estimated = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+      if (estimated) name.resize(name.size() - suffix.size());
+      PointCloud cloud = sample(name, std::stoul(argv[3]), std::stoull(argv[5]));
+      if (estimated) {
+        cloud.normals.clear();
+        NormalParams normal_params;
+        normal_params.k = 15;
+        estimate_normals(cloud, normal_params);
+        orient_normals(cloud);
+      }
+      return run(cloud, argv[4], parse_params(argc, argv, 6));
+    }
     fmt::print(stderr, "usage: triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...] | "
                        "shape sphere|torus|cube|plane N OUT.ply SEED [KEY=VALUE...]\n");
     return 1;

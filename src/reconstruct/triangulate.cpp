@@ -39,13 +39,15 @@ constexpr std::size_t kSpacingAveraged = 3;
 constexpr std::size_t kMaxHoleCorners = 64;
 // Rounds of opening pinched vertices and filling the holes again.
 constexpr int kRepairRounds = 3;
+// Longest fan walked around a vertex.
+constexpr int kMaxFanWalk = 64;
 // Unused points are inserted in this many rounds (one per triangle and round), each looking at
 // the triangles of this many nearest points.
 constexpr int kInsertRounds = 3;
 constexpr std::size_t kInsertNeighbours = 8;
 // Holes that the repair opened around a small unfillable one are closed up to this many times
 // max_hole_perimeter_in_spacings.
-constexpr double kRepairedPerimeterFactor = 2.0;
+constexpr double kRepairedPerimeterFactor = 3.0;
 // Neighbours whose normal agrees with the centre's may lie this many local spacings off its
 // tangent plane (plus what the turn of the normals explains).
 constexpr double kFlatOffsetInSpacings = 0.5;
@@ -265,6 +267,51 @@ struct Selection {
     edges.insert(c, a, t);
   }
 };
+
+// Counter-clockwise angle from direction a to direction b around the unit normal n, in [0, 2 pi).
+double ccw_angle(const Vector3d& a, const Vector3d& b, const Vector3d& n) {
+  double angle = std::atan2(n.dot(a.cross(b)), a.dot(b) - a.dot(n) * b.dot(n));
+  if (angle < 0.0) angle += 2.0 * std::numbers::pi;
+  return angle;
+}
+
+// Whether a new triangle with corner v (next x, previous y, counter-clockwise) fits into the
+// gap of v's fan instead of overlapping it: walking the fan from the shared edge v-x (or v-y)
+// to its other end z, y (or x) must come before z, seen around v's normal. A corner with no
+// shared edge, or whose fan the triangle closes, fits.
+bool fits_gap(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals, const Selection& sel, std::uint32_t v,
+              std::uint32_t x, std::uint32_t y) {
+  const Vector3d& n = normals[v];
+  const auto dir = [&](std::uint32_t w) { return Vector3d(positions[w] - positions[v]); };
+  const auto corner_next = [&](std::uint32_t t) {
+    const Triangle& tri = sel.triangles[t];
+    const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
+    return std::array<std::uint32_t, 2>{std::uint32_t(tri[(c + 1) % 3]), std::uint32_t(tri[(c + 2) % 3])};
+  };
+  if (sel.edges.contains(x, v)) {
+    // The fan runs clockwise from x: triangles (z, v, w) with w clockwise of z.
+    std::uint32_t z = x;
+    for (int step = 0; step < kMaxFanWalk; ++step) {
+      const std::uint32_t t = sel.edges.find(z, v);
+      if (t == kNone) break;
+      z = corner_next(t)[0];
+      if (z == y) return true;
+    }
+    return ccw_angle(dir(x), dir(y), n) < ccw_angle(dir(x), dir(z), n);
+  }
+  if (sel.edges.contains(v, y)) {
+    // The fan runs counter-clockwise from y.
+    std::uint32_t z = y;
+    for (int step = 0; step < kMaxFanWalk; ++step) {
+      const std::uint32_t t = sel.edges.find(v, z);
+      if (t == kNone) break;
+      z = corner_next(t)[1];
+      if (z == x) return true;
+    }
+    return ccw_angle(dir(x), dir(y), n) < ccw_angle(dir(z), dir(y), n);
+  }
+  return true;
+}
 
 // Closes the front where it turns sharply: at a boundary vertex v between boundary edges
 // u -> v -> w whose opening angle on the hole side (in v's tangent plane) is below
@@ -906,6 +953,8 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
       if (mode == 1 && twin[std::size_t((c + 2) % 3)] == kNone && twin[std::size_t(c)] == kNone) return false;
     }
     if (mode == 2 && twin[0] == kNone && twin[1] == kNone && twin[2] == kNone) return false;
+    for (int c = 0; c < 3; ++c)
+      if (in_mesh[v[c]] && !fits_gap(cloud.positions, normals, sel, v[c], v[(c + 1) % 3], v[(c + 2) % 3])) return false;
     const Vector3d face =
         (cloud.positions[v[1]] - cloud.positions[v[0]]).cross(cloud.positions[v[2]] - cloud.positions[v[0]]).normalized();
     for (std::uint32_t t : twin)

@@ -29,7 +29,7 @@ struct TriangulateParams {
   double max_front_angle_deg = 150.0;  // after growing, boundary corners opening less than this
                                        // (hole side) are closed by a triangle, sharpest first,
                                        // when the new edge is within the radius; 0: none, [0, 180)
-  double max_hole_perimeter_in_spacings = 15.0;  // holes whose perimeter is at most this many
+  double max_hole_perimeter_in_spacings = 20.0;  // holes whose perimeter is at most this many
                                        // local spacings are closed at the end; 0: none closed
 };
 
