@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <set>
 #include <vector>
@@ -124,6 +125,30 @@ TEST(RegionGrowing, OpenPatchHasOneBoundaryLoop) {
     const Vector3d &a = r.mesh.vertices[tri[0]], &b = r.mesh.vertices[tri[1]], &c = r.mesh.vertices[tri[2]];
     ASSERT_GT((b - a).cross(c - a).z(), 0.0);  // facing the normals (+z)
   }
+}
+
+// A sphere with its cap above z = 0.8 cut away: a real hole (rim radius 0.6, circumference
+// 3.77), far larger than the holes the final pass closes, so it stays open and is reported as
+// the one boundary loop; elsewhere the surface is closed (a disc: Euler characteristic 1).
+TEST(RegionGrowing, CutAwayCapIsReportedAsOneHole) {
+  const PointCloud sphere = test::sample_sphere(4000, 1.0);
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < sphere.size(); ++i)
+    if (sphere.positions[i].z() <= 0.8) kept.push_back(i);
+  const PointCloud cloud = sphere.select(kept);
+  const TriangulateResult r = reconstruct_region_growing(cloud);
+  const MeshTopology& t = r.topology;
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.non_manifold_vertices, 0u);
+  EXPECT_EQ(t.inconsistent_edges, 0u);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.euler_characteristic, 1);
+  ASSERT_EQ(t.boundary_loops.size(), 1u);
+  const double rim = 2.0 * std::numbers::pi * 0.6;
+  // The loop zigzags through the samples just below z = 0.8: measured 1.09 x the circumference.
+  EXPECT_GT(t.boundary_loops[0].length, 0.95 * rim);
+  EXPECT_LT(t.boundary_loops[0].length, 1.3 * rim);
+  for (int v : t.boundary_loops[0].vertices) EXPECT_GT(r.mesh.vertices[std::size_t(v)].z(), 0.6);
 }
 
 // Two parallel sheets three mean spacings apart, facing the same way (a floor under a table)
