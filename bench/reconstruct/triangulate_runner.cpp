@@ -10,6 +10,7 @@
 // spacings, centroid), longest first, at most 20.
 #include <sys/resource.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -118,8 +119,18 @@ TriangulateParams parse_params(int argc, char** argv, int first) {
 }
 
 int run(const PointCloud& cloud, const std::string& out_path, const TriangulateParams& params) {
+  // Stage ends from the progress fractions: 0.1 spacing, 0.7 umbrellas, 0.8 merging the
+  // candidates, 0.9 growing, 1.0 closing holes and topology.
+  const std::array<double, 5> marks{0.1, 0.7, 0.8, 0.9, 1.0};
+  std::array<double, 5> stage_end{};
+  std::size_t next_mark = 0;
   const Clock::time_point start = Clock::now();
-  const TriangulateResult result = reconstruct_region_growing(cloud, params);
+  const auto progress = [&](double fraction) {
+    while (next_mark < marks.size() && fraction >= marks[next_mark] - 1e-12)
+      stage_end[next_mark++] = std::chrono::duration<double>(Clock::now() - start).count();
+    return true;
+  };
+  const TriangulateResult result = reconstruct_region_growing(cloud, params, nullptr, progress);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   const double rss = peak_rss_mb();
   if (!out_path.empty() && out_path != "-") write_mesh(out_path, result.mesh);
@@ -129,6 +140,11 @@ int run(const PointCloud& cloud, const std::string& out_path, const TriangulateP
   out["points"] = cloud.size();
   out["seconds"] = seconds;
   out["peak_rss_mb"] = rss;
+  out["stage_seconds"] = {{"tree_and_spacing", stage_end[0]},
+                          {"umbrellas", stage_end[1] - stage_end[0]},
+                          {"merge_candidates", stage_end[2] - stage_end[1]},
+                          {"grow", stage_end[3] - stage_end[2]},
+                          {"close_holes", stage_end[4] - stage_end[3]}};
   out["mean_spacing"] = result.mean_spacing;
   out["candidate_triangles"] = result.candidate_triangles;
   out["selected_triangles"] = result.selected_triangles;
