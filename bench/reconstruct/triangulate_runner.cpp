@@ -2,7 +2,8 @@
 // Stage runner for bench/reconstruct/run_triangulate_bench.sh.
 //   triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...]        the cloud's own oriented normals
 //   triangulate_runner shape NAME N OUT.ply SEED [KEY=VALUE...]    sphere, torus, cube, plane; exact normals
-//                                                                  (NAME_estimated: PCA normals, k = 15, oriented)
+//                                                                  (NAME_estimated: PCA normals, k = 15, oriented;
+//                                                                  a first KEY noise=S: Gaussian noise of S mean spacings)
 // Runs reconstruct_region_growing (default parameters unless a TriangulateParams field is set as
 // KEY=VALUE) and writes the mesh ("-": not written). Prints one JSON
 // line: seconds (whole reconstruction, file reading excluded), peak_rss_mb (whole process), the
@@ -190,6 +191,19 @@ int main(int argc, char** argv) {
       const bool estimated = name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
       if (estimated) name.resize(name.size() - suffix.size());
       PointCloud cloud = sample(name, std::stoul(argv[3]), std::stoull(argv[5]));
+      // A first extra argument noise=S adds Gaussian noise of S mean spacings (seeded) to the
+      // positions, normals kept.
+      int first_param = 6;
+      if (argc > 6 && std::string(argv[6]).rfind("noise=", 0) == 0) {
+        const double sigma = std::stod(std::string(argv[6]).substr(6)) * mean_spacing(cloud.positions);
+        std::mt19937_64 rng(std::stoull(argv[5]) + 1000);
+        std::normal_distribution<double> gauss(0.0, sigma);
+        for (Vector3d& p : cloud.positions) {
+          const double x = gauss(rng), y = gauss(rng), z = gauss(rng);
+          p += Vector3d(x, y, z);
+        }
+        first_param = 7;
+      }
       if (estimated) {
         cloud.normals.clear();
         NormalParams normal_params;
@@ -197,7 +211,7 @@ int main(int argc, char** argv) {
         estimate_normals(cloud, normal_params);
         orient_normals(cloud);
       }
-      return run(cloud, argv[4], parse_params(argc, argv, 6));
+      return run(cloud, argv[4], parse_params(argc, argv, first_param));
     }
     fmt::print(stderr, "usage: triangulate_runner run CLOUD.ply OUT.ply [KEY=VALUE...] | "
                        "shape sphere|torus|cube|plane N OUT.ply SEED [KEY=VALUE...]\n");
