@@ -100,8 +100,7 @@ TEST(RegionGrowing, TorusHasGenusOne) {
 
 // Gaussian noise of 0.1 mean spacings on the positions (normals exact): still closed with the
 // right genus (measured with triangulate_runner: also at 0.2 mean spacings for sphere, torus
-// and cube; at 0.3 a small
-// extra piece or hole appears).
+// and cube; at 0.3 a small extra piece or hole appears).
 TEST(RegionGrowing, SmallNoiseStaysClosed) {
   PointCloud sphere = test::sample_sphere(4000, 1.0);
   test::add_noise(sphere, 0.1 * mean_spacing(sphere.positions));
