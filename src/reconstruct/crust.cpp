@@ -14,6 +14,7 @@
 #include <numeric>
 #include <utility>
 #include <vector>
+#include <Eigen/Geometry>
 
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Delaunay_triangulation_cell_base_3.h>

@@ -37,6 +37,23 @@ constexpr std::size_t kSpacingNeighbours = 8;
 constexpr std::size_t kSpacingAveraged = 3;
 // Holes with more corners than this are left open (ear clipping is cubic in the corner count).
 constexpr std::size_t kMaxHoleCorners = 64;
+// Rounds of opening pinched vertices and filling the holes again.
+constexpr int kRepairRounds = 3;
+// Longest fan walked around a vertex.
+constexpr int kMaxFanWalk = 64;
+// Unused points are inserted in this many rounds (one per triangle and round), each looking at
+// the triangles of this many nearest points.
+constexpr int kInsertRounds = 3;
+constexpr std::size_t kInsertNeighbours = 8;
+// Holes that the repair opened around a small unfillable one are closed up to this many times
+// max_hole_perimeter_in_spacings.
+constexpr double kRepairedPerimeterFactor = 3.0;
+// Neighbours whose normal agrees with the centre's may lie this many local spacings off its
+// tangent plane (plus what the turn of the normals explains).
+constexpr double kFlatOffsetInSpacings = 0.5;
+// A triangle closing a hole may deviate at most this far from each corner's normal.
+constexpr double kFillMaxDeviationDeg = 120.0;
+const double kFillMinCos = std::cos(kFillMaxDeviationDeg * std::numbers::pi / 180.0);
 
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
@@ -144,7 +161,15 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
     const Vector3d d = s.cloud.positions[j] - p;
     const double height = d.dot(n);
     if (std::abs(height) > max_offset) continue;
-    if (s.normals[j].dot(n) < min_normal_dot) continue;
+    const double normal_dot = s.normals[j].dot(n);
+    if (normal_dot < min_normal_dot) continue;
+    // A neighbour whose normal agrees with p's lies on the same smooth sheet only if it is near
+    // p's tangent plane: on a curve of radius R a neighbour at distance d sits d^2 / 2R off the
+    // plane while its normal turns by d / R, so the offset allowed grows with the sine of the
+    // normals' angle (a sharp edge allows the whole max_offset). This keeps a parallel sheet a
+    // few spacings away (a floor under a table) out of the umbrella.
+    const double sine = s.normals[j].cross(n).norm();
+    if (std::abs(height) > std::max(kFlatOffsetInSpacings * s.local_spacing[i], std::sqrt(nb.squared_distance) * sine)) continue;
     const Vector3d tangent = d - height * n;
     const double tangent_length = tangent.norm(), distance = std::sqrt(nb.squared_distance);
     if (!(tangent_length > 1e-9 * distance) || !(distance > 0.0)) continue;
@@ -243,6 +268,51 @@ struct Selection {
   }
 };
 
+// Counter-clockwise angle from direction a to direction b around the unit normal n, in [0, 2 pi).
+double ccw_angle(const Vector3d& a, const Vector3d& b, const Vector3d& n) {
+  double angle = std::atan2(n.dot(a.cross(b)), a.dot(b) - a.dot(n) * b.dot(n));
+  if (angle < 0.0) angle += 2.0 * std::numbers::pi;
+  return angle;
+}
+
+// Whether a new triangle with corner v (next x, previous y, counter-clockwise) fits into the
+// gap of v's fan instead of overlapping it: walking the fan from the shared edge v-x (or v-y)
+// to its other end z, y (or x) must come before z, seen around v's normal. A corner with no
+// shared edge, or whose fan the triangle closes, fits.
+bool fits_gap(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals, const Selection& sel, std::uint32_t v,
+              std::uint32_t x, std::uint32_t y) {
+  const Vector3d& n = normals[v];
+  const auto dir = [&](std::uint32_t w) { return Vector3d(positions[w] - positions[v]); };
+  const auto corner_next = [&](std::uint32_t t) {
+    const Triangle& tri = sel.triangles[t];
+    const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
+    return std::array<std::uint32_t, 2>{std::uint32_t(tri[(c + 1) % 3]), std::uint32_t(tri[(c + 2) % 3])};
+  };
+  if (sel.edges.contains(x, v)) {
+    // The fan runs clockwise from x: triangles (z, v, w) with w clockwise of z.
+    std::uint32_t z = x;
+    for (int step = 0; step < kMaxFanWalk; ++step) {
+      const std::uint32_t t = sel.edges.find(z, v);
+      if (t == kNone) break;
+      z = corner_next(t)[0];
+      if (z == y) return true;
+    }
+    return ccw_angle(dir(x), dir(y), n) < ccw_angle(dir(x), dir(z), n);
+  }
+  if (sel.edges.contains(v, y)) {
+    // The fan runs counter-clockwise from y.
+    std::uint32_t z = y;
+    for (int step = 0; step < kMaxFanWalk; ++step) {
+      const std::uint32_t t = sel.edges.find(v, z);
+      if (t == kNone) break;
+      z = corner_next(t)[1];
+      if (z == x) return true;
+    }
+    return ccw_angle(dir(x), dir(y), n) < ccw_angle(dir(z), dir(y), n);
+  }
+  return true;
+}
+
 // Closes the front where it turns sharply: at a boundary vertex v between boundary edges
 // u -> v -> w whose opening angle on the hole side (in v's tangent plane) is below
 // `max_angle_deg`, adds the triangle (v, u, w), smallest angle first, while the new edge u-w is
@@ -326,125 +396,425 @@ std::size_t close_front(const PointCloud& cloud, const std::vector<Vector3d>& no
   return added;
 }
 
-// Closes the holes whose perimeter is at most `max_perimeter_in_spacings` local spacings by ear
-// clipping in their best-fit plane. Returns the number of holes closed.
-std::size_t fill_small_holes(const PointCloud& cloud, const std::vector<double>& local_spacing, double max_perimeter_in_spacings,
-                             Selection& sel, std::size_t& added) {
-  const std::size_t n = cloud.size();
+// Fills one simple hole loop (hole half-edges loop[i] -> loop[i+1], the hole on their left
+// seen from the normals' side) by dynamic programming over its sub-chains (Barequet and Sharir
+// 1995; Liepa 2003): among the triangulations whose new edges are in the mesh in neither
+// direction and whose triangles face the way their corners' normals do, the one with
+// the smallest worst normal deviation, then the smallest area. O(m^3) for m corners; the
+// buffers are reused from loop to loop.
+class LoopFiller {
+public:
+  bool fill(const std::vector<std::uint32_t>& loop, const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+            Selection& sel) {
+    const std::size_t m = loop.size();
+    if (m < 3) return false;
+    const auto at = [m](std::size_t i, std::size_t j) { return i * m + j; };
+    diagonal_ok_.assign(m * m, 0);
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = i + 1; j < m; ++j) {
+        const bool side = j == i + 1 || (i == 0 && j == m - 1);
+        diagonal_ok_[at(i, j)] =
+            static_cast<std::uint8_t>(side || (!sel.edges.contains(loop[i], loop[j]) && !sel.edges.contains(loop[j], loop[i])));
+      }
+    cost_.assign(m * m, Cost{INFINITY, INFINITY});
+    split_.assign(m * m, 0);
+    for (std::size_t i = 0; i + 1 < m; ++i) cost_[at(i, i + 1)] = Cost{0.0, 0.0};
+    for (std::size_t length = 2; length < m; ++length)
+      for (std::size_t i = 0; i + length < m; ++i) {
+        const std::size_t j = i + length;
+        if (!diagonal_ok_[at(i, j)]) continue;
+        Cost best{INFINITY, INFINITY};
+        for (std::size_t k = i + 1; k < j; ++k) {
+          const Cost &left = cost_[at(i, k)], &right = cost_[at(k, j)];
+          if (!std::isfinite(left.worst) || !std::isfinite(right.worst)) continue;
+          const Cost tri = triangle_cost(positions, normals, loop[i], loop[k], loop[j]);
+          if (!std::isfinite(tri.worst)) continue;
+          const Cost total{std::max({left.worst, right.worst, tri.worst}), left.area + right.area + tri.area};
+          if (better(total, best)) {
+            best = total;
+            split_[at(i, j)] = static_cast<std::uint32_t>(k);
+          }
+        }
+        cost_[at(i, j)] = best;
+      }
+    if (!std::isfinite(cost_[at(0, m - 1)].worst)) return false;
+    stack_.assign(1, {0, static_cast<std::uint32_t>(m - 1)});
+    while (!stack_.empty()) {
+      const auto [i, j] = stack_.back();
+      stack_.pop_back();
+      if (j - i < 2) continue;
+      const std::uint32_t k = split_[at(i, j)];
+      const std::uint32_t a = loop[i], b = loop[k], c = loop[j];
+      sel.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+      stack_.push_back({i, k});
+      stack_.push_back({k, j});
+    }
+    return true;
+  }
+
+private:
+  struct Cost {
+    double worst;  // largest 1 - cos(angle) between a triangle's normal and a corner's normal
+    double area;
+  };
+  static bool better(const Cost& x, const Cost& y) {
+    // Deviations within 1e-3 (about 2.5 degrees near 0) count as equal: then the area decides.
+    if (std::abs(x.worst - y.worst) > 1e-3) return x.worst < y.worst;
+    return x.area < y.area;
+  }
+  static Cost triangle_cost(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals, std::uint32_t a,
+                            std::uint32_t b, std::uint32_t c) {
+    const Vector3d face = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+    const double twice_area = face.norm();
+    const double scale = (positions[b] - positions[a]).squaredNorm() + (positions[c] - positions[a]).squaredNorm();
+    if (!(twice_area > 1e-12 * scale)) return Cost{INFINITY, INFINITY};
+    const Vector3d unit = face / twice_area;
+    // Across a sharp edge a corner's normal may stand at up to 90 degrees from the triangle
+    // (more where the normals were estimated): the corners only have to agree with it on
+    // average, each within kFillMaxDeviationDeg.
+    double worst = 0.0;
+    if (!(unit.dot(normals[a] + normals[b] + normals[c]) > 0.0)) return Cost{INFINITY, INFINITY};
+    for (std::uint32_t v : {a, b, c}) {
+      const double cosine = unit.dot(normals[v]);
+      if (!(cosine > kFillMinCos)) return Cost{INFINITY, INFINITY};
+      worst = std::max(worst, 1.0 - cosine);
+    }
+    return Cost{worst, 0.5 * twice_area};
+  }
+
+  std::vector<Cost> cost_;
+  std::vector<std::uint32_t> split_;
+  std::vector<std::uint8_t> diagonal_ok_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack_;
+};
+
+// Closes the holes with at most kMaxHoleCorners corners whose perimeter is at most
+// `max_perimeter_in_spacings` local spacings (LoopFiller). Returns the number of holes closed
+// and adds the triangles it made to `added`; flags the corners of the small holes it could not
+// close in `reopen`.
+std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                             const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
+                             LoopFiller& filler, const std::vector<std::uint8_t>& repaired, std::vector<std::uint8_t>& reopen,
+                             std::size_t& added) {
+  const std::size_t n = positions.size();
+  // Triangles per edge-connected piece (union-find), to tell the rim of a tiny isolated piece
+  // from a hole.
+  const std::size_t triangle_total = sel.triangles.size();
+  std::vector<std::uint32_t> parent(triangle_total), piece_size(triangle_total, 0);
+  for (std::size_t t = 0; t < triangle_total; ++t) parent[t] = static_cast<std::uint32_t>(t);
+  const auto root = [&](std::uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  for (std::size_t t = 0; t < triangle_total; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t twin = sel.edges.find(std::uint32_t(sel.triangles[t][(c + 1) % 3]), std::uint32_t(sel.triangles[t][c]));
+      if (twin != kNone) parent[root(twin)] = root(static_cast<std::uint32_t>(t));
+    }
+  for (std::size_t t = 0; t < triangle_total; ++t) ++piece_size[root(static_cast<std::uint32_t>(t))];
   // Hole half-edges run opposite to the boundary edges of the mesh: y -> x for an edge x -> y
-  // without twin. The filling triangles use them in that direction.
-  // Up to two hole edges leave a vertex (two at a pinch, where two fans touch); more are
-  // left alone.
-  std::vector<std::array<std::uint32_t, 2>> hole_out(n, {kNone, kNone});
+  // without twin. The filling triangles use them in that direction. Up to three hole edges
+  // leave a vertex (more than one at a pinch, where fans touch); more are left alone.
+  constexpr std::size_t kSlots = 3;
+  std::vector<std::array<std::uint32_t, kSlots>> hole_out(n, {kNone, kNone, kNone});
   const std::size_t triangle_count = sel.triangles.size();
   for (std::size_t t = 0; t < triangle_count; ++t) {
     for (int c = 0; c < 3; ++c) {
       const auto x = static_cast<std::uint32_t>(sel.triangles[t][c]), y = static_cast<std::uint32_t>(sel.triangles[t][(c + 1) % 3]);
       if (sel.edges.contains(y, x)) continue;
-      std::array<std::uint32_t, 2>& slots = hole_out[y];
-      if (slots[0] == kNone) slots[0] = x;
-      else if (slots[1] == kNone) slots[1] = x;
+      for (std::uint32_t& slot : hole_out[y])
+        if (slot == kNone) {
+          slot = x;
+          break;
+        }
     }
   }
   // Interior angle of the hole at v between the edges p -> v and v -> w, in v's tangent plane:
-  // at a pinch the walk takes the tighter turn, which keeps each loop small and simple.
+  // at a pinch the walk takes the tightest turn, which pairs each incoming hole edge with the
+  // outgoing one across the same gap between fans.
   const auto turn = [&](std::uint32_t p, std::uint32_t v, std::uint32_t w) {
-    const Vector3d nv = cloud.normals[v].norm() > 0.0 ? Vector3d(cloud.normals[v].normalized()) : Vector3d::UnitZ();
+    const Vector3d& nv = normals[v];
     const Vector3d e1 = nv.unitOrthogonal(), e2 = nv.cross(e1);
-    const Vector3d a3 = cloud.positions[w] - cloud.positions[v], b3 = cloud.positions[p] - cloud.positions[v];
+    const Vector3d a3 = positions[w] - positions[v], b3 = positions[p] - positions[v];
     const Vector2d a(a3.dot(e1), a3.dot(e2)), b(b3.dot(e1), b3.dot(e2));
     double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
     if (angle < 0.0) angle += 2.0 * std::numbers::pi;
     return angle;
   };
-  std::vector<std::uint8_t> in_loop(n, 0);
-  std::vector<std::uint32_t> loop;
-  std::vector<Vector2d> flat;
-  std::vector<std::size_t> alive;
+  // The walk follows hole edges as a path; whenever it reaches a vertex already on the path,
+  // the part from there on is a simple closed loop, which is filled (when small) and cut off.
+  std::vector<std::uint32_t> position(n, kNone);
+  std::vector<std::uint32_t> path, cycle;
   std::size_t filled = 0;
-  for (std::size_t start = 0; start < n; ++start) while (hole_out[start][0] != kNone) {
-    // Walk one loop, consuming its hole edges; give up when it revisits a vertex or grows too
-    // long.
-    loop.clear();
-    bool simple = false;
-    double perimeter = 0.0, spacing_sum = 0.0;
-    std::uint32_t v = static_cast<std::uint32_t>(start), from = kNone;
-    while (loop.size() <= kMaxHoleCorners) {
-      std::array<std::uint32_t, 2>& slots = hole_out[v];
-      int pick = slots[0] != kNone ? 0 : 1;
-      if (slots[0] != kNone && slots[1] != kNone && from != kNone && turn(from, v, slots[1]) < turn(from, v, slots[0])) pick = 1;
-      const std::uint32_t w = slots[std::size_t(pick)];
-      if (w == kNone) break;
-      slots[std::size_t(pick)] = kNone;
-      if (pick == 0) std::swap(slots[0], slots[1]);
-      loop.push_back(v);
-      in_loop[v] = 1;
-      perimeter += (cloud.positions[w] - cloud.positions[v]).norm();
-      spacing_sum += local_spacing[v];
-      if (w == start) { simple = loop.size() >= 3; break; }
-      if (in_loop[w]) break;
-      from = v;
-      v = w;
-    }
-    for (std::uint32_t x : loop) in_loop[x] = 0;
-    if (!simple || loop.size() > kMaxHoleCorners) continue;
-    if (perimeter > max_perimeter_in_spacings * spacing_sum / double(loop.size())) continue;
-
-    // Best-fit plane: Newell's normal of the loop in its fill orientation, around a local origin.
-    const Vector3d origin = cloud.positions[loop[0]];
-    Vector3d normal = Vector3d::Zero();
-    for (std::size_t i = 0; i < loop.size(); ++i)
-      normal += (cloud.positions[loop[i]] - origin).cross(cloud.positions[loop[(i + 1) % loop.size()]] - origin);
-    if (!(normal.norm() > 0.0)) continue;
-    normal.normalize();
-    // The hole must face the way its points do; otherwise the loop is the rim of a small
-    // piece, and closing it would glue a back face onto that piece.
-    Vector3d facing = Vector3d::Zero();
-    for (std::uint32_t w : loop) facing += cloud.normals[w];
-    if (!(normal.dot(facing) > 0.0)) continue;
-    const Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
-    flat.clear();
-    for (std::uint32_t w : loop) {
-      const Vector3d d = cloud.positions[w] - origin;
-      flat.emplace_back(d.dot(e1), d.dot(e2));
-    }
-    alive.resize(loop.size());
-    for (std::size_t i = 0; i < loop.size(); ++i) alive[i] = i;
-    const auto cross2 = [](const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); };
-    const std::size_t before = sel.triangles.size();
-    while (alive.size() >= 3) {
-      const std::size_t m = alive.size();
-      std::size_t best = m;
-      double best_angle = -1.0;
-      for (std::size_t i = 0; i < m; ++i) {
-        const std::size_t ia = alive[(i + m - 1) % m], ib = alive[i], ic = alive[(i + 1) % m];
-        const Vector2d &a = flat[ia], &b = flat[ib], &c = flat[ic];
-        if (!(cross2(b - a, c - b) > 0.0)) continue;  // reflex or flat corner
-        if (!sel.free_edges(loop[ia], loop[ib], loop[ic])) continue;
-        if (m > 3 && (sel.edges.contains(loop[ic], loop[ia]) || sel.edges.contains(loop[ia], loop[ic]))) continue;
-        bool empty = true;
-        for (std::size_t o = 0; o < m && empty; ++o) {
-          const std::size_t io = alive[o];
-          if (io == ia || io == ib || io == ic) continue;
-          const Vector2d& q = flat[io];
-          empty = !(cross2(b - a, q - a) >= 0.0 && cross2(c - b, q - b) >= 0.0 && cross2(a - c, q - c) >= 0.0);
+  for (std::size_t start = 0; start < n; ++start) {
+    while (hole_out[start][0] != kNone) {
+      path.assign(1, static_cast<std::uint32_t>(start));
+      position[start] = 0;
+      while (!path.empty()) {
+        const std::uint32_t v = path.back();
+        const std::uint32_t from = path.size() >= 2 ? path[path.size() - 2] : kNone;
+        std::array<std::uint32_t, kSlots>& slots = hole_out[v];
+        std::size_t pick = kSlots;
+        double tightest = INFINITY;
+        for (std::size_t s = 0; s < kSlots; ++s) {
+          if (slots[s] == kNone) continue;
+          const double angle = from == kNone ? 0.0 : turn(from, v, slots[s]);
+          if (pick == kSlots || angle < tightest) {
+            pick = s;
+            tightest = angle;
+          }
         }
-        if (!empty) continue;
-        double smallest = 0.0, largest = 0.0;
-        if (!inner_angles(cloud.positions[loop[ia]], cloud.positions[loop[ib]], cloud.positions[loop[ic]], smallest, largest)) continue;
-        if (smallest > best_angle) { best_angle = smallest; best = i; }
+        if (pick == kSlots) break;  // dead end: the hole edges around it were left out
+        const std::uint32_t w = slots[pick];
+        for (std::size_t s = pick; s + 1 < kSlots; ++s) slots[s] = slots[s + 1];
+        slots[kSlots - 1] = kNone;
+        if (position[w] == kNone) {
+          position[w] = static_cast<std::uint32_t>(path.size());
+          path.push_back(w);
+          continue;
+        }
+        const std::size_t first = position[w];
+        cycle.assign(path.begin() + std::ptrdiff_t(first), path.end());
+        for (std::size_t i = first + 1; i < path.size(); ++i) position[path[i]] = kNone;
+        path.resize(first + 1);
+        if (first == 0 && hole_out[w][0] == kNone) path.clear();
+        if (cycle.size() < 3 || cycle.size() > kMaxHoleCorners) continue;
+        double perimeter = 0.0, spacing_sum = 0.0;
+        bool grown = false;
+        for (std::size_t i = 0; i < cycle.size(); ++i) {
+          perimeter += (positions[cycle[(i + 1) % cycle.size()]] - positions[cycle[i]]).norm();
+          spacing_sum += local_spacing[cycle[i]];
+          grown = grown || repaired[cycle[i]];
+        }
+        // A hole that the repair grew from a small one keeps being closed up to twice the limit.
+        const double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        if (perimeter > limit * spacing_sum / double(cycle.size())) continue;
+        const std::size_t before = sel.triangles.size();
+        if (filler.fill(cycle, positions, normals, sel)) ++filled;
+        else {
+          const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
+          const bool tiny_piece = beside < triangle_total && piece_size[root(beside)] <= 2 * cycle.size();
+          if (!tiny_piece)
+            for (std::uint32_t x : cycle) reopen[x] = 1;
+        }
+        added += sel.triangles.size() - before;
       }
-      if (best == m) break;
-      const std::uint32_t a = loop[alive[(best + m - 1) % m]], b = loop[alive[best]], c = loop[alive[(best + 1) % m]];
-      const Vector3d face = (cloud.positions[b] - cloud.positions[a]).cross(cloud.positions[c] - cloud.positions[a]);
-      sel.add(a, b, c, face.normalized());
-      alive.erase(alive.begin() + std::ptrdiff_t(best));
+      for (std::uint32_t x : path) position[x] = kNone;
+      position[start] = kNone;
     }
-    // An unfinished loop keeps the triangles already added: each one only shrinks the hole.
-    added += sel.triangles.size() - before;
-    if (alive.size() < 3) ++filled;
   }
   return filled;
+}
+
+// Opens what the hole filling could not close: removes the triangles with two corners flagged
+// in `reopen` (those along a small hole that had no valid filling, e.g. at a fold), so that
+// the next pass sees one larger, simpler hole; at a vertex whose triangles form more than one fan
+// (fronts that met there only), keeps the fan with the largest angle at the vertex and removes
+// the others. Clears `reopen`; returns the number of triangles removed.
+std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std::uint8_t>& reopen, std::vector<std::uint8_t>& repaired,
+                         Selection& sel) {
+  const std::size_t n = positions.size(), f = sel.triangles.size();
+  std::vector<std::uint32_t> offset(n + 1, 0), around(3 * f);
+  for (const Triangle& t : sel.triangles)
+    for (int c = 0; c < 3; ++c) ++offset[std::size_t(t[c]) + 1];
+  for (std::size_t v = 0; v < n; ++v) offset[v + 1] += offset[v];
+  {
+    std::vector<std::uint32_t> cursor(offset.begin(), offset.end() - 1);
+    for (std::size_t t = 0; t < f; ++t)
+      for (int c = 0; c < 3; ++c) around[cursor[std::size_t(sel.triangles[t][c])]++] = static_cast<std::uint32_t>(t);
+  }
+  std::vector<std::uint8_t> removed(f, 0);
+  std::vector<std::uint32_t> local, fan_of;
+  std::vector<double> fan_angle;
+  std::size_t count = 0;
+  // The corner of triangle t at v: the next and previous vertices, counter-clockwise.
+  const auto corner = [&](std::uint32_t t, std::uint32_t v, std::uint32_t& next, std::uint32_t& prev) {
+    const Triangle& tri = sel.triangles[t];
+    const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
+    next = std::uint32_t(tri[(c + 1) % 3]);
+    prev = std::uint32_t(tri[(c + 2) % 3]);
+  };
+  const auto alive = [&](std::uint32_t t) { return t != kNone && !removed[t]; };
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = sel.triangles[t];
+    if (int(reopen[std::size_t(tri[0])]) + reopen[std::size_t(tri[1])] + reopen[std::size_t(tri[2])] >= 2) {
+      removed[t] = 1;
+      ++count;
+    }
+  }
+  std::fill(reopen.begin(), reopen.end(), std::uint8_t{0});
+  for (std::uint32_t v = 0; v < n; ++v) {
+    local.clear();
+    for (std::uint32_t i = offset[v]; i < offset[v + 1]; ++i)
+      if (!removed[around[i]]) local.push_back(around[i]);
+    if (local.size() < 2) continue;
+    fan_of.assign(local.size(), kNone);
+    fan_angle.clear();
+    const auto index_of = [&](std::uint32_t t) {
+      return std::size_t(std::find(local.begin(), local.end(), t) - local.begin());
+    };
+    // Label chains from their first triangle (none before it across an edge); what is left
+    // are closed fans.
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t s = 0; s < local.size(); ++s) {
+        if (fan_of[s] != kNone) continue;
+        std::uint32_t next = 0, prev = 0;
+        corner(local[s], v, next, prev);
+        if (pass == 0 && alive(sel.edges.find(v, prev))) continue;
+        const auto fan = static_cast<std::uint32_t>(fan_angle.size());
+        fan_angle.push_back(0.0);
+        for (std::size_t at = s; at < local.size() && fan_of[at] == kNone;) {
+          fan_of[at] = fan;
+          corner(local[at], v, next, prev);
+          const Vector3d a = positions[next] - positions[v], b = positions[prev] - positions[v];
+          fan_angle[fan] += std::atan2(a.cross(b).norm(), a.dot(b));
+          const std::uint32_t t = sel.edges.find(next, v);
+          at = alive(t) ? index_of(t) : local.size();
+        }
+      }
+    if (fan_angle.size() < 2) continue;
+    const auto keep = static_cast<std::uint32_t>(std::max_element(fan_angle.begin(), fan_angle.end()) - fan_angle.begin());
+    for (std::size_t s = 0; s < local.size(); ++s)
+      if (fan_of[s] != keep) {
+        removed[local[s]] = 1;
+        ++count;
+      }
+  }
+  if (count == 0) return 0;
+  Selection kept(f);
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = sel.triangles[t];
+    if (!removed[t]) kept.add(std::uint32_t(tri[0]), std::uint32_t(tri[1]), std::uint32_t(tri[2]), sel.normals[t]);
+    else for (int c = 0; c < 3; ++c) repaired[std::size_t(tri[c])] = 1;
+  }
+  sel = std::move(kept);
+  return count;
+}
+
+// Inserts the usable points that no triangle uses (their umbrella triangles lost to
+// neighbouring ones, or they sat in a hole that was filled without them) into the mesh: into
+// the triangle whose plane they project into (along its normal), split in three, or else onto
+// the interior edge they project onto, whose two triangles are split in two each. The point
+// must lie within its search radius of the plane and face the way the new triangles do. Both
+// moves keep the mesh edge-manifold and oriented. Returns the number of points inserted.
+std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                                 const std::vector<std::uint8_t>& usable, const std::vector<double>& radius_of, const KdTree& tree,
+                                 Selection& sel) {
+  const std::size_t n = positions.size();
+  std::size_t inserted = 0;
+  std::vector<std::uint8_t> used(n), taken;
+  std::vector<std::uint32_t> unused, offset(n + 1), around;
+  std::vector<Neighbor> neighbors;
+  std::vector<Triangle> next_triangles;
+  for (int round = 0; round < kInsertRounds; ++round) {
+    std::fill(used.begin(), used.end(), std::uint8_t{0});
+    for (const Triangle& t : sel.triangles)
+      for (int c = 0; c < 3; ++c) used[std::size_t(t[c])] = 1;
+    unused.clear();
+    for (std::uint32_t i = 0; i < n; ++i)
+      if (usable[i] && !used[i]) unused.push_back(i);
+    if (unused.empty() || sel.triangles.empty()) break;
+    const std::size_t f = sel.triangles.size();
+    std::fill(offset.begin(), offset.end(), 0u);
+    for (const Triangle& t : sel.triangles)
+      for (int c = 0; c < 3; ++c) ++offset[std::size_t(t[c]) + 1];
+    for (std::size_t v = 0; v < n; ++v) offset[v + 1] += offset[v];
+    around.resize(3 * f);
+    {
+      std::vector<std::uint32_t> cursor(offset.begin(), offset.end() - 1);
+      for (std::size_t t = 0; t < f; ++t)
+        for (int c = 0; c < 3; ++c) around[cursor[std::size_t(sel.triangles[t][c])]++] = static_cast<std::uint32_t>(t);
+    }
+    taken.assign(f, 0);
+    next_triangles.clear();
+    const auto corner = [&](std::uint32_t t, int c) { return std::uint32_t(sel.triangles[t][c]); };
+    const auto faces = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vector3d& n_p) {
+      const Vector3d face = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+      return face.dot(n_p) > 0.0 && face.dot(normals[a] + normals[b] + normals[c]) > 0.0;
+    };
+    std::size_t placed = 0;
+    for (const std::uint32_t p : unused) {
+      const Vector3d& x = positions[p];
+      const Vector3d& n_p = normals[p];
+      tree.knn(x, kInsertNeighbours, neighbors);
+      // Best triangle: smallest distance to its plane among those the point projects into.
+      std::uint32_t best = kNone;
+      double best_height = radius_of[p];
+      for (const Neighbor& nb : neighbors)
+        for (std::uint32_t i = offset[nb.index]; i < offset[nb.index + 1]; ++i) {
+          const std::uint32_t t = around[i];
+          if (taken[t]) continue;
+          const Vector3d &a = positions[corner(t, 0)], &b = positions[corner(t, 1)], &c = positions[corner(t, 2)];
+          const Vector3d face = (b - a).cross(c - a);
+          const double twice_area = face.norm();
+          if (!(twice_area > 0.0)) continue;
+          const Vector3d unit = face / twice_area;
+          if (!(unit.dot(n_p) > 0.0)) continue;
+          const double height = std::abs((x - a).dot(unit));
+          if (!(height < best_height)) continue;
+          const bool inside = (b - a).cross(x - a).dot(unit) >= 0.0 && (c - b).cross(x - b).dot(unit) >= 0.0 &&
+                              (a - c).cross(x - c).dot(unit) >= 0.0;
+          if (!inside) continue;
+          best = t;
+          best_height = height;
+        }
+      if (best != kNone) {
+        const std::uint32_t a = corner(best, 0), b = corner(best, 1), c = corner(best, 2);
+        if (faces(a, b, p, n_p) && faces(b, c, p, n_p) && faces(c, a, p, n_p)) {
+          taken[best] = 1;
+          next_triangles.insert(next_triangles.end(), {Triangle(int(a), int(b), int(p)), Triangle(int(b), int(c), int(p)),
+                                                       Triangle(int(c), int(a), int(p))});
+          ++placed;
+          continue;
+        }
+      }
+      // Otherwise the nearest interior edge a -> b whose span the point projects into.
+      std::uint32_t t1 = kNone, t2 = kNone, ea = kNone, eb = kNone;
+      double best_distance = radius_of[p];
+      for (const Neighbor& nb : neighbors)
+        for (std::uint32_t i = offset[nb.index]; i < offset[nb.index + 1]; ++i) {
+          const std::uint32_t t = around[i];
+          if (taken[t]) continue;
+          for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = corner(t, e), b = corner(t, (e + 1) % 3);
+            const std::uint32_t twin = sel.edges.find(b, a);
+            if (twin == kNone || taken[twin]) continue;
+            const Vector3d ab = positions[b] - positions[a];
+            const double along = (x - positions[a]).dot(ab) / ab.squaredNorm();
+            if (!(along > 0.0 && along < 1.0)) continue;
+            const double distance = (x - positions[a] - along * ab).norm();
+            if (!(distance < best_distance)) continue;
+            best_distance = distance;
+            t1 = t;
+            t2 = twin;
+            ea = a;
+            eb = b;
+          }
+        }
+      if (t1 == kNone) continue;
+      const std::uint32_t c = corner(t1, 0) != ea && corner(t1, 0) != eb ? corner(t1, 0)
+                              : corner(t1, 1) != ea && corner(t1, 1) != eb ? corner(t1, 1) : corner(t1, 2);
+      const std::uint32_t d = corner(t2, 0) != ea && corner(t2, 0) != eb ? corner(t2, 0)
+                              : corner(t2, 1) != ea && corner(t2, 1) != eb ? corner(t2, 1) : corner(t2, 2);
+      if (!(faces(ea, p, c, n_p) && faces(p, eb, c, n_p) && faces(eb, p, d, n_p) && faces(p, ea, d, n_p))) continue;
+      taken[t1] = taken[t2] = 1;
+      next_triangles.insert(next_triangles.end(), {Triangle(int(ea), int(p), int(c)), Triangle(int(p), int(eb), int(c)),
+                                                   Triangle(int(eb), int(p), int(d)), Triangle(int(p), int(ea), int(d))});
+      ++placed;
+    }
+    if (placed == 0) break;
+    inserted += placed;
+    Selection kept(f + next_triangles.size());
+    const auto add = [&](const Triangle& t) {
+      const auto a = std::uint32_t(t[0]), b = std::uint32_t(t[1]), c = std::uint32_t(t[2]);
+      kept.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+    };
+    for (std::size_t t = 0; t < f; ++t)
+      if (!taken[t]) add(sel.triangles[t]);
+    for (const Triangle& t : next_triangles) add(t);
+    sel = std::move(kept);
+  }
+  return inserted;
 }
 
 }  // namespace
@@ -583,6 +953,8 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
       if (mode == 1 && twin[std::size_t((c + 2) % 3)] == kNone && twin[std::size_t(c)] == kNone) return false;
     }
     if (mode == 2 && twin[0] == kNone && twin[1] == kNone && twin[2] == kNone) return false;
+    for (int c = 0; c < 3; ++c)
+      if (in_mesh[v[c]] && !fits_gap(cloud.positions, normals, sel, v[c], v[(c + 1) % 3], v[(c + 2) % 3])) return false;
     const Vector3d face =
         (cloud.positions[v[1]] - cloud.positions[v[0]]).cross(cloud.positions[v[2]] - cloud.positions[v[0]]).normalized();
     for (std::uint32_t t : twin)
@@ -626,8 +998,20 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   std::vector<double> radius_of(n);
   for (std::size_t i = 0; i < n; ++i) radius_of[i] = params.radius > 0.0 ? params.radius : params.radius_in_spacings * local_spacing[i];
   result.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
-  if (params.max_hole_perimeter_in_spacings > 0.0)
-    result.holes_filled = fill_small_holes(cloud, local_spacing, params.max_hole_perimeter_in_spacings, sel, result.fill_triangles);
+  if (params.max_hole_perimeter_in_spacings > 0.0) {
+    // Fill, then open the pinches that remain (vertices where fans touch) and fill again.
+    LoopFiller filler;
+    std::vector<std::uint8_t> reopen(n, 0), repaired(n, 0);
+    for (int round = 0;; ++round) {
+      result.holes_filled += fill_small_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel,
+                                              filler, repaired, reopen, result.fill_triangles);
+      if (round == kRepairRounds) break;
+      const std::size_t removed = open_pinches(cloud.positions, reopen, repaired, sel);
+      result.pinch_triangles_removed += removed;
+      if (removed == 0) break;
+    }
+  }
+  result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
 
   result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
   result.topology = analyze_topology(result.mesh);
