@@ -64,12 +64,15 @@ demo() {
   "$cli" normals "$out/b9_clean.ply" "$out/b9_normals.ply" --orient mst --report "$out/b9_normals.json"
   "$cli" features "$out/b9_normals.ply" "$out/b9_features.ply" --report "$out/b9_features.json"
   "$cli" simplify "$out/b9_features.ply" "$out/b9_regional.ply" --method regional --ratio 0.25 --report "$out/b9_simplify.json"
+  "$cli" reconstruct "$out/b9_normals.ply" "$out/b9_mesh.ply" --method triangulate --report "$out/b9_mesh.json"
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info "$ROOT/data/kitten.xyz" --report "$out/kitten_info.json"
   "$cli" clean "$ROOT/data/kitten.xyz" "$out/kitten_clean.ply" --method sor,trilateral --report "$out/kitten_clean.json"
   "$cli" normals "$out/kitten_clean.ply" "$out/kitten_normals.ply" --orient mst --report "$out/kitten_normals.json"
   "$cli" curvature "$out/kitten_normals.ply" "$out/kitten_curvature.ply" --report "$out/kitten_curvature.json"
   "$cli" simplify "$out/kitten_curvature.ply" "$out/kitten_regional.ply" --method regional --ratio 0.2 --report "$out/kitten_simplify.json"
+  "$cli" reconstruct "$out/kitten_normals.ply" "$out/kitten_mesh.ply" --method triangulate --report "$out/kitten_mesh.json"
+  "$cli" reconstruct "$out/kitten_normals.ply" "$out/kitten_ball_pivot.ply" --method ball-pivot --report "$out/kitten_ball_pivot.json"
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
 }

@@ -123,6 +123,7 @@ void run_reconstruct(const ReconstructState& s) {
   check_range("max-angle", tp.max_angle_deg, 60.0, 180.0, true, false);
   check_range("max-dihedral", tp.max_dihedral_deg, 0.0, 180.0, true, false);
   check_range("fill-holes", tp.max_hole_perimeter_in_spacings, 0.0, INFINITY, false, true);
+  check_range("max-front-angle", tp.max_front_angle_deg, 0.0, 180.0, false, false);
   check_range("cocone-angle", s.crust.cocone_angle_deg, 0.0, 90.0, true, true);
   check_range("crust-normal-angle", s.crust.normal_filter_angle_deg, 0.0, 90.0, true, false);
   check_range("sharp-edge-angle", s.crust.sharp_edge_angle_deg, 180.0, 360.0, false, false);
@@ -275,7 +276,11 @@ Command register_reconstruct(CLI::App& app) {
   cmd->add_option("--max-dihedral", s.triangulate.max_dihedral_deg,
                   "triangulate: largest angle between neighbouring triangle normals, degrees (default 135)");
   cmd->add_option("--fill-holes", s.triangulate.max_hole_perimeter_in_spacings,
-                  "triangulate: close holes up to this perimeter in local spacings, 0: none (default 15)");
+                  fmt::format("triangulate: close holes up to this perimeter in local spacings, 0: none (default {})",
+                              TriangulateParams{}.max_hole_perimeter_in_spacings));
+  cmd->add_option("--max-front-angle", s.triangulate.max_front_angle_deg,
+                  fmt::format("triangulate: after growing, close boundary corners opening less than this, degrees; 0: off (default {})",
+                              TriangulateParams{}.max_front_angle_deg));
   // crust
   cmd->add_option("--cocone-angle", s.crust.cocone_angle_deg, "crust: cocone half-angle theta, degrees (default 22.5)");
   cmd->add_option("--crust-normal-angle", s.crust.normal_filter_angle_deg,
