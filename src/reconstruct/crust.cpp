@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Delaunay_triangulation_cell_base_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -42,6 +44,7 @@ using Delaunay = CGAL::Delaunay_triangulation_3<K, Tds>;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kInfinite = -1;
+constexpr std::size_t kAxisNeighbours = 10;  // samples in the plane fit that gives hull samples their axis
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -228,6 +231,9 @@ void check_params(const CrustParams& params) {
   if (!(params.sharp_edge_angle_deg >= 180.0 && params.sharp_edge_angle_deg <= 360.0))
     throw UsageError(fmt::format("crust: sharp_edge_angle_deg = {}, expected a value in [180, 360]",
                                  params.sharp_edge_angle_deg));
+  if (!(params.max_boundary_edge_in_spacings >= 0.0) || !std::isfinite(params.max_boundary_edge_in_spacings))
+    throw UsageError(fmt::format("crust: max_boundary_edge_in_spacings = {}, expected a finite value >= 0 (0: off)",
+                                 params.max_boundary_edge_in_spacings));
 }
 
 }  // namespace
@@ -351,9 +357,11 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
       for (int v : cells.vertex[c])
         if (v != kInfinite) vc[fill[v]++] = int(c);
   }
-  std::vector<Vector3d> pole(n, Vector3d::Zero());   // unit pole vector (zero: none)
+  std::vector<Vector3d> pole(n, Vector3d::Zero());        // unit normal axis (zero: none)
+  std::vector<Vector3d> hull_normal(n, Vector3d::Zero());  // unit mean outward hull normal (hull samples)
   std::vector<char> on_hull(n, 0), finite_pole(n, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Neighbor> near;  // one per chunk, reused by its points
     for (std::size_t o = r.begin(); o != r.end(); ++o) {
       const std::uint32_t i = order[o];
       if (rep[i] != int(i)) continue;
@@ -376,8 +384,31 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         }
       }
       on_hull[i] = hull_point ? 1 : 0;
-      if (hull_point && hull.norm() > 1e-6) {
-        pole[i] = hull.normalized();
+      if (hull_point) {
+        // The Voronoi cell is unbounded, so the pole is at infinity. Its direction, the mean
+        // outward normal of the hull facets, is the surface normal on a closed surface but lies
+        // sideways at the rim of an open one (where it would let vertical "curtain" triangles
+        // through). The axis is therefore the normal of the plane fitted to the nearest samples,
+        // signed by the hull normal, which still serves to orient pieces.
+        const double h = hull.norm();
+        if (h > 1e-6) hull_normal[i] = hull / h;
+        tree.knn(p[i], kAxisNeighbours, near);
+        Vector3d mean = Vector3d::Zero();
+        for (const Neighbor& nb : near) mean += p[nb.index];
+        mean /= double(near.size());
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const Neighbor& nb : near) {
+          const Vector3d d = p[nb.index] - mean;
+          cov += d * d.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+        Vector3d axis = eig.eigenvectors().col(0);
+        if (eig.eigenvalues()(1) > 0.0 && axis.allFinite()) {
+          if (axis.dot(hull_normal[i]) < 0.0) axis = -axis;
+          pole[i] = axis.normalized();
+        } else {
+          pole[i] = hull_normal[i];
+        }
       } else if (far2 > 0.0) {
         pole[i] = far.normalized();
         finite_pole[i] = 1;
@@ -601,6 +632,50 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
   stats.walk_dropped = 0;
   for (std::size_t t = 0; t < nt; ++t)
     if (alive[t] && state[t] != 1) ++stats.walk_dropped;
+
+  // 4c. Rim peeling. Where an open surface's rim is concave, the Delaunay triangulation fills it
+  // with long thin triangles that pass the cocone test (they lie in the surface); they are peeled
+  // from the boundary inward while their boundary edge is too long. Closed pieces have no boundary
+  // edge and are untouched.
+  if (params.max_boundary_edge_in_spacings > 0.0 && !out_tris.empty()) {
+    const double max_len2 = std::pow(params.max_boundary_edge_in_spacings * spacing, 2);
+    std::vector<int> out_of(nt, -1);  // candidate -> output triangle
+    for (std::size_t j = 0; j < out_src.size(); ++j) out_of[out_src[j]] = int(j);
+    std::vector<char> keep(out_tris.size(), 1);
+    auto edge_len2 = [&](int e) { return (p[cx.edge_verts[e][0]] - p[cx.edge_verts[e][1]]).squaredNorm(); };
+    auto other_on = [&](int e, int t) { return edge_used[e][0] == t ? edge_used[e][1] : edge_used[e][0]; };
+    std::vector<int> peel;
+    for (std::size_t j = 0; j < out_src.size(); ++j)
+      for (int e : cx.tri_edges[out_src[j]])
+        if (edge_used[e][1] < 0 && edge_len2(e) > max_len2) {
+          peel.push_back(int(j));
+          break;
+        }
+    while (!peel.empty()) {
+      const int j = peel.back();
+      peel.pop_back();
+      if (!keep[j]) continue;
+      keep[j] = 0;
+      ++stats.rim_peeled;
+      const int t = out_src[j];
+      for (int e : cx.tri_edges[t]) {
+        const int u = other_on(e, t);
+        edge_used[e] = {u, -1};
+        if (u >= 0 && keep[out_of[u]] && edge_len2(e) > max_len2) peel.push_back(out_of[u]);
+      }
+    }
+    std::size_t w = 0;
+    for (std::size_t j = 0; j < out_tris.size(); ++j)
+      if (keep[j]) {
+        out_tris[w] = out_tris[j];
+        out_piece[w] = out_piece[j];
+        out_src[w] = out_src[j];
+        ++w;
+      }
+    out_tris.resize(w);
+    out_piece.resize(w);
+    out_src.resize(w);
+  }
   reporter.report(0.9);
   reporter.throw_if_cancelled();
 
@@ -641,8 +716,8 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         centroid_score += nrm.dot(a + b + c);
         for (int m = 0; m < 3; ++m)
           if (on_hull[t[m]]) {
-            hull_score += nrm.dot(pole[t[m]]);
-            hull_abs += std::abs(nrm.dot(pole[t[m]]));
+            hull_score += nrm.dot(hull_normal[t[m]]);
+            hull_abs += std::abs(nrm.dot(hull_normal[t[m]]));
           }
       }
       if (closed)

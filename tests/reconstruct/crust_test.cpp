@@ -337,6 +337,9 @@ TEST(Crust, RejectsBadParametersAndDegenerateInput) {
   p = {};
   p.sharp_edge_angle_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(reconstruct_crust(cloud, p), UsageError);
+  p = {};
+  p.max_boundary_edge_in_spacings = -1.0;
+  expect_error_message([&] { reconstruct_crust(cloud, p); }, "max_boundary_edge_in_spacings = -1");
 
   PointCloud few;
   few.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
@@ -348,9 +351,28 @@ TEST(Crust, RejectsBadParametersAndDegenerateInput) {
   EXPECT_THROW(reconstruct_crust(flat), ComputeError);
   expect_error_message([&] { reconstruct_crust(flat); }, "coplanar");
 
+  // Exactly collinear (dyadic coordinates, so that the shift to the local origin is exact too).
   PointCloud line;
-  for (int i = 0; i < 20; ++i) line.positions.emplace_back(0.1 * i, 0.2 * i, -0.3 * i);
+  for (int i = 0; i < 20; ++i) line.positions.emplace_back(0.125 * i, 0.25 * i, -0.375 * i);
   expect_error_message([&] { reconstruct_crust(line); }, "collinear");
+  // 0.1 * i is not exactly on a line in floating point: the exact predicates see a plane.
+  PointCloud rounded_line;
+  for (int i = 0; i < 20; ++i) rounded_line.positions.emplace_back(0.1 * i, 0.2 * i, -0.3 * i);
+  EXPECT_THROW(reconstruct_crust(rounded_line), ComputeError);
+  // Nearly coplanar (1e-9 of relief on a unit square): a 3D Delaunay exists, and the result is a
+  // valid disc (measured: 432 triangles, one boundary loop, every sample used).
+  PointCloud thin = flat;
+  std::mt19937_64 rng(32);
+  std::uniform_real_distribution<double> relief(-1e-9, 1e-9);
+  for (auto& x : thin.positions) x.z() = relief(rng);
+  const ReconstructionResult disc = reconstruct_crust(thin);
+  EXPECT_TRUE(disc.topology.edge_manifold());
+  EXPECT_TRUE(disc.topology.oriented());
+  EXPECT_EQ(disc.topology.non_manifold_vertices, 0u);
+  EXPECT_EQ(disc.topology.components, 1u);
+  EXPECT_EQ(disc.topology.euler_characteristic, 1);
+  EXPECT_EQ(disc.topology.boundary_loops.size(), 1u);
+  EXPECT_EQ(disc.unused_points, 0u);
   PointCloud same;
   same.positions.assign(10, Vector3d(1, 2, 3));
   expect_error_message([&] { reconstruct_crust(same); }, "identical");
