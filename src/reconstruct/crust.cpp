@@ -15,6 +15,13 @@
 #include <utility>
 #include <vector>
 
+// CGAL's parallel Delaunay triangulation (oneTBB) is built when POINTSURF_PARALLEL_DELAUNAY is
+// defined. It needs libtbbmalloc at link time (CGAL's concurrent containers use
+// tbb::scalable_allocator), which the pointsurf target does not link by default. crust.cpp is the
+// only translation unit that includes CGAL, so defining CGAL_LINKED_WITH_TBB here affects no other.
+#if defined(POINTSURF_PARALLEL_DELAUNAY) && !defined(CGAL_LINKED_WITH_TBB)
+#define CGAL_LINKED_WITH_TBB
+#endif
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <CGAL/Delaunay_triangulation_3.h>
@@ -39,7 +46,14 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Vb = CGAL::Triangulation_vertex_base_with_info_3<int, K>;
 using Cb = CGAL::Triangulation_cell_base_with_info_3<int, K, CGAL::Delaunay_triangulation_cell_base_3<K>>;
+// The triangulation itself does not depend on the insertion order (CGAL's symbolic perturbation
+// settles cospherical points by a fixed rule); its cells are renumbered by their vertices below,
+// so every later pass is deterministic with parallel insertion too.
+#ifdef POINTSURF_PARALLEL_DELAUNAY
+using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb, CGAL::Parallel_tag>;
+#else
 using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb>;
+#endif
 using Delaunay = CGAL::Delaunay_triangulation_3<K, Tds>;
 
 constexpr double kPi = 3.14159265358979323846;
@@ -277,7 +291,17 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     const auto t0 = Clock::now();
     std::vector<std::pair<K::Point_3, int>> input(n);
     for (std::size_t i = 0; i < n; ++i) input[i] = {K::Point_3(p[i].x(), p[i].y(), p[i].z()), int(i)};
-    Delaunay dt(input.begin(), input.end());
+#ifdef POINTSURF_PARALLEL_DELAUNAY
+    const BoundingBox local = bounding_box(p);
+    const Vector3d pad = Vector3d::Constant(1e-6 * std::max(local.diagonal(), 1e-300));
+    Delaunay::Lock_data_structure locks(CGAL::Bbox_3(local.min.x() - pad.x(), local.min.y() - pad.y(),
+                                                      local.min.z() - pad.z(), local.max.x() + pad.x(),
+                                                      local.max.y() + pad.y(), local.max.z() + pad.z()),
+                                        50);
+    Delaunay dt(input.begin(), input.end(), &locks);
+#else
+    Delaunay dt(input.begin(), input.end());  // spatially sorted range insertion
+#endif
     input = {};
     stats.seconds_delaunay = seconds_since(t0);
     reporter.report(0.45);
@@ -290,6 +314,17 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
           n, what, dt.dimension()));
     }
     stats.duplicate_points = n - dt.number_of_vertices();
+    if (stats.duplicate_points > 0) {
+      // Which copy of a duplicate the triangulation keeps depends on the insertion order: keep
+      // the one of smallest index instead (the later copies are the unused ones).
+      std::vector<char> present(n, 0);
+      for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) present[v->info()] = 1;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!present[i]) {
+          const auto v = dt.nearest_vertex(K::Point_3(p[i].x(), p[i].y(), p[i].z()));
+          if (int(i) < v->info()) v->info() = int(i);
+        }
+    }
     for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) rep[v->info()] = v->info();
     if (stats.duplicate_points > 0) {
       for (std::size_t i = 0; i < n; ++i)
@@ -303,8 +338,21 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     cells.neighbor.resize(nc);
     cells.center.resize(nc);
     cells.infinite.resize(nc);
-    int index = 0;
-    for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) c->info() = index++;
+    // Number the cells in the order of their sorted vertex indices, whatever order the (parallel)
+    // insertion left them in.
+    {
+      std::vector<std::pair<std::array<int, 4>, Delaunay::Cell_handle>> order_cells;
+      order_cells.reserve(nc);
+      for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) {
+        std::array<int, 4> key;
+        for (int i = 0; i < 4; ++i) key[i] = dt.is_infinite(c->vertex(i)) ? kInfinite : c->vertex(i)->info();
+        std::sort(key.begin(), key.end());
+        order_cells.emplace_back(key, c);
+      }
+      tbb::parallel_sort(order_cells.begin(), order_cells.end(),
+                         [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (std::size_t i = 0; i < nc; ++i) order_cells[i].second->info() = int(i);
+    }
     for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) {
       const int ci = c->info();
       for (int i = 0; i < 4; ++i) {
@@ -323,14 +371,18 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       const auto& v = cells.vertex[c];
       if (!cells.infinite[c]) {
-        cells.center[c] = circumcenter(p[v[0]], p[v[1]], p[v[2]], p[v[3]]);
+        std::array<int, 4> s = v;  // sorted, so that rounding does not depend on the vertex order
+        std::sort(s.begin(), s.end());
+        cells.center[c] = circumcenter(p[s[0]], p[s[1]], p[s[2]], p[s[3]]);
         continue;
       }
       int k = 0;
       while (v[k] != kInfinite) ++k;
-      const Vector3d& a = p[v[(k + 1) % 4]];
-      const Vector3d& b = p[v[(k + 2) % 4]];
-      const Vector3d& d = p[v[(k + 3) % 4]];
+      std::array<int, 3> f{v[(k + 1) % 4], v[(k + 2) % 4], v[(k + 3) % 4]};
+      std::sort(f.begin(), f.end());
+      const Vector3d& a = p[f[0]];
+      const Vector3d& b = p[f[1]];
+      const Vector3d& d = p[f[2]];
       Vector3d normal = (b - a).cross(d - a);
       const auto& inner = cells.vertex[cells.neighbor[c][k]];
       int opposite = inner[0];
@@ -472,7 +524,9 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
       if (f & (1u << i)) {
         ++stats.cocone_triangles;
         const auto& v = cells.vertex[c];
-        candidates.push_back({v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]});
+        std::array<int, 3> tri{v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]};
+        std::sort(tri.begin(), tri.end());
+        candidates.push_back(tri);
       }
     }
   }

@@ -270,6 +270,10 @@ TEST(Crust, DuplicatesAreMergedAndLeftUnused) {
   EXPECT_TRUE(r.topology.closed());
   ASSERT_EQ(r.mesh.vertex_normals.size(), cloud.size());
   for (std::size_t i = n; i < cloud.size(); ++i) EXPECT_EQ(r.mesh.vertex_normals[i], r.mesh.vertex_normals[i - n]);
+  // the later copies are the unused ones, whatever order the triangulation inserted them in
+  std::vector<char> used(cloud.size(), 0);
+  for (const Triangle& t : r.mesh.triangles) used[t[0]] = used[t[1]] = used[t[2]] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.begin() + std::ptrdiff_t(n), char(0)), 0);
 }
 
 TEST(Crust, BoundaryModes) {
