@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Stage runner for bench/reconstruct/run_crust_bench.sh.
-//   crust_runner run CLOUD.ply OUT.ply [drop_normals]
+//   crust_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [COCONE_ANGLE_DEG]]
 //   crust_runner xyz CLOUD.ply OUT.xyz       positions only, for the CGAL peer
 // Reads the cloud (normals dropped when the third argument is "drop_normals", so that the pole
 // vectors orient the mesh), runs reconstruct_crust with default parameters and writes the mesh.
@@ -29,12 +29,12 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;
 }
 
-int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals) {
+int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals, const CrustParams& params) {
   PointCloud cloud = read_point_cloud(cloud_path).cloud;
   if (drop_normals) cloud.normals.clear();
   CrustStats stats;
   const Clock::time_point start = Clock::now();
-  const ReconstructionResult result = reconstruct_crust(cloud, {}, {}, &stats);
+  const ReconstructionResult result = reconstruct_crust(cloud, params, {}, &stats);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   const double rss = peak_rss_mb();
   write_mesh(out_path, result.mesh);
@@ -52,6 +52,8 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
   out["normal_filtered"] = stats.normal_filtered;
   out["pruned"] = stats.pruned;
   out["walk_dropped"] = stats.walk_dropped;
+  out["rim_peeled"] = stats.rim_peeled;
+  out["cocone_angle_deg"] = params.cocone_angle_deg;
   out["open_pieces"] = stats.open_pieces;
   out["closed_pieces"] = stats.closed_pieces;
   out["triangles"] = t.triangles;
@@ -71,8 +73,11 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "run" && (argc == 4 || argc == 5))
-      return run(argv[2], argv[3], argc == 5 && std::string(argv[4]) == "drop_normals");
+    if (mode == "run" && argc >= 4 && argc <= 6) {
+      CrustParams params;
+      if (argc == 6) params.cocone_angle_deg = std::stod(argv[5]);
+      return run(argv[2], argv[3], argc >= 5 && std::string(argv[4]) == "drop_normals", params);
+    }
     if (mode == "xyz" && argc == 4) {
       PointCloud cloud = read_point_cloud(argv[2]).cloud;
       PointCloud positions;
@@ -80,7 +85,7 @@ int main(int argc, char** argv) {
       write_point_cloud(argv[3], positions);
       return 0;
     }
-    fmt::print(stderr, "usage: crust_runner run CLOUD.ply OUT.ply [drop_normals] | xyz CLOUD.ply OUT.xyz\n");
+    fmt::print(stderr, "usage: crust_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [COCONE_ANGLE_DEG]] | xyz CLOUD.ply OUT.xyz\n");
     return 1;
   } catch (const Error& e) {
     fmt::print(stderr, "crust_runner: {}\n", e.what());

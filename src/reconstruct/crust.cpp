@@ -595,6 +595,7 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
   std::vector<int> bfs;
   std::vector<double> ang;
   std::vector<int> live;
+  std::vector<std::size_t> rank;
   std::vector<Triangle> out_tris;
   std::vector<int> out_piece;
   std::vector<int> out_src;  // candidate triangle of each output triangle
@@ -670,16 +671,26 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         edge_angles(p, a, b, p[ot[(j + 2) % 3]] - p[a], live.data(), live.size(), cx, ang.data());
         // edge_angles measures towards axis x e1; t's normal is along (b - a) x (c - a), the
         // same side, so the smallest angle is the outer neighbour.
-        std::size_t pick = 0;
-        for (std::size_t i = 1; i < live.size(); ++i)
-          if (ang[i] < ang[pick] || (ang[i] == ang[pick] && live[i] < live[pick])) pick = i;
-        const int s = live[pick];
-        if (state[s] != 0) continue;
-        const int d = third_vertex(cx.tris[s], a, b);
-        if (try_accept(s, {b, a, d}))
-          bfs.push_back(s);
-        else
+        // If the outer neighbour cannot join (one of its other edges is taken, or it would be
+        // traversed the wrong way), the next ones in angular order are tried, so that a conflict
+        // far away does not leave a hole here; try_accept keeps the result edge-manifold and
+        // oriented whichever one joins.
+        rank.resize(live.size());
+        std::iota(rank.begin(), rank.end(), std::size_t{0});
+        std::sort(rank.begin(), rank.end(), [&](std::size_t x, std::size_t y) {
+          return ang[x] < ang[y] || (ang[x] == ang[y] && live[x] < live[y]);
+        });
+        for (std::size_t i : rank) {
+          const int s = live[i];
+          if (state[s] == 1) break;
+          if (state[s] == -1) continue;
+          const int d = third_vertex(cx.tris[s], a, b);
+          if (try_accept(s, {b, a, d})) {
+            bfs.push_back(s);
+            break;
+          }
           state[s] = -1;
+        }
       }
     }
   }

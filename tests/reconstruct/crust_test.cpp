@@ -97,8 +97,9 @@ TEST(Crust, SphereIsWatertightGenusZeroOutwardAndClose) {
   EXPECT_LT(worst * 180.0 / 3.14159265358979, 10.0);  // pole vectors are outward normal estimates
   const auto [to_truth, from_truth] =
       hausdorff(r.mesh, test::sample_sphere(20000, 1.0, Vector3d::Zero(), 5), [](const Vector3d& x) { return sphere_distance(x, 1.0); });
-  EXPECT_LE(to_truth, 2.0 * r.mean_spacing);
-  EXPECT_LE(from_truth, 2.0 * r.mean_spacing);
+  // measured: 0.05 spacings (the chords' sagitta) and 0.29 (limited by the 100k mesh samples)
+  EXPECT_LE(to_truth, 0.25 * r.mean_spacing);
+  EXPECT_LE(from_truth, 1.0 * r.mean_spacing);
   EXPECT_EQ(stats.input_points, cloud.size());
   EXPECT_GT(stats.delaunay_cells, cloud.size());
   EXPECT_GE(stats.cocone_triangles, r.mesh.triangles.size());
@@ -114,8 +115,9 @@ TEST(Crust, TorusIsWatertightGenusOne) {
   EXPECT_EQ(r.unused_points, 0u);
   const auto [to_truth, from_truth] = hausdorff(r.mesh, test::sample_torus(20000, 1.0, 0.4, 5),
                                                 [](const Vector3d& x) { return torus_distance(x, 1.0, 0.4); });
-  EXPECT_LE(to_truth, 2.0 * r.mean_spacing);
-  EXPECT_LE(from_truth, 2.0 * r.mean_spacing);
+  // measured: 0.08 and 0.39 spacings
+  EXPECT_LE(to_truth, 0.25 * r.mean_spacing);
+  EXPECT_LE(from_truth, 1.0 * r.mean_spacing);
   // outward: the face normal points away from the tube's centre line
   std::size_t inward = 0;
   for (const Triangle& t : r.mesh.triangles) {
@@ -138,8 +140,10 @@ TEST(Crust, CubeIsEdgeManifoldOrientedAndCloseDespiteSharpEdges) {
   EXPECT_LE(inward_faces(r.mesh, Vector3d::Zero()), r.mesh.triangles.size() / 100);
   const auto [to_truth, from_truth] =
       hausdorff(r.mesh, test::sample_cube(20000, 1.0, 5), [](const Vector3d& x) { return cube_distance(x, 1.0); });
-  EXPECT_LE(to_truth, 2.0 * r.mean_spacing);
-  EXPECT_LE(from_truth, 2.0 * r.mean_spacing);
+  // measured: 0.45 spacings (triangles cutting the edges) and 0.59 (small holes at the edges:
+  // 83 boundary edges)
+  EXPECT_LE(to_truth, 1.0 * r.mean_spacing);
+  EXPECT_LE(from_truth, 1.0 * r.mean_spacing);
 }
 
 TEST(Crust, OpenPatchIsEdgeManifoldOrientedAndCoversItsInterior) {
@@ -202,8 +206,9 @@ TEST(Crust, RandomSphereSamplesGiveAManifoldCloseMesh) {
   EXPECT_LE(inward_faces(r.mesh, Vector3d(1, 2, 3)), r.mesh.triangles.size() / 200);
   const auto [to_truth, from_truth] = hausdorff(r.mesh, test::sample_sphere(20000, 2.0, Vector3d(1, 2, 3), 5),
                                                 [](const Vector3d& x) { return sphere_distance(x - Vector3d(1, 2, 3), 2.0); });
-  EXPECT_LE(to_truth, 2.0 * r.mean_spacing);
-  EXPECT_LE(from_truth, 2.0 * r.mean_spacing);
+  // measured: 0.18 and 0.72 spacings (and no boundary edge with this seed)
+  EXPECT_LE(to_truth, 0.5 * r.mean_spacing);
+  EXPECT_LE(from_truth, 1.5 * r.mean_spacing);
 }
 
 TEST(Crust, KeepsInputNormalsAndOrientsTrianglesByThem) {
