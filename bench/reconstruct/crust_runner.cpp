@@ -53,6 +53,7 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
   out["pruned"] = stats.pruned;
   out["walk_dropped"] = stats.walk_dropped;
   out["rim_peeled"] = stats.rim_peeled;
+  out["holes_filled"] = stats.holes_filled;
   out["cocone_angle_deg"] = params.cocone_angle_deg;
   out["open_pieces"] = stats.open_pieces;
   out["closed_pieces"] = stats.closed_pieces;

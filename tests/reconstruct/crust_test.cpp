@@ -144,6 +144,14 @@ TEST(Crust, CubeIsEdgeManifoldOrientedAndCloseDespiteSharpEdges) {
   // 83 boundary edges)
   EXPECT_LE(to_truth, 1.0 * r.mean_spacing);
   EXPECT_LE(from_truth, 1.0 * r.mean_spacing);
+  // Small holes at the edges are closed (measured: 83 boundary edges without the fill, 18 with).
+  CrustParams no_fill;
+  no_fill.max_hole_edges = 0;
+  const ReconstructionResult holes = reconstruct_crust(cloud, no_fill);
+  EXPECT_TRUE(holes.topology.edge_manifold());
+  EXPECT_TRUE(holes.topology.oriented());
+  EXPECT_LE(r.topology.boundary_edges, 40u);
+  EXPECT_GT(holes.topology.boundary_edges, 2 * r.topology.boundary_edges);
 }
 
 TEST(Crust, OpenPatchIsEdgeManifoldOrientedAndCoversItsInterior) {
@@ -349,6 +357,9 @@ TEST(Crust, RejectsBadParametersAndDegenerateInput) {
   p = {};
   p.max_boundary_edge_in_spacings = -1.0;
   expect_error_message([&] { reconstruct_crust(cloud, p); }, "max_boundary_edge_in_spacings = -1");
+  p = {};
+  p.max_hole_edges = -2;
+  expect_error_message([&] { reconstruct_crust(cloud, p); }, "max_hole_edges = -2");
 
   PointCloud few;
   few.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};

@@ -36,6 +36,9 @@ struct CrustParams {
                                         // boundary edge longer than this are peeled, repeatedly
                                         // (the long thin triangles Delaunay puts along the concave
                                         // parts of an open rim); closed pieces are untouched; 0: off
+  int max_hole_edges = 16;              // >= 0: boundary loops of at most this many edges are closed
+                                        // with triangles of the samples (ear clipping, no new
+                                        // vertex); 0 (or 1, 2): off
 };
 
 /// Counts from each stage of reconstruct_crust, for reports.
@@ -52,6 +55,7 @@ struct CrustStats {
   std::size_t closed_pieces = 0;       // connected pieces treated as closed
   std::size_t walk_dropped = 0;        // candidates the manifold walk left out
   std::size_t rim_peeled = 0;          // walked triangles then peeled at the boundary
+  std::size_t holes_filled = 0;        // small boundary loops closed (CrustParams::max_hole_edges)
   std::size_t flipped_pieces = 0;      // pieces whose orientation the final outward test flipped
   double seconds_delaunay = 0.0;       // wall time of the 3D Delaunay triangulation
   double seconds_total = 0.0;          // wall time of the whole reconstruction
@@ -70,7 +74,9 @@ struct CrustStats {
 ///  4. manifold extraction: normal filtering, repeated pruning of triangles at sharp edges
 ///     (Amenta et al. 1998), then a walk over the outer side of each connected piece that keeps
 ///     the mesh edge-manifold and consistently oriented; then triangles with a boundary edge
-///     longer than `max_boundary_edge_in_spacings` are peeled (rim slivers of open surfaces).
+///     longer than `max_boundary_edge_in_spacings` are peeled (rim slivers of open surfaces);
+///  5. boundary loops of at most `max_hole_edges` edges (holes left by undersampling) are closed
+///     by ear clipping with triangles of the samples, never reusing an existing edge.
 /// Output: `mesh.vertices` are the input points in input order with their colours and fields.
 /// If the cloud has normals they are kept and each piece is oriented to agree with them;
 /// otherwise each closed piece faces outward (positive volume), each open piece by the hull
