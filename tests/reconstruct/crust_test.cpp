@@ -163,6 +163,10 @@ TEST(Crust, OpenPatchIsEdgeManifoldOrientedAndCoversItsInterior) {
   EXPECT_TRUE(r.topology.edge_manifold());
   EXPECT_TRUE(r.topology.oriented());
   EXPECT_EQ(r.topology.components, 1u);
+  // a disc: one boundary loop (the rim), Euler characteristic 1, no pinched vertex
+  EXPECT_EQ(r.topology.boundary_loops.size(), 1u);
+  EXPECT_EQ(r.topology.euler_characteristic, 1);
+  EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
   // every sample at least 3 spacings from the rim is a vertex of the mesh
   std::size_t interior = 0, interior_unused = 0;
   std::vector<char> used(cloud.size(), 0);
