@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Stage runner for bench/reconstruct/run_crust_bench.sh.
-//   crust_runner run CLOUD.ply OUT.ply [drop_normals]
+//   crust_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [COCONE_ANGLE_DEG]]
 //   crust_runner xyz CLOUD.ply OUT.xyz       positions only, for the CGAL peer
 // Reads the cloud (normals dropped when the third argument is "drop_normals", so that the pole
 // vectors orient the mesh), runs reconstruct_crust with default parameters and writes the mesh.
@@ -29,12 +29,19 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;
 }
 
-int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals) {
+int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals, const CrustParams& params) {
   PointCloud cloud = read_point_cloud(cloud_path).cloud;
   if (drop_normals) cloud.normals.clear();
   CrustStats stats;
   const Clock::time_point start = Clock::now();
-  const ReconstructionResult result = reconstruct_crust(cloud, {}, {}, &stats);
+  // Wall time at each progress report: the stage boundaries (0.45 Delaunay, 0.5 circumcentres,
+  // 0.55 poles, 0.7 cocone test, 0.8 pruning, 0.9 walk, 1 peeling, holes, orientation, topology).
+  nlohmann::json stages = nlohmann::json::array();
+  const auto report = [&](double fraction) {
+    stages.push_back({fraction, std::chrono::duration<double>(Clock::now() - start).count()});
+    return true;
+  };
+  const ReconstructionResult result = reconstruct_crust(cloud, params, report, &stats);
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   const double rss = peak_rss_mb();
   write_mesh(out_path, result.mesh);
@@ -44,6 +51,7 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
   out["points"] = cloud.size();
   out["seconds"] = seconds;
   out["delaunay_seconds"] = stats.seconds_delaunay;
+  out["stage_seconds"] = stages;
   out["peak_rss_mb"] = rss;
   out["mean_spacing"] = result.mean_spacing;
   out["delaunay_cells"] = stats.delaunay_cells;
@@ -52,6 +60,9 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
   out["normal_filtered"] = stats.normal_filtered;
   out["pruned"] = stats.pruned;
   out["walk_dropped"] = stats.walk_dropped;
+  out["rim_peeled"] = stats.rim_peeled;
+  out["holes_filled"] = stats.holes_filled;
+  out["cocone_angle_deg"] = params.cocone_angle_deg;
   out["open_pieces"] = stats.open_pieces;
   out["closed_pieces"] = stats.closed_pieces;
   out["triangles"] = t.triangles;
@@ -71,8 +82,11 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "run" && (argc == 4 || argc == 5))
-      return run(argv[2], argv[3], argc == 5 && std::string(argv[4]) == "drop_normals");
+    if (mode == "run" && argc >= 4 && argc <= 6) {
+      CrustParams params;
+      if (argc == 6) params.cocone_angle_deg = std::stod(argv[5]);
+      return run(argv[2], argv[3], argc >= 5 && std::string(argv[4]) == "drop_normals", params);
+    }
     if (mode == "xyz" && argc == 4) {
       PointCloud cloud = read_point_cloud(argv[2]).cloud;
       PointCloud positions;
@@ -80,7 +94,7 @@ int main(int argc, char** argv) {
       write_point_cloud(argv[3], positions);
       return 0;
     }
-    fmt::print(stderr, "usage: crust_runner run CLOUD.ply OUT.ply [drop_normals] | xyz CLOUD.ply OUT.xyz\n");
+    fmt::print(stderr, "usage: crust_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [COCONE_ANGLE_DEG]] | xyz CLOUD.ply OUT.xyz\n");
     return 1;
   } catch (const Error& e) {
     fmt::print(stderr, "crust_runner: {}\n", e.what());

@@ -16,6 +16,15 @@
 #include <vector>
 #include <Eigen/Geometry>
 
+// CGAL's parallel Delaunay triangulation (oneTBB) is built when POINTSURF_PARALLEL_DELAUNAY is
+// defined. It needs libtbbmalloc at link time (CGAL's concurrent containers use
+// tbb::scalable_allocator), which the pointsurf target does not link by default. crust.cpp is the
+// only translation unit that includes CGAL, so defining CGAL_LINKED_WITH_TBB here affects no other.
+#if defined(POINTSURF_PARALLEL_DELAUNAY) && !defined(CGAL_LINKED_WITH_TBB)
+#define CGAL_LINKED_WITH_TBB
+#endif
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Delaunay_triangulation_cell_base_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -39,11 +48,19 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Vb = CGAL::Triangulation_vertex_base_with_info_3<int, K>;
 using Cb = CGAL::Triangulation_cell_base_with_info_3<int, K, CGAL::Delaunay_triangulation_cell_base_3<K>>;
+// The triangulation itself does not depend on the insertion order (CGAL's symbolic perturbation
+// settles cospherical points by a fixed rule); its cells are renumbered by their vertices below,
+// so every later pass is deterministic with parallel insertion too.
+#ifdef POINTSURF_PARALLEL_DELAUNAY
+using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb, CGAL::Parallel_tag>;
+#else
 using Tds = CGAL::Triangulation_data_structure_3<Vb, Cb>;
+#endif
 using Delaunay = CGAL::Delaunay_triangulation_3<K, Tds>;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kInfinite = -1;
+constexpr std::size_t kAxisNeighbours = 10;  // samples in the plane fit that gives hull samples their axis
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -230,6 +247,11 @@ void check_params(const CrustParams& params) {
   if (!(params.sharp_edge_angle_deg >= 180.0 && params.sharp_edge_angle_deg <= 360.0))
     throw UsageError(fmt::format("crust: sharp_edge_angle_deg = {}, expected a value in [180, 360]",
                                  params.sharp_edge_angle_deg));
+  if (!(params.max_boundary_edge_in_spacings >= 0.0) || !std::isfinite(params.max_boundary_edge_in_spacings))
+    throw UsageError(fmt::format("crust: max_boundary_edge_in_spacings = {}, expected a finite value >= 0 (0: off)",
+                                 params.max_boundary_edge_in_spacings));
+  if (params.max_hole_edges < 0)
+    throw UsageError(fmt::format("crust: max_hole_edges = {}, expected a value >= 0 (0: off)", params.max_hole_edges));
 }
 
 }  // namespace
@@ -273,7 +295,17 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     const auto t0 = Clock::now();
     std::vector<std::pair<K::Point_3, int>> input(n);
     for (std::size_t i = 0; i < n; ++i) input[i] = {K::Point_3(p[i].x(), p[i].y(), p[i].z()), int(i)};
-    Delaunay dt(input.begin(), input.end());
+#ifdef POINTSURF_PARALLEL_DELAUNAY
+    const BoundingBox local = bounding_box(p);
+    const Vector3d pad = Vector3d::Constant(1e-6 * std::max(local.diagonal(), 1e-300));
+    Delaunay::Lock_data_structure locks(CGAL::Bbox_3(local.min.x() - pad.x(), local.min.y() - pad.y(),
+                                                      local.min.z() - pad.z(), local.max.x() + pad.x(),
+                                                      local.max.y() + pad.y(), local.max.z() + pad.z()),
+                                        50);
+    Delaunay dt(input.begin(), input.end(), &locks);
+#else
+    Delaunay dt(input.begin(), input.end());  // spatially sorted range insertion
+#endif
     input = {};
     stats.seconds_delaunay = seconds_since(t0);
     reporter.report(0.45);
@@ -286,6 +318,17 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
           n, what, dt.dimension()));
     }
     stats.duplicate_points = n - dt.number_of_vertices();
+    if (stats.duplicate_points > 0) {
+      // Which copy of a duplicate the triangulation keeps depends on the insertion order: keep
+      // the one of smallest index instead (the later copies are the unused ones).
+      std::vector<char> present(n, 0);
+      for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) present[v->info()] = 1;
+      for (std::size_t i = 0; i < n; ++i)
+        if (!present[i]) {
+          const auto v = dt.nearest_vertex(K::Point_3(p[i].x(), p[i].y(), p[i].z()));
+          if (int(i) < v->info()) v->info() = int(i);
+        }
+    }
     for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) rep[v->info()] = v->info();
     if (stats.duplicate_points > 0) {
       for (std::size_t i = 0; i < n; ++i)
@@ -299,8 +342,21 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     cells.neighbor.resize(nc);
     cells.center.resize(nc);
     cells.infinite.resize(nc);
-    int index = 0;
-    for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) c->info() = index++;
+    // Number the cells in the order of their sorted vertex indices, whatever order the (parallel)
+    // insertion left them in.
+    {
+      std::vector<std::pair<std::array<int, 4>, Delaunay::Cell_handle>> order_cells;
+      order_cells.reserve(nc);
+      for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) {
+        std::array<int, 4> key;
+        for (int i = 0; i < 4; ++i) key[i] = dt.is_infinite(c->vertex(i)) ? kInfinite : c->vertex(i)->info();
+        std::sort(key.begin(), key.end());
+        order_cells.emplace_back(key, c);
+      }
+      tbb::parallel_sort(order_cells.begin(), order_cells.end(),
+                         [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (std::size_t i = 0; i < nc; ++i) order_cells[i].second->info() = int(i);
+    }
     for (auto c = dt.all_cells_begin(); c != dt.all_cells_end(); ++c) {
       const int ci = c->info();
       for (int i = 0; i < 4; ++i) {
@@ -319,14 +375,18 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
     for (std::size_t c = r.begin(); c != r.end(); ++c) {
       const auto& v = cells.vertex[c];
       if (!cells.infinite[c]) {
-        cells.center[c] = circumcenter(p[v[0]], p[v[1]], p[v[2]], p[v[3]]);
+        std::array<int, 4> s = v;  // sorted, so that rounding does not depend on the vertex order
+        std::sort(s.begin(), s.end());
+        cells.center[c] = circumcenter(p[s[0]], p[s[1]], p[s[2]], p[s[3]]);
         continue;
       }
       int k = 0;
       while (v[k] != kInfinite) ++k;
-      const Vector3d& a = p[v[(k + 1) % 4]];
-      const Vector3d& b = p[v[(k + 2) % 4]];
-      const Vector3d& d = p[v[(k + 3) % 4]];
+      std::array<int, 3> f{v[(k + 1) % 4], v[(k + 2) % 4], v[(k + 3) % 4]};
+      std::sort(f.begin(), f.end());
+      const Vector3d& a = p[f[0]];
+      const Vector3d& b = p[f[1]];
+      const Vector3d& d = p[f[2]];
       Vector3d normal = (b - a).cross(d - a);
       const auto& inner = cells.vertex[cells.neighbor[c][k]];
       int opposite = inner[0];
@@ -353,9 +413,11 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
       for (int v : cells.vertex[c])
         if (v != kInfinite) vc[fill[v]++] = int(c);
   }
-  std::vector<Vector3d> pole(n, Vector3d::Zero());   // unit pole vector (zero: none)
+  std::vector<Vector3d> pole(n, Vector3d::Zero());        // unit normal axis (zero: none)
+  std::vector<Vector3d> hull_normal(n, Vector3d::Zero());  // unit mean outward hull normal (hull samples)
   std::vector<char> on_hull(n, 0), finite_pole(n, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Neighbor> near;  // one per chunk, reused by its points
     for (std::size_t o = r.begin(); o != r.end(); ++o) {
       const std::uint32_t i = order[o];
       if (rep[i] != int(i)) continue;
@@ -378,8 +440,31 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         }
       }
       on_hull[i] = hull_point ? 1 : 0;
-      if (hull_point && hull.norm() > 1e-6) {
-        pole[i] = hull.normalized();
+      if (hull_point) {
+        // The Voronoi cell is unbounded, so the pole is at infinity. Its direction, the mean
+        // outward normal of the hull facets, is the surface normal on a closed surface but lies
+        // sideways at the rim of an open one (where it would let vertical "curtain" triangles
+        // through). The axis is therefore the normal of the plane fitted to the nearest samples,
+        // signed by the hull normal, which still serves to orient pieces.
+        const double h = hull.norm();
+        if (h > 1e-6) hull_normal[i] = hull / h;
+        tree.knn(p[i], kAxisNeighbours, near);
+        Vector3d mean = Vector3d::Zero();
+        for (const Neighbor& nb : near) mean += p[nb.index];
+        mean /= double(near.size());
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (const Neighbor& nb : near) {
+          const Vector3d d = p[nb.index] - mean;
+          cov += d * d.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+        Vector3d axis = eig.eigenvectors().col(0);
+        if (eig.eigenvalues()(1) > 0.0 && axis.allFinite()) {
+          if (axis.dot(hull_normal[i]) < 0.0) axis = -axis;
+          pole[i] = axis.normalized();
+        } else {
+          pole[i] = hull_normal[i];
+        }
       } else if (far2 > 0.0) {
         pole[i] = far.normalized();
         finite_pole[i] = 1;
@@ -443,7 +528,9 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
       if (f & (1u << i)) {
         ++stats.cocone_triangles;
         const auto& v = cells.vertex[c];
-        candidates.push_back({v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]});
+        std::array<int, 3> tri{v[(i + 1) % 4], v[(i + 2) % 4], v[(i + 3) % 4]};
+        std::sort(tri.begin(), tri.end());
+        candidates.push_back(tri);
       }
     }
   }
@@ -512,6 +599,7 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
   std::vector<int> bfs;
   std::vector<double> ang;
   std::vector<int> live;
+  std::vector<std::size_t> rank;
   std::vector<Triangle> out_tris;
   std::vector<int> out_piece;
   std::vector<int> out_src;  // candidate triangle of each output triangle
@@ -587,22 +675,76 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         edge_angles(p, a, b, p[ot[(j + 2) % 3]] - p[a], live.data(), live.size(), cx, ang.data());
         // edge_angles measures towards axis x e1; t's normal is along (b - a) x (c - a), the
         // same side, so the smallest angle is the outer neighbour.
-        std::size_t pick = 0;
-        for (std::size_t i = 1; i < live.size(); ++i)
-          if (ang[i] < ang[pick] || (ang[i] == ang[pick] && live[i] < live[pick])) pick = i;
-        const int s = live[pick];
-        if (state[s] != 0) continue;
-        const int d = third_vertex(cx.tris[s], a, b);
-        if (try_accept(s, {b, a, d}))
-          bfs.push_back(s);
-        else
+        // If the outer neighbour cannot join (one of its other edges is taken, or it would be
+        // traversed the wrong way), the next ones in angular order are tried, so that a conflict
+        // far away does not leave a hole here; try_accept keeps the result edge-manifold and
+        // oriented whichever one joins.
+        rank.resize(live.size());
+        std::iota(rank.begin(), rank.end(), std::size_t{0});
+        std::sort(rank.begin(), rank.end(), [&](std::size_t x, std::size_t y) {
+          return ang[x] < ang[y] || (ang[x] == ang[y] && live[x] < live[y]);
+        });
+        for (std::size_t i : rank) {
+          const int s = live[i];
+          if (state[s] == 1) break;
+          if (state[s] == -1) continue;
+          const int d = third_vertex(cx.tris[s], a, b);
+          if (try_accept(s, {b, a, d})) {
+            bfs.push_back(s);
+            break;
+          }
           state[s] = -1;
+        }
       }
     }
   }
   stats.walk_dropped = 0;
   for (std::size_t t = 0; t < nt; ++t)
     if (alive[t] && state[t] != 1) ++stats.walk_dropped;
+
+  // 4c. Rim peeling. Where an open surface's rim is concave, the Delaunay triangulation fills it
+  // with long thin triangles that pass the cocone test (they lie in the surface); they are peeled
+  // from the boundary inward while their boundary edge is too long. Closed pieces have no boundary
+  // edge and are untouched.
+  if (params.max_boundary_edge_in_spacings > 0.0 && !out_tris.empty()) {
+    const double max_len2 = std::pow(params.max_boundary_edge_in_spacings * spacing, 2);
+    std::vector<int> out_of(nt, -1);  // candidate -> output triangle
+    for (std::size_t j = 0; j < out_src.size(); ++j) out_of[out_src[j]] = int(j);
+    std::vector<char> keep(out_tris.size(), 1);
+    auto edge_len2 = [&](int e) { return (p[cx.edge_verts[e][0]] - p[cx.edge_verts[e][1]]).squaredNorm(); };
+    auto other_on = [&](int e, int t) { return edge_used[e][0] == t ? edge_used[e][1] : edge_used[e][0]; };
+    std::vector<int> peel;
+    for (std::size_t j = 0; j < out_src.size(); ++j)
+      for (int e : cx.tri_edges[out_src[j]])
+        if (edge_used[e][1] < 0 && edge_len2(e) > max_len2) {
+          peel.push_back(int(j));
+          break;
+        }
+    while (!peel.empty()) {
+      const int j = peel.back();
+      peel.pop_back();
+      if (!keep[j]) continue;
+      keep[j] = 0;
+      ++stats.rim_peeled;
+      const int t = out_src[j];
+      for (int e : cx.tri_edges[t]) {
+        const int u = other_on(e, t);
+        edge_used[e] = {u, -1};
+        if (u >= 0 && keep[out_of[u]] && edge_len2(e) > max_len2) peel.push_back(out_of[u]);
+      }
+    }
+    std::size_t w = 0;
+    for (std::size_t j = 0; j < out_tris.size(); ++j)
+      if (keep[j]) {
+        out_tris[w] = out_tris[j];
+        out_piece[w] = out_piece[j];
+        out_src[w] = out_src[j];
+        ++w;
+      }
+    out_tris.resize(w);
+    out_piece.resize(w);
+    out_src.resize(w);
+  }
   reporter.report(0.9);
   reporter.throw_if_cancelled();
 
@@ -643,8 +785,8 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
         centroid_score += nrm.dot(a + b + c);
         for (int m = 0; m < 3; ++m)
           if (on_hull[t[m]]) {
-            hull_score += nrm.dot(pole[t[m]]);
-            hull_abs += std::abs(nrm.dot(pole[t[m]]));
+            hull_score += nrm.dot(hull_normal[t[m]]);
+            hull_abs += std::abs(nrm.dot(hull_normal[t[m]]));
           }
       }
       if (closed)
@@ -659,6 +801,97 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
   for (std::size_t j = 0; j < out_tris.size(); ++j)
     if (flip[out_piece[j]]) std::swap(out_tris[j][1], out_tris[j][2]);
   stats.flipped_pieces = std::size_t(std::count(flip.begin(), flip.end(), char(1)));
+
+  // 6. Small holes. Undersampled spots (random samples, thin parts) leave holes of a few edges
+  // where the cocone test missed a triangle or the walk met a conflict; each boundary loop of at
+  // most `max_hole_edges` edges is closed by ear clipping (shortest new edge first) with triangles
+  // of existing samples, as long as no new edge already exists in the mesh. Loops through a
+  // vertex with several boundary edges, and loops of small pieces (which would fold shut), are
+  // left open.
+  if (params.max_hole_edges >= 3 && !out_tris.empty()) {
+    auto directed_key = [](int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); };
+    std::vector<std::uint64_t> half(3 * out_tris.size());
+    for (std::size_t j = 0; j < out_tris.size(); ++j)
+      for (int k = 0; k < 3; ++k) half[3 * j + k] = directed_key(out_tris[j][k], out_tris[j][(k + 1) % 3]);
+    tbb::parallel_sort(half.begin(), half.end());
+    std::vector<std::uint64_t> added;  // directed edges of fill triangles (few), kept sorted
+    auto has_half = [&](int a, int b) {
+      const std::uint64_t key = directed_key(a, b);
+      return std::binary_search(half.begin(), half.end(), key) || std::binary_search(added.begin(), added.end(), key);
+    };
+    auto has_edge = [&](int a, int b) { return has_half(a, b) || has_half(b, a); };
+    // Boundary half-edges a -> b (no b -> a), and the number leaving each vertex.
+    std::vector<std::pair<int, int>> rim;
+    for (std::uint64_t key : half) {
+      const int a = int(key >> 32), b = int(key & 0xffffffffu);
+      if (!std::binary_search(half.begin(), half.end(), directed_key(b, a))) rim.emplace_back(a, b);
+    }
+    std::sort(rim.begin(), rim.end());
+    std::vector<std::size_t> piece_size(std::size_t(piece_count), 0);
+    std::vector<int> piece_of_vertex(n, -1);
+    for (std::size_t j = 0; j < out_tris.size(); ++j) {
+      ++piece_size[out_piece[j]];
+      for (int k = 0; k < 3; ++k) piece_of_vertex[out_tris[j][k]] = out_piece[j];
+    }
+    const std::size_t min_piece = 8 * std::size_t(params.max_hole_edges);
+    std::vector<char> rim_done(rim.size(), 0);
+    std::vector<int> loop, poly;
+    auto next_rim = [&](int a) -> long {  // the one boundary half-edge leaving a, or -1
+      const auto lo = std::lower_bound(rim.begin(), rim.end(), std::make_pair(a, std::numeric_limits<int>::min()));
+      if (lo == rim.end() || lo->first != a) return -1;
+      if (lo + 1 != rim.end() && (lo + 1)->first == a) return -1;
+      return long(lo - rim.begin());
+    };
+    for (std::size_t start = 0; start < rim.size(); ++start) {
+      if (rim_done[start]) continue;
+      loop.clear();
+      bool ok = true;
+      long h = long(start);
+      while (true) {
+        if (rim_done[h]) {
+          ok = h == long(start) && loop.size() >= 3;
+          break;
+        }
+        rim_done[h] = 1;
+        loop.push_back(rim[h].first);
+        h = next_rim(rim[h].second);
+        if (h < 0 || loop.size() > std::size_t(params.max_hole_edges)) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) continue;
+      const int owner = piece_of_vertex[loop[0]];
+      if (owner < 0 || piece_size[owner] < min_piece) continue;
+      // The fill runs against the loop: polygon = loop reversed, clipped ear by ear.
+      poly.assign(loop.rbegin(), loop.rend());
+      std::vector<Triangle> fill_tris;
+      while (poly.size() > 3) {
+        std::size_t best = poly.size();
+        double best_len = std::numeric_limits<double>::infinity();
+        for (std::size_t j = 0; j < poly.size(); ++j) {
+          const int a = poly[(j + poly.size() - 1) % poly.size()], c = poly[(j + 1) % poly.size()];
+          if (has_edge(a, c)) continue;
+          const double len = (p[a] - p[c]).squaredNorm();
+          if (len < best_len) best_len = len, best = j;
+        }
+        if (best == poly.size()) break;
+        const std::size_t m = poly.size();
+        const int a = poly[(best + m - 1) % m], b = poly[best], c = poly[(best + 1) % m];
+        fill_tris.emplace_back(a, b, c);
+        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(c, a)), directed_key(c, a));
+        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(a, c)), directed_key(a, c));
+        poly.erase(poly.begin() + std::ptrdiff_t(best));
+      }
+      if (poly.size() != 3) continue;  // (the diagonals added above only block later fills)
+      fill_tris.emplace_back(poly[0], poly[1], poly[2]);
+      ++stats.holes_filled;
+      for (const Triangle& t : fill_tris) {
+        out_tris.push_back(t);
+        out_piece.push_back(owner);
+      }
+    }
+  }
 
   ReconstructionResult result;
   result.mean_spacing = spacing;
