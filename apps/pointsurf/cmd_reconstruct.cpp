@@ -127,6 +127,8 @@ void run_reconstruct(const ReconstructState& s) {
   check_range("cocone-angle", s.crust.cocone_angle_deg, 0.0, 90.0, true, true);
   check_range("crust-normal-angle", s.crust.normal_filter_angle_deg, 0.0, 90.0, true, false);
   check_range("sharp-edge-angle", s.crust.sharp_edge_angle_deg, 180.0, 360.0, false, false);
+  check_range("crust-rim-edge", s.crust.max_boundary_edge_in_spacings, 0.0, INFINITY, false, true);
+  if (s.crust.max_hole_edges < 0) throw UsageError(fmt::format("--crust-fill-holes: {} must be >= 0", s.crust.max_hole_edges));
   CrustParams crust = s.crust;
   crust.boundary = parse_boundary(s.crust_boundary);
   BallPivotParams ball;
@@ -153,11 +155,14 @@ void run_reconstruct(const ReconstructState& s) {
                        {"min_angle_deg", tp.min_angle_deg},
                        {"max_angle_deg", tp.max_angle_deg},
                        {"max_dihedral_deg", tp.max_dihedral_deg},
-                       {"max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings}});
+                       {"max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings},
+                       {"max_front_angle_deg", tp.max_front_angle_deg}});
   if (s.method == "crust")
     parameters.update({{"cocone_angle_deg", crust.cocone_angle_deg},
                        {"normal_filter_angle_deg", crust.normal_filter_angle_deg},
                        {"sharp_edge_angle_deg", crust.sharp_edge_angle_deg},
+                       {"max_boundary_edge_in_spacings", crust.max_boundary_edge_in_spacings},
+                       {"max_hole_edges", crust.max_hole_edges},
                        {"boundary", s.crust_boundary}});
   if (s.method == "ball-pivot")
     parameters.update({{"radii", ball.radii},
@@ -287,6 +292,11 @@ Command register_reconstruct(CLI::App& app) {
                   "crust: drop triangles deviating more from the pole vectors, degrees; 90 disables (default 60)");
   cmd->add_option("--sharp-edge-angle", s.crust.sharp_edge_angle_deg, "crust: sharp-edge pruning gap, degrees; 360 disables (default 270)");
   cmd->add_option("--boundary", s.crust_boundary, "crust: auto, closed or open (default auto)")->type_name("KIND");
+  cmd->add_option("--crust-rim-edge", s.crust.max_boundary_edge_in_spacings,
+                  fmt::format("crust: peel rim triangles with a boundary edge longer than this, mean spacings; 0: off (default {})",
+                              CrustParams{}.max_boundary_edge_in_spacings));
+  cmd->add_option("--crust-fill-holes", s.crust.max_hole_edges,
+                  fmt::format("crust: close holes of at most this many edges; 0: off (default {})", CrustParams{}.max_hole_edges));
   // ball pivoting
   cmd->add_option("--radii", s.radii, "ball-pivot: ball radii, cloud units (default: from --radii-in-spacings)")->type_name("R1,R2,...");
   cmd->add_option("--radii-in-spacings", s.radii_in_spacings, "ball-pivot: radii in mean spacings (default 1.5,3,6)")->type_name("A,B,...");

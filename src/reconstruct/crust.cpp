@@ -14,7 +14,6 @@
 #include <numeric>
 #include <utility>
 #include <vector>
-#include <Eigen/Geometry>
 
 // CGAL's parallel Delaunay triangulation (oneTBB) is built when POINTSURF_PARALLEL_DELAUNAY is
 // defined. It needs libtbbmalloc at link time (CGAL's concurrent containers use
@@ -31,7 +30,6 @@
 #include <CGAL/Triangulation_cell_base_with_info_3.h>
 #include <CGAL/Triangulation_data_structure_3.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
-#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
