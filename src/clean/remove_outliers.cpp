@@ -6,8 +6,10 @@
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <span>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -24,6 +26,13 @@ namespace {
 constexpr std::size_t kGrain = 256;
 // RANSAC: the smallest sine of the angle at the first sample between the other two.
 constexpr double kMinSine = 0.1;
+// RANSAC: planes passing within kGate * distance of the point are refitted and tested.
+constexpr double kGate = 2.0;
+// RANSAC: a point within this many RMS residuals of a refitted plane's inliers lies on it.
+constexpr double kNoiseSigmas = 4.0;
+// RANSAC: the foot of a kept point lies within this many in-plane standard deviations of the
+// centroid of the plane's inliers (1.6 at a cube corner, 0.7 on an open border).
+constexpr double kSpread = 2.5;
 
 // Runs `visit(i, buffer)` for every point in the tree's spatial order, in parallel, with a
 // thread-local neighbour buffer and progress over [0, 1).
@@ -56,6 +65,103 @@ std::uint64_t mix(std::uint64_t x) {
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
+}
+
+// A point's random stream: from the seed and its coordinates only (not its index).
+std::uint64_t seed_for(std::uint64_t seed, const Eigen::Vector3d& p) {
+  return mix(seed ^ mix(std::bit_cast<std::uint64_t>(p.x()) ^
+                        mix(std::bit_cast<std::uint64_t>(p.y()) ^ mix(std::bit_cast<std::uint64_t>(p.z())))));
+}
+
+// A plane normal . x + offset = 0 in the offsets' frame (the query point at the origin, so
+// |offset| is its distance to the plane).
+struct Plane {
+  Eigen::Vector3d normal;
+  double offset = 0.0;
+  double rms = 0.0;  // refitted planes: RMS distance of the inliers they were fitted to
+  bool surrounds = true;  // refitted planes: the point's foot lies within the inliers' spread
+};
+
+std::size_t support_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+  std::size_t support = 0;
+  for (const Eigen::Vector3d& x : q) support += std::abs(plane.normal.dot(x) + plane.offset) <= distance;
+  return support;
+}
+
+// The least-squares plane of the points within `distance` of `plane` (its inliers); nullopt
+// when fewer than 3 or when they are collinear.
+std::optional<Plane> refit(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  std::size_t count = 0;
+  for (const Eigen::Vector3d& x : q) {
+    if (std::abs(plane.normal.dot(x) + plane.offset) > distance) continue;
+    sum += x;
+    outer.noalias() += x * x.transpose();
+    ++count;
+  }
+  if (count < 3) return std::nullopt;
+  const Eigen::Vector3d centroid = sum / double(count);
+  const Eigen::Matrix3d covariance = outer / double(count) - centroid * centroid.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(covariance);
+  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+  if (!(values[1] > kMinSine * kMinSine * values[2])) return std::nullopt;  // a line, not a plane
+  Plane fitted{eigen.eigenvectors().col(0).normalized(), 0.0, std::sqrt(std::max(values[0], 0.0))};
+  fitted.offset = -fitted.normal.dot(centroid);
+  // The foot of the point (the origin) on the plane, from the inliers' centroid, against the
+  // inliers' in-plane spread: a point far from where the plane is supported does not lie on it.
+  const Eigen::Vector3d foot = -centroid + fitted.normal.dot(centroid) * fitted.normal;
+  fitted.surrounds = foot.squaredNorm() <= kSpread * kSpread * (values[1] + values[2]);
+  return fitted;
+}
+
+// Decides one point from the offsets `q` of its neighbours (itself excluded); see the header
+// for the three tests a refitted plane must pass. Allocates nothing.
+bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const RansacOutlierParams& params,
+                      std::uint64_t state) {
+  const std::size_t m = q.size();
+  if (m < 3) return false;
+  const std::size_t needed = static_cast<std::size_t>(std::ceil(params.min_support * double(m) - 1e-9));
+  const std::size_t enough = std::max(needed, static_cast<std::size_t>(std::ceil(params.min_relative_support * double(m) - 1e-9)));
+  std::size_t best = 0;     // the largest support of any plane tried
+  std::size_t through = 0;  // the largest support of a refitted plane that passed the tests
+  std::optional<Plane> best_plane;
+  for (int it = 0; it < params.iterations; ++it) {
+    // Three distinct neighbours, uniformly.
+    const std::size_t a = (state = mix(state)) % m;
+    std::size_t b = (state = mix(state)) % (m - 1);
+    b += b >= a;
+    std::size_t c = (state = mix(state)) % (m - 2);
+    c += c >= std::min(a, b);
+    c += c >= std::max(a, b);
+    const Eigen::Vector3d u = q[b] - q[a], v = q[c] - q[a];
+    Eigen::Vector3d normal = u.cross(v);
+    const double length = normal.norm();
+    // Nearly collinear samples (angle below about 6 degrees) give no reliable plane.
+    if (!(length > kMinSine * u.norm() * v.norm())) continue;
+    normal /= length;
+    const Plane plane{normal, -normal.dot(q[a])};
+    const std::size_t support = support_of(q, plane, distance);
+    if (support > best) {
+      best = support;
+      best_plane = plane;
+    }
+    if (std::abs(plane.offset) > kGate * distance || support < needed || support <= through) continue;
+    const std::optional<Plane> fitted = refit(q, plane, distance);
+    if (!fitted || !fitted->surrounds) continue;
+    if (std::abs(fitted->offset) > std::clamp(kNoiseSigmas * fitted->rms, distance, kGate * distance)) continue;
+    const std::size_t fitted_support = support_of(q, *fitted, distance);
+    if (fitted_support < needed) continue;
+    through = std::max(through, fitted_support);
+    best = std::max(best, fitted_support);
+    if (through >= enough) return true;  // no plane can hold more than all m neighbours
+  }
+  if (through == 0) return false;
+  // The best plane's own least-squares fit may hold more points than the random sample did.
+  if (best_plane)
+    if (const std::optional<Plane> fitted = refit(q, *best_plane, distance)) best = std::max(best, support_of(q, *fitted, distance));
+  return double(through) >= params.min_relative_support * double(best);
 }
 
 }  // namespace
@@ -125,6 +231,8 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   if (params.iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, params.iterations));
   if (!(params.min_support > 0.0 && params.min_support <= 1.0))
     throw UsageError(fmt::format("{}: min_support must be in (0, 1], got {}", fn, params.min_support));
+  if (!(params.min_relative_support >= 0.0 && params.min_relative_support <= 1.0))
+    throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, params.min_relative_support));
   detail::check_length(fn, "distance", params.distance, false);
   if (params.distance == 0.0) detail::check_positive(fn, "distance_in_spacings", params.distance_in_spacings);
   detail::check_cloud(fn, cloud, 4, tree);
@@ -145,31 +253,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
     q.clear();
     for (const Neighbor& nb : neighbors)
       if (nb.index != i) q.push_back(t.point(nb.index) - p);
-    const std::size_t m = q.size();
-    if (m < 3) {
-      keep[i] = 0;
-      return;
-    }
-    const std::size_t support_needed = static_cast<std::size_t>(std::ceil(params.min_support * double(m) - 1e-9));
-    std::uint64_t state = mix(params.seed ^ mix(std::bit_cast<std::uint64_t>(p.x()) ^
-                                                mix(std::bit_cast<std::uint64_t>(p.y()) ^ mix(std::bit_cast<std::uint64_t>(p.z())))));
-    bool fits = false;
-    for (int it = 0; it < params.iterations && !fits; ++it) {
-      std::size_t a = (state = mix(state)) % m, b = (state = mix(state)) % m, c = (state = mix(state)) % m;
-      if (a == b || b == c || a == c) continue;
-      const Eigen::Vector3d u = q[b] - q[a], v = q[c] - q[a];
-      Eigen::Vector3d normal = u.cross(v);
-      const double length = normal.norm();
-      // Nearly collinear samples (angle below about 6 degrees) give no reliable plane.
-      if (!(length > kMinSine * u.norm() * v.norm())) continue;
-      normal /= length;
-      const double offset = -normal.dot(q[a]);  // plane: normal . x + offset = 0; the point is x = 0
-      if (std::abs(offset) > distance) continue;
-      std::size_t support = 0;
-      for (std::size_t j = 0; j < m && support < support_needed; ++j) support += std::abs(normal.dot(q[j]) + offset) <= distance;
-      fits = support >= support_needed;
-    }
-    keep[i] = fits;
+    keep[i] = fits_local_plane(q, distance, params, seed_for(params.seed, p));
   });
   reporter.report(1.0);
   reporter.throw_if_cancelled();
