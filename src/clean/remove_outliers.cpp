@@ -33,6 +33,10 @@ constexpr double kNoiseSigmas = 4.0;
 // RANSAC: the foot of a kept point lies within this many in-plane standard deviations of the
 // centroid of the plane's inliers (1.6 at a cube corner, 0.7 on an open border).
 constexpr double kSpread = 2.5;
+// RANSAC: a plane through the point other than the dominant one needs this share of
+// min_support among points off the dominant plane (4 of 23 neighbours by default: a cube
+// corner's other faces reach it, a cluster of a few drift points mostly does not).
+constexpr double kOwnShare = 0.5;
 
 // Runs `visit(i, buffer)` for every point in the tree's spatial order, in parallel, with a
 // thread-local neighbour buffer and progress over [0, 1).
@@ -80,12 +84,27 @@ struct Plane {
   double offset = 0.0;
   double rms = 0.0;  // refitted planes: RMS distance of the inliers they were fitted to
   bool surrounds = true;  // refitted planes: the point's foot lies within the inliers' spread
+  double score = 0.0;  // candidates: their Fit score
 };
 
-std::size_t support_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+// How well a plane fits the neighbours: how many lie within `distance` (its support) and the
+// MSAC score sum(1 - r^2 / distance^2) over those, which prefers a surface (residuals at the
+// noise level) to a plane cutting across creases (residuals spread over the whole band).
+struct Fit {
   std::size_t support = 0;
-  for (const Eigen::Vector3d& x : q) support += std::abs(plane.normal.dot(x) + plane.offset) <= distance;
-  return support;
+  double score = 0.0;
+};
+
+Fit fit_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+  Fit fit;
+  const double inverse = 1.0 / (distance * distance);
+  for (const Eigen::Vector3d& x : q) {
+    const double r = plane.normal.dot(x) + plane.offset;
+    if (std::abs(r) > distance) continue;
+    ++fit.support;
+    fit.score += 1.0 - r * r * inverse;
+  }
+  return fit;
 }
 
 // The least-squares plane of the points within `distance` of `plane` (its inliers); nullopt
@@ -116,17 +135,27 @@ std::optional<Plane> refit(std::span<const Eigen::Vector3d> q, const Plane& plan
   return fitted;
 }
 
+// Whether a refitted plane passes close enough to the point (the origin): within `distance`,
+// or within kNoiseSigmas RMS residuals of its inliers up to kGate * distance, with the point's
+// foot inside the inliers' spread.
+bool passes_near(const Plane& fitted, double distance) {
+  return fitted.surrounds && std::abs(fitted.offset) <= std::clamp(kNoiseSigmas * fitted.rms, distance, kGate * distance);
+}
+
 // Decides one point from the offsets `q` of its neighbours (itself excluded); see the header
-// for the three tests a refitted plane must pass. Allocates nothing.
-bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const RansacOutlierParams& params,
-                      std::uint64_t state) {
+// for the tests. `candidates` is scratch space (reused, so nothing is allocated per point
+// once it has grown to `iterations`).
+bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const RansacOutlierParams& params, std::uint64_t state,
+                      std::vector<Plane>& candidates) {
   const std::size_t m = q.size();
   if (m < 3) return false;
   const std::size_t needed = static_cast<std::size_t>(std::ceil(params.min_support * double(m) - 1e-9));
   const std::size_t enough = std::max(needed, static_cast<std::size_t>(std::ceil(params.min_relative_support * double(m) - 1e-9)));
-  std::size_t best = 0;     // the largest support of any plane tried
-  std::size_t through = 0;  // the largest support of a refitted plane that passed the tests
-  std::optional<Plane> best_plane;
+  const std::size_t own_needed = static_cast<std::size_t>(std::ceil(kOwnShare * params.min_support * double(m) - 1e-9));
+  candidates.clear();
+  Plane dominant;  // the best-scoring plane of the neighbourhood
+  Fit dominant_fit;
+  bool dominant_refitted = false;
   for (int it = 0; it < params.iterations; ++it) {
     // Three distinct neighbours, uniformly.
     const std::size_t a = (state = mix(state)) % m;
@@ -142,26 +171,39 @@ bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const
     if (!(length > kMinSine * u.norm() * v.norm())) continue;
     normal /= length;
     const Plane plane{normal, -normal.dot(q[a])};
-    const std::size_t support = support_of(q, plane, distance);
-    if (support > best) {
-      best = support;
-      best_plane = plane;
-    }
-    if (std::abs(plane.offset) > kGate * distance || support < needed || support <= through) continue;
+    const Fit fit = fit_of(q, plane, distance);
+    if (fit.score > dominant_fit.score) dominant = plane, dominant_fit = fit, dominant_refitted = false;
+    if (std::abs(plane.offset) > kGate * distance || fit.support < needed) continue;
     const std::optional<Plane> fitted = refit(q, plane, distance);
-    if (!fitted || !fitted->surrounds) continue;
-    if (std::abs(fitted->offset) > std::clamp(kNoiseSigmas * fitted->rms, distance, kGate * distance)) continue;
-    const std::size_t fitted_support = support_of(q, *fitted, distance);
-    if (fitted_support < needed) continue;
-    through = std::max(through, fitted_support);
-    best = std::max(best, fitted_support);
-    if (through >= enough) return true;  // no plane can hold more than all m neighbours
+    if (!fitted || !passes_near(*fitted, distance)) continue;
+    const Fit refit_fit = fit_of(q, *fitted, distance);
+    if (refit_fit.support < needed) continue;
+    // A plane through the point holding this share of all neighbours dominates any other.
+    if (refit_fit.support >= enough) return true;
+    candidates.push_back(*fitted);
+    candidates.back().score = refit_fit.score;
+    if (refit_fit.score > dominant_fit.score) dominant = *fitted, dominant_fit = refit_fit, dominant_refitted = true;
   }
-  if (through == 0) return false;
-  // The best plane's own least-squares fit may hold more points than the random sample did.
-  if (best_plane)
-    if (const std::optional<Plane> fitted = refit(q, *best_plane, distance)) best = std::max(best, support_of(q, *fitted, distance));
-  return double(through) >= params.min_relative_support * double(best);
+  if (candidates.empty()) return false;
+  if (!dominant_refitted)
+    if (const std::optional<Plane> fitted = refit(q, dominant, distance)) {
+      const Fit fit = fit_of(q, *fitted, distance);
+      if (fit.score >= dominant_fit.score) dominant = *fitted, dominant_fit = fit, dominant_refitted = true;
+    }
+  // On the dominant plane itself.
+  if (dominant_refitted ? passes_near(dominant, distance) : std::abs(dominant.offset) <= distance) return true;
+  // Otherwise a plane through the point must score min_relative_support of the dominant plane
+  // and hold kOwnShare * min_support of the neighbours on its own (not within `distance` of
+  // the dominant plane): a steep plane through a strip of the surface below a drift point, or
+  // through a few other drift points and that strip, does not; a crease's other face does.
+  for (const Plane& plane : candidates) {
+    if (plane.score < params.min_relative_support * dominant_fit.score) continue;
+    std::size_t own = 0;
+    for (const Eigen::Vector3d& x : q)
+      own += std::abs(plane.normal.dot(x) + plane.offset) <= distance && std::abs(dominant.normal.dot(x) + dominant.offset) > distance;
+    if (own >= own_needed) return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -242,18 +284,23 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   const std::size_t k = static_cast<std::size_t>(params.k);
 
   std::vector<std::uint8_t> keep(cloud.size());
-  tbb::enumerable_thread_specific<std::vector<Eigen::Vector3d>> offset_buffers;
+  struct Scratch {
+    std::vector<Eigen::Vector3d> offsets;
+    std::vector<Plane> candidates;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
   for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     const Eigen::Vector3d& p = cloud.positions[i];
     t.knn(p, k, neighbors);
     // Offsets of the other points from this one: small numbers even for georeferenced clouds.
     // The point itself takes no part in the fits, so it cannot support a plane through itself.
-    std::vector<Eigen::Vector3d>& q = offset_buffers.local();
+    Scratch& local = scratch.local();
+    std::vector<Eigen::Vector3d>& q = local.offsets;
     q.clear();
     for (const Neighbor& nb : neighbors)
       if (nb.index != i) q.push_back(t.point(nb.index) - p);
-    keep[i] = fits_local_plane(q, distance, params, seed_for(params.seed, p));
+    keep[i] = fits_local_plane(q, distance, params, seed_for(params.seed, p), local.candidates);
   });
   reporter.report(1.0);
   reporter.throw_if_cancelled();
