@@ -34,6 +34,7 @@ struct CleanState {
   int min_neighbours = 4;
   double distance = 0.0;
   double min_support = 0.3;
+  double min_relative_support = RansacOutlierParams{}.min_relative_support;
   int iterations = 2;
   double height_sigma = 0.0;
   double sharpness_deg = 20.0;
@@ -92,6 +93,8 @@ void validate(const CleanState& s, const std::vector<Method>& methods) {
   if (s.min_neighbours < 1) throw UsageError(fmt::format("--min-neighbours: {} must be at least 1", s.min_neighbours));
   if (!(s.min_support > 0.0 && s.min_support <= 1.0))
     throw UsageError(fmt::format("--min-support: {} must be in (0, 1] (a fraction of the neighbourhood)", s.min_support));
+  if (!(s.min_relative_support >= 0.0 && s.min_relative_support <= 1.0))
+    throw UsageError(fmt::format("--min-relative-support: {} must be in [0, 1]", s.min_relative_support));
   if (s.iterations < 1) throw UsageError(fmt::format("--iterations: {} must be at least 1", s.iterations));
   if (!(s.sharpness_deg > 0.0 && s.sharpness_deg <= 90.0))
     throw UsageError(fmt::format("--sharpness-deg: {} must be in (0, 90] degrees", s.sharpness_deg));
@@ -113,6 +116,7 @@ void run_clean(const CleanState& s) {
                          {"min_neighbours", s.min_neighbours},
                          {"distance", s.distance},
                          {"min_support", s.min_support},
+                         {"min_relative_support", s.min_relative_support},
                          {"iterations", s.iterations},
                          {"height_sigma", s.height_sigma},
                          {"sharpness_deg", s.sharpness_deg},
@@ -165,7 +169,8 @@ void run_clean(const CleanState& s) {
         break;
       case Method::Ransac:
         removal(remove_ransac_outliers(
-                    cloud, {.k = k_given ? s.k : 24, .distance = s.distance, .min_support = s.min_support, .seed = s.seed}, &tree,
+                    cloud, {.k = k_given ? s.k : 24, .distance = s.distance, .min_support = s.min_support,
+                     .min_relative_support = s.min_relative_support, .seed = s.seed}, &tree,
                     bar.callback()),
                 "distance_used");
         break;
@@ -227,6 +232,10 @@ Command register_clean(CLI::App& app) {
                   "ransac: plane distance (default 1 mean spacing); duplicates: merge distance (default 0.1 mean spacing); cloud units")
       ->type_name("D");
   cmd->add_option("--min-support", state->min_support, "ransac: fraction of the neighbourhood a plane needs, in (0, 1] (default 0.3)");
+  cmd->add_option("--min-relative-support", state->min_relative_support,
+                  fmt::format("ransac: a plane through the point keeps it when it holds this fraction of the neighbours or scores this "
+                              "fraction of the dominant plane, in [0, 1] (default {})",
+                              RansacOutlierParams{}.min_relative_support));
   cmd->add_flag("--exact", state->exact, "duplicates: merge only points with identical coordinates");
   cmd->add_option("--iterations", state->iterations, "bilateral/trilateral: position passes (default 2)");
   cmd->add_option("--height-sigma", state->height_sigma, "bilateral/trilateral: range sigma along the normal, cloud units (default 1 mean spacing)")

@@ -6,8 +6,10 @@
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <span>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -24,6 +26,17 @@ namespace {
 constexpr std::size_t kGrain = 256;
 // RANSAC: the smallest sine of the angle at the first sample between the other two.
 constexpr double kMinSine = 0.1;
+// RANSAC: planes passing within kGate * distance of the point are refitted and tested.
+constexpr double kGate = 2.0;
+// RANSAC: a point within this many RMS residuals of a refitted plane's inliers lies on it.
+constexpr double kNoiseSigmas = 4.0;
+// RANSAC: the foot of a kept point lies within this many in-plane standard deviations of the
+// centroid of the plane's inliers (1.6 at a cube corner, 0.7 on an open border).
+constexpr double kSpread = 2.5;
+// RANSAC: a plane through the point other than the dominant one needs this share of
+// min_support among points off the dominant plane (4 of 23 neighbours by default: a cube
+// corner's other faces reach it, a cluster of a few drift points mostly does not).
+constexpr double kOwnShare = 0.5;
 
 // Runs `visit(i, buffer)` for every point in the tree's spatial order, in parallel, with a
 // thread-local neighbour buffer and progress over [0, 1).
@@ -56,6 +69,141 @@ std::uint64_t mix(std::uint64_t x) {
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
+}
+
+// A point's random stream: from the seed and its coordinates only (not its index).
+std::uint64_t seed_for(std::uint64_t seed, const Eigen::Vector3d& p) {
+  return mix(seed ^ mix(std::bit_cast<std::uint64_t>(p.x()) ^
+                        mix(std::bit_cast<std::uint64_t>(p.y()) ^ mix(std::bit_cast<std::uint64_t>(p.z())))));
+}
+
+// A plane normal . x + offset = 0 in the offsets' frame (the query point at the origin, so
+// |offset| is its distance to the plane).
+struct Plane {
+  Eigen::Vector3d normal;
+  double offset = 0.0;
+  double rms = 0.0;  // refitted planes: RMS distance of the inliers they were fitted to
+  bool surrounds = true;  // refitted planes: the point's foot lies within the inliers' spread
+  double score = 0.0;  // candidates: their Fit score
+};
+
+// How well a plane fits the neighbours: how many lie within `distance` (its support) and the
+// MSAC score sum(1 - r^2 / distance^2) over those, which prefers a surface (residuals at the
+// noise level) to a plane cutting across creases (residuals spread over the whole band).
+struct Fit {
+  std::size_t support = 0;
+  double score = 0.0;
+};
+
+Fit fit_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+  Fit fit;
+  const double inverse = 1.0 / (distance * distance);
+  for (const Eigen::Vector3d& x : q) {
+    const double r = plane.normal.dot(x) + plane.offset;
+    if (std::abs(r) > distance) continue;
+    ++fit.support;
+    fit.score += 1.0 - r * r * inverse;
+  }
+  return fit;
+}
+
+// The least-squares plane of the points within `distance` of `plane` (its inliers); nullopt
+// when fewer than 3 or when they are collinear.
+std::optional<Plane> refit(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  std::size_t count = 0;
+  for (const Eigen::Vector3d& x : q) {
+    if (std::abs(plane.normal.dot(x) + plane.offset) > distance) continue;
+    sum += x;
+    outer.noalias() += x * x.transpose();
+    ++count;
+  }
+  if (count < 3) return std::nullopt;
+  const Eigen::Vector3d centroid = sum / double(count);
+  const Eigen::Matrix3d covariance = outer / double(count) - centroid * centroid.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(covariance);
+  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
+  if (!(values[1] > kMinSine * kMinSine * values[2])) return std::nullopt;  // a line, not a plane
+  Plane fitted{eigen.eigenvectors().col(0).normalized(), 0.0, std::sqrt(std::max(values[0], 0.0))};
+  fitted.offset = -fitted.normal.dot(centroid);
+  // The foot of the point (the origin) on the plane, from the inliers' centroid, against the
+  // inliers' in-plane spread: a point far from where the plane is supported does not lie on it.
+  const Eigen::Vector3d foot = -centroid + fitted.normal.dot(centroid) * fitted.normal;
+  fitted.surrounds = foot.squaredNorm() <= kSpread * kSpread * (values[1] + values[2]);
+  return fitted;
+}
+
+// Whether a refitted plane passes close enough to the point (the origin): within `distance`,
+// or within kNoiseSigmas RMS residuals of its inliers up to kGate * distance, with the point's
+// foot inside the inliers' spread.
+bool passes_near(const Plane& fitted, double distance) {
+  return fitted.surrounds && std::abs(fitted.offset) <= std::clamp(kNoiseSigmas * fitted.rms, distance, kGate * distance);
+}
+
+// Decides one point from the offsets `q` of its neighbours (itself excluded); see the header
+// for the tests. `candidates` is scratch space (reused, so nothing is allocated per point
+// once it has grown to `iterations`).
+bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const RansacOutlierParams& params, std::uint64_t state,
+                      std::vector<Plane>& candidates) {
+  const std::size_t m = q.size();
+  if (m < 3) return false;
+  const std::size_t needed = static_cast<std::size_t>(std::ceil(params.min_support * double(m) - 1e-9));
+  const std::size_t enough = std::max(needed, static_cast<std::size_t>(std::ceil(params.min_relative_support * double(m) - 1e-9)));
+  const std::size_t own_needed = static_cast<std::size_t>(std::ceil(kOwnShare * params.min_support * double(m) - 1e-9));
+  candidates.clear();
+  Plane dominant;  // the best-scoring plane of the neighbourhood
+  Fit dominant_fit;
+  bool dominant_refitted = false;
+  for (int it = 0; it < params.iterations; ++it) {
+    // Three distinct neighbours, uniformly.
+    const std::size_t a = (state = mix(state)) % m;
+    std::size_t b = (state = mix(state)) % (m - 1);
+    b += b >= a;
+    std::size_t c = (state = mix(state)) % (m - 2);
+    c += c >= std::min(a, b);
+    c += c >= std::max(a, b);
+    const Eigen::Vector3d u = q[b] - q[a], v = q[c] - q[a];
+    Eigen::Vector3d normal = u.cross(v);
+    const double length = normal.norm();
+    // Nearly collinear samples (angle below about 6 degrees) give no reliable plane.
+    if (!(length > kMinSine * u.norm() * v.norm())) continue;
+    normal /= length;
+    const Plane plane{normal, -normal.dot(q[a])};
+    const Fit fit = fit_of(q, plane, distance);
+    if (fit.score > dominant_fit.score) dominant = plane, dominant_fit = fit, dominant_refitted = false;
+    if (std::abs(plane.offset) > kGate * distance || fit.support < needed) continue;
+    const std::optional<Plane> fitted = refit(q, plane, distance);
+    if (!fitted || !passes_near(*fitted, distance)) continue;
+    const Fit refit_fit = fit_of(q, *fitted, distance);
+    if (refit_fit.support < needed) continue;
+    // A plane through the point holding this share of all neighbours dominates any other.
+    if (refit_fit.support >= enough) return true;
+    candidates.push_back(*fitted);
+    candidates.back().score = refit_fit.score;
+    if (refit_fit.score > dominant_fit.score) dominant = *fitted, dominant_fit = refit_fit, dominant_refitted = true;
+  }
+  if (candidates.empty()) return false;
+  if (!dominant_refitted)
+    if (const std::optional<Plane> fitted = refit(q, dominant, distance)) {
+      const Fit fit = fit_of(q, *fitted, distance);
+      if (fit.score >= dominant_fit.score) dominant = *fitted, dominant_fit = fit, dominant_refitted = true;
+    }
+  // On the dominant plane itself.
+  if (dominant_refitted ? passes_near(dominant, distance) : std::abs(dominant.offset) <= distance) return true;
+  // Otherwise a plane through the point must score min_relative_support of the dominant plane
+  // and hold kOwnShare * min_support of the neighbours on its own (not within `distance` of
+  // the dominant plane): a steep plane through a strip of the surface below a drift point, or
+  // through a few other drift points and that strip, does not; a crease's other face does.
+  for (const Plane& plane : candidates) {
+    if (plane.score < params.min_relative_support * dominant_fit.score) continue;
+    std::size_t own = 0;
+    for (const Eigen::Vector3d& x : q)
+      own += std::abs(plane.normal.dot(x) + plane.offset) <= distance && std::abs(dominant.normal.dot(x) + dominant.offset) > distance;
+    if (own >= own_needed) return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -133,6 +281,8 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   if (params.iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, params.iterations));
   if (!(params.min_support > 0.0 && params.min_support <= 1.0))
     throw UsageError(fmt::format("{}: min_support must be in (0, 1], got {}", fn, params.min_support));
+  if (!(params.min_relative_support >= 0.0 && params.min_relative_support <= 1.0))
+    throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, params.min_relative_support));
   detail::check_length(fn, "distance", params.distance, false);
   if (params.distance == 0.0) detail::check_positive(fn, "distance_in_spacings", params.distance_in_spacings);
   detail::check_cloud(fn, cloud, 4, tree);
@@ -142,42 +292,23 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   const std::size_t k = static_cast<std::size_t>(params.k);
 
   std::vector<std::uint8_t> keep(cloud.size());
-  tbb::enumerable_thread_specific<std::vector<Eigen::Vector3d>> offset_buffers;
+  struct Scratch {
+    std::vector<Eigen::Vector3d> offsets;
+    std::vector<Plane> candidates;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
   for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     const Eigen::Vector3d& p = cloud.positions[i];
     t.knn(p, k, neighbors);
     // Offsets of the other points from this one: small numbers even for georeferenced clouds.
     // The point itself takes no part in the fits, so it cannot support a plane through itself.
-    std::vector<Eigen::Vector3d>& q = offset_buffers.local();
+    Scratch& local = scratch.local();
+    std::vector<Eigen::Vector3d>& q = local.offsets;
     q.clear();
     for (const Neighbor& nb : neighbors)
       if (nb.index != i) q.push_back(t.point(nb.index) - p);
-    const std::size_t m = q.size();
-    if (m < 3) {
-      keep[i] = 0;
-      return;
-    }
-    const std::size_t support_needed = static_cast<std::size_t>(std::ceil(params.min_support * double(m) - 1e-9));
-    std::uint64_t state = mix(params.seed ^ mix(std::bit_cast<std::uint64_t>(p.x()) ^
-                                                mix(std::bit_cast<std::uint64_t>(p.y()) ^ mix(std::bit_cast<std::uint64_t>(p.z())))));
-    bool fits = false;
-    for (int it = 0; it < params.iterations && !fits; ++it) {
-      std::size_t a = (state = mix(state)) % m, b = (state = mix(state)) % m, c = (state = mix(state)) % m;
-      if (a == b || b == c || a == c) continue;
-      const Eigen::Vector3d u = q[b] - q[a], v = q[c] - q[a];
-      Eigen::Vector3d normal = u.cross(v);
-      const double length = normal.norm();
-      // Nearly collinear samples (angle below about 6 degrees) give no reliable plane.
-      if (!(length > kMinSine * u.norm() * v.norm())) continue;
-      normal /= length;
-      const double offset = -normal.dot(q[a]);  // plane: normal . x + offset = 0; the point is x = 0
-      if (std::abs(offset) > distance) continue;
-      std::size_t support = 0;
-      for (std::size_t j = 0; j < m && support < support_needed; ++j) support += std::abs(normal.dot(q[j]) + offset) <= distance;
-      fits = support >= support_needed;
-    }
-    keep[i] = fits;
+    keep[i] = fits_local_plane(q, distance, params, seed_for(params.seed, p), local.candidates);
   });
   reporter.report(1.0);
   reporter.throw_if_cancelled();

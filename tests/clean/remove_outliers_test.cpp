@@ -167,7 +167,27 @@ TEST(RadiusOutliers, InvariantUnderPermutationAndAFarShift) {
   EXPECT_LE(std::max(far.kept.size(), base.kept.size()) - std::min(far.kept.size(), base.kept.size()), 2u);
 }
 
-TEST(RansacOutliers, RemovesPointsOffTheFacesOfANoisyCubeAndKeepsEdges) {
+// The points judged outliers among the first `surface` points (all on the true surface), and
+// those near the cube's edges and corners.
+struct SurfaceLosses {
+  std::size_t removed = 0, edge = 0, edge_removed = 0, corner = 0, corner_removed = 0;
+};
+
+SurfaceLosses surface_losses(const PointCloud& cloud, const OutlierResult& result, std::size_t surface, double spacing, bool cube) {
+  std::vector<bool> kept(cloud.size(), false);
+  for (std::uint32_t i : result.kept) kept[i] = true;
+  SurfaceLosses l;
+  for (std::size_t i = 0; i < surface; ++i) {
+    l.removed += !kept[i];
+    if (!cube) continue;
+    const Vector3d& p = cloud.positions[i];
+    if (test::distance_to_cube_edge(p) <= 2.0 * spacing) ++l.edge, l.edge_removed += !kept[i];
+    if ((p.cwiseAbs() - Vector3d::Constant(1.0)).norm() <= 3.0 * spacing) ++l.corner, l.corner_removed += !kept[i];
+  }
+  return l;
+}
+
+TEST(RansacOutliers, RemovesPointsOffTheFacesOfANoisyCubeAndKeepsEdgesAndCorners) {
   PointCloud cloud = test::sample_cube(20000, 1.0, 6);
   const double spacing = mean_spacing(cloud.positions);
   test::add_noise(cloud, 0.2 * spacing, 8);
@@ -175,21 +195,108 @@ TEST(RansacOutliers, RemovesPointsOffTheFacesOfANoisyCubeAndKeepsEdges) {
   const std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, 200, 3.0 * spacing, 15.0 * spacing, 12);
   const OutlierResult result = remove_ransac_outliers(cloud);
   const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
-  std::printf("ransac on a noisy cube: precision %.3f recall %.3f\n", d.precision, d.recall);
-  // Measured: precision 1.000, recall 0.625 (below the 0.95 aimed for: open work, see docs/clean.md).
-  EXPECT_GE(d.recall, 0.6);
-  EXPECT_GE(d.precision, 0.95);
-  // Points near the edges fit the plane of their own face.
-  std::size_t edge_points = 0, edge_removed = 0;
-  std::vector<bool> kept(cloud.size(), false);
-  for (std::uint32_t i : result.kept) kept[i] = true;
-  for (std::size_t i = 0; i < surface; ++i) {
-    if (test::distance_to_cube_edge(cloud.positions[i]) > 2.0 * spacing) continue;
-    ++edge_points;
-    edge_removed += !kept[i];
+  const SurfaceLosses l = surface_losses(cloud, result, surface, spacing, true);
+  std::printf("ransac on a noisy cube: precision %.3f recall %.3f; edge points removed %zu/%zu, corner %zu/%zu\n", d.precision,
+              d.recall, l.edge_removed, l.edge, l.corner_removed, l.corner);
+  // Measured: precision 1.000, recall 1.000 (before the refit and dominance tests: 1.000 / 0.625).
+  EXPECT_GE(d.recall, 0.98);
+  EXPECT_GE(d.precision, 0.98);
+  // Points near the edges and corners fit the plane of their own face. Measured: 0 of 1379
+  // within 2 spacings of an edge, 0 of 52 within 3 spacings of a corner.
+  ASSERT_GT(l.edge, 500u);
+  ASSERT_GT(l.corner, 20u);
+  EXPECT_LE(double(l.edge_removed), 0.01 * double(l.edge));
+  EXPECT_LE(l.corner_removed, 1u);
+}
+
+TEST(RansacOutliers, HeavierNoiseOnACubeAndASphere) {
+  // Noise 0.5 spacing: surface points stray a spacing from their plane; the acceptance band
+  // grows with the inliers' RMS residual (4 of them, at most 2 distances).
+  {
+    PointCloud cloud = test::sample_cube(20000, 1.0, 6);
+    const double spacing = mean_spacing(cloud.positions);
+    test::add_noise(cloud, 0.5 * spacing, 8);
+    const std::size_t surface = cloud.size();
+    const std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, 200, 3.0 * spacing, 15.0 * spacing, 12);
+    const OutlierResult result = remove_ransac_outliers(cloud);
+    const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
+    const SurfaceLosses l = surface_losses(cloud, result, surface, spacing, true);
+    std::printf("ransac, cube, noise 0.5: precision %.3f recall %.3f; surface points removed %zu, near edges %zu/%zu\n", d.precision,
+                d.recall, l.removed, l.edge_removed, l.edge);
+    // Measured: precision 0.980, recall 0.980, 4 of 20000 surface points removed, 1 of 1354
+    // near the edges (before: 1.000 / 0.325).
+    EXPECT_GE(d.precision, 0.95);
+    EXPECT_GE(d.recall, 0.95);
+    EXPECT_LE(double(l.edge_removed), 0.01 * double(l.edge));
   }
-  ASSERT_GT(edge_points, 500u);
-  EXPECT_LE(double(edge_removed), 0.01 * double(edge_points));
+  {
+    PointCloud cloud = test::sample_sphere(20000, 1.0, Vector3d::Zero(), 3);
+    const double spacing = mean_spacing(cloud.positions);
+    test::add_noise(cloud, 0.5 * spacing, 4);
+    const std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, 200, 3.0 * spacing, 15.0 * spacing, 5);
+    const OutlierResult result = remove_ransac_outliers(cloud);
+    const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
+    std::printf("ransac, sphere, noise 0.5: precision %.3f recall %.3f\n", d.precision, d.recall);
+    // Measured: precision 0.975, recall 0.995 (before: 1.000 / 0.360).
+    EXPECT_GE(d.precision, 0.95);
+    EXPECT_GE(d.recall, 0.95);
+  }
+}
+
+TEST(RansacOutliers, KeepsCurvedSurfacesAndFindsDriftAndScatteredPoints) {
+  // Small spheres: 24 neighbours span 0.25 (2000 points) to 0.35 (1000) radians of arc, so the
+  // local planes are visibly curved.
+  for (std::size_t n : {1000, 2000}) {
+    PointCloud cloud = test::sample_sphere(n, 1.0, Vector3d::Zero(), 7);
+    const double spacing = mean_spacing(cloud.positions);
+    test::add_noise(cloud, 0.2 * spacing, 8);
+    const std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, n / 100, 3.0 * spacing, 10.0 * spacing, 9);
+    const OutlierResult result = remove_ransac_outliers(cloud);
+    const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
+    std::printf("ransac, sphere of %zu points: precision %.3f recall %.3f\n", n, d.precision, d.recall);
+    // Measured: precision 1.000, recall 1.000 for both (before: recall 0.500 and 0.600).
+    EXPECT_EQ(surface_losses(cloud, result, n, spacing, false).removed, 0u) << n;
+    EXPECT_GE(d.recall, 0.95) << n;
+  }
+  // Drift and scattered points together (the sphere of the other filters' tests).
+  Noisy s = noisy_sphere();
+  const OutlierResult result = remove_ransac_outliers(s.cloud);
+  const test::Detection d = test::score_removal(result.kept, s.cloud.size(), s.outliers);
+  std::printf("ransac on a noisy sphere: precision %.3f recall %.3f\n", d.precision, d.recall);
+  // Measured: precision 1.000, recall 1.000 (before: 1.000 / 0.570).
+  EXPECT_GE(d.precision, 0.98);
+  EXPECT_GE(d.recall, 0.98);
+}
+
+TEST(RansacOutliers, RemovesSmallClustersOfDriftPoints) {
+  // Drift points in clusters of `size` (a seeded drift point and size - 1 copies jittered by
+  // a spacing around it): each point's neighbourhood holds size - 1 other drift points, which
+  // form no plane as well supported as the surface below them.
+  for (std::size_t size : {2, 4, 6}) {
+    PointCloud cloud = test::sample_sphere(20000, 1.0, Vector3d::Zero(), 3);
+    const double spacing = mean_spacing(cloud.positions);
+    test::add_noise(cloud, 0.2 * spacing, 4);
+    std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, 40, 3.0 * spacing, 10.0 * spacing, 5);
+    std::mt19937_64 rng(size);
+    std::normal_distribution<double> jitter(0.0, spacing);
+    PointCloud extra;
+    for (std::uint32_t o : std::vector<std::uint32_t>(outliers))
+      for (std::size_t j = 1; j < size; ++j) {
+        const double x = jitter(rng), y = jitter(rng), z = jitter(rng);
+        outliers.push_back(static_cast<std::uint32_t>(cloud.size() + extra.size()));
+        extra.positions.push_back(cloud.positions[o] + Vector3d(x, y, z));
+        extra.normals.push_back(cloud.normals[o]);
+      }
+    cloud.append(extra);
+    const OutlierResult result = remove_ransac_outliers(cloud);
+    const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
+    std::printf("ransac, drift clusters of %zu: precision %.3f recall %.3f\n", size, d.precision, d.recall);
+    // Measured: precision 1.000 for all; recall 0.988, 0.981, 0.908 for clusters of 2, 4, 6
+    // (a plane through the point must hold 4 of its 23 neighbours off the dominant plane;
+    // with the dominance test alone: 0.988, 0.825, 0.296).
+    EXPECT_GE(d.precision, 0.98) << size;
+    EXPECT_GE(d.recall, size < 6 ? 0.95 : 0.85) << size;
+  }
 }
 
 TEST(RansacOutliers, InvariantUnderPermutation) {
@@ -200,7 +307,9 @@ TEST(RansacOutliers, InvariantUnderPermutation) {
   const OutlierResult base = remove_ransac_outliers(cloud);
   const std::vector<std::size_t> perm = permutation(cloud.size(), 11);
   EXPECT_EQ(unpermute(remove_ransac_outliers(cloud.select(perm)).kept, perm), base.kept);
-  EXPECT_GT(base.removed, 20u);  // of 40 drift points; measured 27
+  // Measured: the 40 drift points and nothing else (before: 27 of them).
+  EXPECT_GE(base.removed, 38u);
+  EXPECT_LE(base.removed, 42u);
 }
 
 TEST(KeepPoints, KeepsAttributesAndChecksIndices) {
@@ -230,6 +339,9 @@ TEST(Outliers, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.distance = -0.5}); }, "distance must be >= 0 (cloud units), got -0.5");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_support = 0.0}); }, "min_support must be in (0, 1], got 0");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_support = 1.5}); }, "min_support must be in (0, 1], got 1.5");
+  expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_relative_support = -0.1}); },
+                           "min_relative_support must be in [0, 1], got -0.1");
+  expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_relative_support = NAN}); }, "min_relative_support must be in [0, 1]");
   PointCloud one;
   one.positions = {Vector3d::Zero()};
   expect_error<UsageError>([&] { remove_statistical_outliers(one); }, "needs at least 2 points, got 1");
@@ -256,6 +368,7 @@ TEST(Outliers, ReuseATreeAndCancel) {
   EXPECT_TRUE(monotone);
   EXPECT_EQ(last, 1.0);
 }
+
 
 }  // namespace
 }  // namespace pointsurf
