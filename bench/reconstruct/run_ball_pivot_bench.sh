@@ -9,30 +9,18 @@
 # Chamfer / Hausdorff distances to the true mesh (bench/reconstruct/mesh_metrics_runner).
 # Needs: BUILD_DIR with ball_pivot_runner, mesh_metrics_runner and pointsurf_bench built.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
+WORK_NAME=ball_pivot
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SIZES="${1:-100000}"
 REPEATS="${2:-3}"
-MESH="${MESH:-armadillo}"
 O3D_LIMIT="${O3D_LIMIT:-1200}"
-OUT="$ROOT/bench/out"
-WORK="$OUT/ball_pivot"
-PY=/usr/bin/python3
 RUNNER="$BUILD_DIR/bench/ball_pivot_runner"
-METRICS="$BUILD_DIR/bench/mesh_metrics_runner"
-mkdir -p "$WORK"
 
-if [ ! -f "$OUT/$MESH.off" ]; then
-  tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$OUT" "data/meshes/$MESH.off"
-  mv "$OUT/data/meshes/$MESH.off" "$OUT/$MESH.off"
-  rm -rf "$OUT/data"
-fi
 
 RESULTS="$WORK/results.jsonl"
 : > "$RESULTS"
 for n in $SIZES; do
-  clean="$OUT/${MESH}_${n}.ply"
-  [ -f "$clean" ] || "$BUILD_DIR/bench/pointsurf_bench" sample "$OUT/$MESH.off" "$n" "$clean" 1
+  clean=$(sample_cloud "$n")
   spacing=$("$RUNNER" spacing "$clean")
   radii=$("$PY" -c "s=$spacing; print(','.join(repr(f*s) for f in (1.5, 3.0, 6.0)))")
   noisy="$WORK/${MESH}_${n}_noisy.ply"

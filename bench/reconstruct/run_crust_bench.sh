@@ -11,24 +11,13 @@
 # Needs: BUILD_DIR with crust_runner, mesh_metrics_runner and pointsurf_bench built; g++ and
 # libcgal-dev (the CGAL peer bench/reconstruct/crust_cgal_aft.cpp is compiled here).
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
+WORK_NAME=crust
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SIZES="${1:-100000}"
 REPEATS="${2:-3}"
-MESH="${MESH:-armadillo}"
-OUT="$ROOT/bench/out"
-WORK="$OUT/crust"
-PY=/usr/bin/python3
 RUNNER="$BUILD_DIR/bench/crust_runner"
-METRICS="$BUILD_DIR/bench/mesh_metrics_runner"
 AFT="$WORK/crust_cgal_aft"
-mkdir -p "$WORK"
 
-if [ ! -f "$OUT/$MESH.off" ]; then
-  tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$OUT" "data/meshes/$MESH.off"
-  mv "$OUT/data/meshes/$MESH.off" "$OUT/$MESH.off"
-  rm -rf "$OUT/data"
-fi
 if [ ! -x "$AFT" ] || [ "$ROOT/bench/reconstruct/crust_cgal_aft.cpp" -nt "$AFT" ]; then
   echo "compiling the CGAL advancing-front peer" >&2
   g++ -O2 -DNDEBUG -std=c++17 -I/usr/include/eigen3 "$ROOT/bench/reconstruct/crust_cgal_aft.cpp" -o "$AFT" -lgmp -lmpfr
@@ -37,8 +26,7 @@ fi
 RESULTS="$WORK/results.jsonl"
 : > "$RESULTS"
 for n in $SIZES; do
-  cloud="$OUT/${MESH}_${n}.ply"
-  [ -f "$cloud" ] || "$BUILD_DIR/bench/pointsurf_bench" sample "$OUT/$MESH.off" "$n" "$cloud" 1
+  cloud=$(sample_cloud "$n")
   xyz="$WORK/${MESH}_${n}.xyz"
   [ -f "$xyz" ] || "$RUNNER" xyz "$cloud" "$xyz"
   for tool in pointsurf cgal_aft; do

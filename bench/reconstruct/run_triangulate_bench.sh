@@ -13,29 +13,17 @@
 # to the true mesh (bench/reconstruct/mesh_metrics_runner), in cloud units and in mean spacings.
 # Needs: BUILD_DIR with triangulate_runner, mesh_metrics_runner and pointsurf_bench built.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
+WORK_NAME=triangulate
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 SIZES="${1:-100000}"
 REPEATS="${2:-3}"
-MESH="${MESH:-armadillo}"
-OUT="$ROOT/bench/out"
-WORK="$OUT/triangulate"
-PY=/usr/bin/python3
 RUNNER="$BUILD_DIR/bench/triangulate_runner"
-METRICS="$BUILD_DIR/bench/mesh_metrics_runner"
-mkdir -p "$WORK"
 
-if [ ! -f "$OUT/$MESH.off" ]; then
-  tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$OUT" "data/meshes/$MESH.off"
-  mv "$OUT/data/meshes/$MESH.off" "$OUT/$MESH.off"
-  rm -rf "$OUT/data"
-fi
 
 RESULTS="$WORK/results.jsonl"
 : > "$RESULTS"
 for n in $SIZES; do
-  cloud="$OUT/${MESH}_${n}.ply"
-  [ -f "$cloud" ] || "$BUILD_DIR/bench/pointsurf_bench" sample "$OUT/$MESH.off" "$n" "$cloud" 1
+  cloud=$(sample_cloud "$n")
   radii=""
   for tool in pointsurf open3d; do
     mesh="$WORK/${tool}_${n}.ply"
