@@ -123,7 +123,7 @@ void run_reconstruct(const ReconstructState& s) {
   check_range("max-angle", tp.max_angle_deg, 60.0, 180.0, true, false);
   check_range("max-dihedral", tp.max_dihedral_deg, 0.0, 180.0, true, false);
   check_range("fill-holes", tp.max_hole_perimeter_in_spacings, 0.0, INFINITY, false, true);
-  check_range("max-front-angle", tp.max_front_angle_deg, 0.0, 180.0, false, false);
+  check_range("max-front-angle", tp.max_front_angle_deg, 0.0, 180.0, false, true);
   check_range("cocone-angle", s.crust.cocone_angle_deg, 0.0, 90.0, true, true);
   check_range("crust-normal-angle", s.crust.normal_filter_angle_deg, 0.0, 90.0, true, false);
   check_range("sharp-edge-angle", s.crust.sharp_edge_angle_deg, 180.0, 360.0, false, false);

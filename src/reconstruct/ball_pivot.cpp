@@ -22,6 +22,7 @@
 #include <tbb/parallel_for.h>
 
 #include "normals/detail/progress_reporter.h"
+#include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 
@@ -104,8 +105,10 @@ public:
       for (std::size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
         if (skip_[i]) continue;
         tree_.radius(global(local_[i]), near_radius_, nbs);
-        near_offsets_[i + 1] = nbs.size();
-        for (const Neighbor& nb : nbs) out.push_back(nb.index);
+        const std::size_t before = out.size();
+        for (const Neighbor& nb : nbs)
+          if (!skip_[nb.index]) out.push_back(nb.index);  // skipped points never join a triangle
+        near_offsets_[i + 1] = out.size() - before;
       }
     });
     for (std::size_t i = 0; i < n; ++i) near_offsets_[i + 1] += near_offsets_[i];
@@ -649,20 +652,28 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   // Local coordinates keep georeferenced clouds precise in the circumcentre computations.
   const Eigen::Vector3d origin = bounding_box(cloud.positions).center();
   std::vector<Eigen::Vector3d> local(n), normals(n);
-  std::vector<std::uint8_t> skip(n, 0);
+  // Skipped: exact copies (by sorting, so a stack of copies stays cheap), points without a
+  // usable normal, and near-duplicates of an earlier point that has one.
+  std::vector<std::uint8_t> skip = detail::later_exact_copies(cloud.positions);
+  const auto usable_normal = [&](std::size_t i) {
+    const double len = cloud.normals[i].norm();
+    return len > 0.0 && std::isfinite(len);
+  };
   const double duplicate_distance = kDuplicateInSpacings * result.mean_spacing;
   tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<Neighbor>& nbs = buffers.local();
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       local[i] = cloud.positions[i] - origin;
-      const Eigen::Vector3d& nrm = cloud.normals[i];
-      const double len = nrm.norm();
-      normals[i] = len > 0.0 && std::isfinite(len) ? Eigen::Vector3d(nrm / len) : Eigen::Vector3d::Zero();
-      if (normals[i].isZero()) skip[i] = 1;
+      normals[i] = usable_normal(i) ? Eigen::Vector3d(cloud.normals[i] / cloud.normals[i].norm()) : Eigen::Vector3d::Zero();
+      if (skip[i]) continue;  // an exact copy: its first is decided below
+      if (normals[i].isZero()) {
+        skip[i] = 1;
+        continue;
+      }
       tree->radius(cloud.positions[i], duplicate_distance, nbs);
       for (const Neighbor& nb : nbs)
-        if (nb.index < i) skip[i] = 1;
+        if (nb.index < i && cloud.positions[nb.index] != cloud.positions[i] && usable_normal(nb.index)) skip[i] = 1;
     }
   });
 

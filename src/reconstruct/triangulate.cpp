@@ -9,6 +9,7 @@
 #include <optional>
 #include <queue>
 #include <functional>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "normals/detail/progress_reporter.h"
+#include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "reconstruct/detail/triangulate_half_edges.h"
 
@@ -237,8 +239,9 @@ void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdT
     throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
   const std::size_t n = cloud.size();
   if (n < 3) throw UsageError(fmt::format("reconstruct_region_growing: needs at least 3 points, got {}", n));
-  if (n >= std::size_t{kNone})
-    throw UsageError(fmt::format("reconstruct_region_growing: at most {} points, got {}", kNone - 1, n));
+  // Triangles hold int vertex indices, and candidate ids must stay below kNone.
+  constexpr std::size_t kMaxPoints = std::size_t(std::numeric_limits<int>::max() / 4);
+  if (n > kMaxPoints) throw UsageError(fmt::format("reconstruct_region_growing: at most {} points, got {}", kMaxPoints, n));
   if (!cloud.has_normals())
     throw UsageError("reconstruct_region_growing: the cloud has no normals; estimate and orient them first "
                      "(estimate_normals, orient_normals)");
@@ -246,6 +249,9 @@ void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdT
     throw UsageError(fmt::format("reconstruct_region_growing: the cloud has {} normals for {} points", cloud.normals.size(), n));
   if (tree != nullptr && tree->size() != n)
     throw UsageError(fmt::format("reconstruct_region_growing: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite())
+      throw InputError(fmt::format("reconstruct_region_growing: point {} has a non-finite coordinate", i));
 }
 
 // The selected triangles and their unit normals, with the half-edge map they fill.
@@ -837,6 +843,8 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   std::vector<std::uint8_t> usable(n, 0);
   const std::span<const std::uint32_t> order = tree->spatial_order();
   {
+    // Exact copies by sorting: a stack of more copies than the kNN below sees stays one point.
+    const std::vector<std::uint8_t> copies = detail::later_exact_copies(cloud.positions);
     detail::ProgressReporter pass(progress, 0.0, 0.1, n);
     tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -845,7 +853,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
       for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
         const std::uint32_t i = order[pos];
         tree->knn(cloud.positions[i], kSpacingNeighbours, nb);
-        bool duplicate = false;
+        bool duplicate = copies[i] != 0;
         double sum = 0.0;
         std::size_t count = 0;
         for (const Neighbor& x : nb) {

@@ -52,12 +52,31 @@ double mean_spacing(const KdTree& tree, std::size_t max_samples, std::uint64_t s
   if (max_samples < 1) throw UsageError("mean_spacing: max_samples must be >= 1, got 0");
   const std::vector<std::uint32_t> samples = sample_indices(n, max_samples, seed);
 
+  // Samples at one position share one answer: a stack of m copies costs one widening query,
+  // not m of them (each would have to step over the whole stack).
+  std::vector<std::uint32_t> by_position(samples.size()), first(samples.size());
+  std::iota(by_position.begin(), by_position.end(), 0u);
+  const auto lexicographic = [&](std::uint32_t a, std::uint32_t b) {
+    const Eigen::Vector3d &p = tree.point(samples[a]), &q = tree.point(samples[b]);
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return a < b;
+  };
+  std::sort(by_position.begin(), by_position.end(), lexicographic);
+  for (std::size_t q = 0; q < by_position.size(); ++q) {
+    const std::uint32_t s = by_position[q];
+    const bool same = q > 0 && tree.point(samples[s]) == tree.point(samples[by_position[q - 1]]);
+    first[s] = same ? first[by_position[q - 1]] : s;
+  }
   std::vector<double> distances(samples.size());
   tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<Neighbor>& neighbors = buffers.local();
-    for (std::size_t s = r.begin(); s != r.end(); ++s) distances[s] = nearest_distinct_distance(tree, samples[s], neighbors);
+    for (std::size_t s = r.begin(); s != r.end(); ++s)
+      if (first[s] == s) distances[s] = nearest_distinct_distance(tree, samples[s], neighbors);
   });
+  for (std::size_t s = 0; s < samples.size(); ++s) distances[s] = distances[first[s]];
   // Summed serially in sample order so the result does not depend on the thread schedule.
   double sum = 0.0;
   std::size_t count = 0;

@@ -147,6 +147,32 @@ TEST(BallPivot, DuplicatesAreLeftUnusedAndTheMeshStaysCorrect) {
   EXPECT_EQ(r.topology.degenerate_triangles, 0u);
 }
 
+TEST(BallPivot, AStackOfManyCopiesStaysCheapAndUnused) {
+  // 20,000 copies of one sample: found by sorting (the radius queries of each copy would cost
+  // the square of the stack), all but the first left unused, the sphere closed.
+  PointCloud cloud = test::sample_sphere(3000, 1.0);
+  cloud.append(cloud.select(std::vector<std::size_t>(20000, 11)));
+  const ReconstructionResult r = reconstruct_ball_pivoting(cloud);
+  expect_closed_genus(r, 0);
+  EXPECT_EQ(r.unused_points, 20000u);
+}
+
+TEST(BallPivot, AFirstCopyWithoutNormalLeavesTheNextCopyInUse) {
+  // Near-duplicates: the first without a usable normal is skipped, so the second one stands in.
+  PointCloud cloud = test::sample_sphere(3000, 1.0);
+  const double spacing = mean_spacing(cloud.positions);
+  cloud.positions.push_back(cloud.positions[0] + Vector3d::Constant(1e-9 * spacing));
+  cloud.normals.push_back(cloud.normals[0]);
+  cloud.normals[0] = Vector3d::Zero();
+  const ReconstructionResult r = reconstruct_ball_pivoting(cloud);
+  expect_closed_genus(r, 0);
+  EXPECT_EQ(r.unused_points, 1u);  // point 0 only
+  bool last_used = false;
+  for (const Triangle& t : r.mesh.triangles)
+    for (int c = 0; c < 3; ++c) last_used |= std::size_t(t[c]) == cloud.size() - 1;
+  EXPECT_TRUE(last_used);
+}
+
 TEST(BallPivot, ExplicitRadiiAreUsedAsGiven) {
   const PointCloud cloud = test::sample_sphere(3000, 1.0);
   BallPivotParams tiny;

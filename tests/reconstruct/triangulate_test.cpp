@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <set>
@@ -261,6 +262,23 @@ TEST(RegionGrowing, DuplicatesAreSkippedAndCounted) {
   EXPECT_EQ(r.duplicate_points, copies.size());
   EXPECT_EQ(r.unused_points, copies.size());
   expect_closed(r, 0);
+}
+
+TEST(RegionGrowing, AStackOfManyCopiesIsOnePoint) {
+  // More copies of one sample than the kNN pass sees (a scanner's "no return" points): found by
+  // sorting, every copy but the first is skipped and the sphere stays closed.
+  PointCloud cloud = test::sample_sphere(3000, 1.0, Vector3d::Zero(), 32);
+  cloud.append(cloud.select(std::vector<std::size_t>(2000, 7)));
+  const TriangulateResult r = reconstruct_region_growing(cloud);
+  EXPECT_EQ(r.duplicate_points, 2000u);
+  EXPECT_EQ(r.unused_points, 2000u);
+  expect_closed(r, 0);
+}
+
+TEST(RegionGrowing, NonFiniteCoordinateIsAnInputError) {
+  PointCloud cloud = test::sample_sphere(500);
+  cloud.positions[17].y() = std::numeric_limits<double>::quiet_NaN();
+  expect_error<InputError>([&] { reconstruct_region_growing(cloud); }, "point 17 has a non-finite coordinate");
 }
 
 TEST(RegionGrowing, DegenerateInputGivesNoTriangleAndNoCrash) {

@@ -271,6 +271,10 @@ TEST(MeanSpacing, RegularGridGivesTheGridStep) {
   for (std::size_t i = 0; i < n; i += 7) grid.push_back(grid[i]);
   EXPECT_NEAR(mean_spacing(grid), h, 1e-9);
   EXPECT_NEAR(mean_spacing(grid, 50, 9), h, 1e-9);  // a sample of 50 points
+  // A stack of 30,000 copies of one grid point: each copy's nearest distinct point is one step
+  // away, found once for the whole stack (a query per copy would step over the stack each time).
+  for (int i = 0; i < 30000; ++i) grid.push_back(grid[5]);
+  EXPECT_NEAR(mean_spacing(grid), h, 1e-9);
 }
 
 TEST(MeanSpacing, SampleIsSeededAndCoincidentPointsGiveZero) {
