@@ -22,19 +22,15 @@
 #include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "bench_util.h"
 
 namespace {
 
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
+using pointsurf::bench::seconds_since;
+
 using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 int sample(const std::string& mesh_path, std::size_t n, const std::string& out, std::uint64_t seed) {
   const TriangleMesh mesh = read_mesh(mesh_path).mesh;

@@ -31,19 +31,15 @@
 #include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "../bench_util.h"
 
 using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) / 1024.0;
-}
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
+using pointsurf::bench::seconds_since;
 
 // An axis-aligned box, possibly flat (a face) or thin (an edge); distance by clamping.
 struct Box {

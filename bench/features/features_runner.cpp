@@ -26,19 +26,16 @@
 #include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "../bench_util.h"
 
 namespace {
+
+using pointsurf::bench::peak_rss_mb;
 
 using namespace pointsurf;
 constexpr double kMeshSharpDeg = 30.0;
 constexpr double kTruthSpacings = 1.0;      // a point within this of a sharp edge must be found
 constexpr double kToleranceSpacings = 1.5;  // a labelled point within this is correct
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_maxrss) / 1024.0;
-}
 
 // Samples a mesh and gives each sample its distance to the nearest sharp mesh edge, measured
 // to points laid along the sharp edges every 0.05 mean spacings (exact to within 0.025 spacings).

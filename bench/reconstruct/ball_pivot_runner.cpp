@@ -22,19 +22,15 @@
 #include "pointsurf/io/io.h"
 #include "pointsurf/reconstruct/ball_pivot.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "../bench_util.h"
 
 namespace {
 
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
+using pointsurf::bench::seconds_since;
+
 using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::vector<double> parse_list(const std::string& text) {
   std::vector<double> values;

@@ -17,17 +17,14 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/reconstruct/crust.h"
+#include "../bench_util.h"
 
 namespace {
 
-using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
 
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
+using namespace pointsurf;
 
 int run(const std::string& cloud_path, const std::string& out_path, bool drop_normals, const CrustParams& params) {
   PointCloud cloud = read_point_cloud(cloud_path).cloud;

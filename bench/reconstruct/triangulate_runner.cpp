@@ -25,17 +25,14 @@
 #include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/reconstruct/triangulate.h"
+#include "../bench_util.h"
 
 namespace {
 
-using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
 
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
+using namespace pointsurf;
 
 // The same samplers (and RNG draw order) as tests/support/shapes.cpp, so that a shape here is
 // the cloud of the test of the same size and seed.

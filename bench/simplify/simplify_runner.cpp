@@ -27,19 +27,15 @@
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/simplify/simplify.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "../bench_util.h"
 
 namespace {
 
+using pointsurf::bench::Clock;
+using pointsurf::bench::peak_rss_mb;
+using pointsurf::bench::seconds_since;
+
 using namespace pointsurf;
-using Clock = std::chrono::steady_clock;
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 struct Distances {
   double mean_ab = 0, max_ab = 0, mean_ba = 0, max_ba = 0;
