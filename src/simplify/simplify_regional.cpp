@@ -10,6 +10,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/lexicographic.h"
 #include "normals/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/simplify/simplify.h"
@@ -94,10 +95,6 @@ void check_params(const RegionalParams& p) {
     throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
 }
 
-bool lexicographic_less(const Vector3d& a, const Vector3d& b) {
-  return a.x() < b.x() || (a.x() == b.x() && (a.y() < b.y() || (a.y() == b.y() && a.z() < b.z())));
-}
-
 }  // namespace
 
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
@@ -156,7 +153,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
                        regions.order.begin() + std::ptrdiff_t(regions.starts[cell + 1]));
       // A fixed visiting order independent of the input order (permutation invariance).
       std::sort(s.members.begin(), s.members.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return lexicographic_less(cloud.positions[a], cloud.positions[b]) ||
+        return detail::lexicographic_less(cloud.positions[a], cloud.positions[b]) ||
                (cloud.positions[a] == cloud.positions[b] && a < b);
       });
       visited += s.members.size();
@@ -292,7 +289,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   };
   const auto before = [&](std::uint32_t a, std::uint32_t b) {
     const double pa = priority(a), pb = priority(b);
-    return pa > pb || (pa == pb && lexicographic_less(cloud.positions[a], cloud.positions[b]));
+    return pa > pb || (pa == pb && detail::lexicographic_less(cloud.positions[a], cloud.positions[b]));
   };
   const bool by_cell = params.target.cell > 0.0;
   const std::size_t wanted = by_cell ? 0 : detail::target_count(params.target, n);

@@ -9,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/lexicographic.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -56,14 +57,10 @@ double mean_spacing(const KdTree& tree, std::size_t max_samples, std::uint64_t s
   // not m of them (each would have to step over the whole stack).
   std::vector<std::uint32_t> by_position(samples.size()), first(samples.size());
   std::iota(by_position.begin(), by_position.end(), 0u);
-  const auto lexicographic = [&](std::uint32_t a, std::uint32_t b) {
+  std::sort(by_position.begin(), by_position.end(), [&](std::uint32_t a, std::uint32_t b) {
     const Eigen::Vector3d &p = tree.point(samples[a]), &q = tree.point(samples[b]);
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
-  };
-  std::sort(by_position.begin(), by_position.end(), lexicographic);
+    return detail::lexicographic_less(p, q) || (p == q && a < b);
+  });
   for (std::size_t q = 0; q < by_position.size(); ++q) {
     const std::uint32_t s = by_position[q];
     const bool same = q > 0 && tree.point(samples[s]) == tree.point(samples[by_position[q - 1]]);

@@ -11,6 +11,8 @@
 #include <Eigen/Core>
 #include <tbb/parallel_sort.h>
 
+#include "core/detail/lexicographic.h"
+
 namespace pointsurf::detail {
 
 // 1 for every point with an identical point of lower index, 0 otherwise (the first of each
@@ -20,10 +22,7 @@ inline std::vector<std::uint8_t> later_exact_copies(std::span<const Eigen::Vecto
   std::iota(order.begin(), order.end(), std::uint32_t{0});
   tbb::parallel_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
     const Eigen::Vector3d &p = positions[a], &q = positions[b];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return a < b;
+    return lexicographic_less(p, q) || (p == q && a < b);
   });
   std::vector<std::uint8_t> copy(positions.size(), 0);
   for (std::size_t q = 1; q < order.size(); ++q)
