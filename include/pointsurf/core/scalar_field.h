@@ -2,6 +2,7 @@
 #pragma once
 // Named per-element scalar fields (intensity, classification, curvature, labels, deviation).
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,6 +28,8 @@ struct ScalarField {
 };
 
 /// Fields of a cloud or mesh, in insertion order, names unique.
+/// A reference or pointer from add() or find() stays valid while more fields are added (so two
+/// fields can be filled side by side); remove() invalidates every one of them.
 class FieldSet {
 public:
   const ScalarField* find(std::string_view name) const noexcept;
@@ -46,7 +49,7 @@ public:
   const ScalarField& operator[](std::size_t i) const { return fields_[i]; }
 
 private:
-  std::vector<ScalarField> fields_;
+  std::deque<ScalarField> fields_;  // a deque: push_back keeps references to earlier fields
 };
 
 }  // namespace pointsurf
