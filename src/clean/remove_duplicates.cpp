@@ -11,7 +11,7 @@
 
 #include "clean/detail/clean_common.h"
 #include "pointsurf/clean/remove_outliers.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {

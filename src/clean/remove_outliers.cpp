@@ -17,7 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include "clean/detail/clean_common.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {

@@ -13,7 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/local_pca.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
 

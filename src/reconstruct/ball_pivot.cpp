@@ -21,7 +21,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"

@@ -20,7 +20,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "reconstruct/detail/triangulate_half_edges.h"

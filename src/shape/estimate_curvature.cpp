@@ -14,7 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/local_pca.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/shape/curvature.h"
 

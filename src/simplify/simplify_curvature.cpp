@@ -26,7 +26,7 @@ std::uint64_t splitmix64(std::uint64_t x) {
 
 }  // namespace
 
-SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
+SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimplifyParams& params, const KdTree* tree,
                                   const ProgressCallback& progress) {
   detail::check_simplify_input("simplify_curvature", cloud, params.target, false);
   detail::check_k("simplify_curvature", params.k);

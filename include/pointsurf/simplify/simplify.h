@@ -85,7 +85,7 @@ struct RandomParams {
 /// Fisher-Yates). O(N). Throws UsageError for a bad target or an empty cloud.
 SimplifyResult simplify_random(const PointCloud& cloud, const RandomParams& params = {});
 
-struct CurvatureParams {
+struct CurvatureSimplifyParams {
   SimplifyTarget target;       // ratio or count (cell is rejected)
   int k = 20;                  // neighbours for normals/variation when the cloud has no field
                                // "variation" (>= 3)
@@ -101,7 +101,7 @@ struct CurvatureParams {
 /// u^(1/w)). High-curvature points are kept more often, not always. Uses the field
 /// "variation" when present, else PCA with `k` neighbours (through `tree` when given; it must
 /// be built over cloud.positions). Parallel; throws UsageError for bad parameters.
-SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureParams& params = {}, const KdTree* tree = nullptr,
+SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimplifyParams& params = {}, const KdTree* tree = nullptr,
                                   const ProgressCallback& progress = {});
 
 struct RegionalParams {
