@@ -225,8 +225,9 @@ void run_features(StageRun& run) {
     rec.metric("recall", recall);
     scored = fmt::format(", precision {:.3f} recall {:.3f} against '{}'", precision, recall, truth_name);
   }
-  rec.summary = fmt::format("features: {}, {}, {} edge and {} corner (threshold {:.4g}, dd {:.4g}){}", plural(cloud.size(), "point"),
-                            plural(r.candidates, "candidate"), plural(r.edges, "point"), plural(r.corners, "point"), r.variation_threshold_used,
+  rec.summary = fmt::format("features: {}, {}, {} edge and {} corner {} (threshold {:.4g}, dd {:.4g}){}", plural(cloud.size(), "point"),
+                            plural(r.candidates, "candidate"), r.edges, r.corners, r.edges + r.corners == 1 ? "point" : "points",
+                            r.variation_threshold_used,
                             r.dd_used, scored);
 }
 

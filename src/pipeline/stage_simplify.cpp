@@ -73,13 +73,14 @@ void run_simplify(StageRun& run) {
   }
   StageRecord& rec = run.record;
   const std::size_t input = cloud.size();
+  const double reduction = r.reduction();
   const std::size_t kept_inputs = r.cloud.size() - r.added_points;
   rec.count("input", as_count(input));
   rec.count("output", as_count(r.cloud.size()));
   rec.count("removed", as_count(input - kept_inputs));
   rec.count("feature_points", as_count(r.feature_points));
   rec.count("added", as_count(r.added_points));
-  rec.metric("reduction", r.reduction());
+  rec.metric("reduction", reduction);
   if (r.length_used > 0.0) rec.metric("length_used", r.length_used);
   // How far the simplified cloud is from the full one, both ways.
   auto summarise = [](const NeighborLists& lists) {
@@ -111,7 +112,7 @@ void run_simplify(StageRun& run) {
   if (r.feature_points > 0) extra += fmt::format(", {} kept", plural(r.feature_points, "feature point"));
   if (r.added_points > 0) extra += fmt::format(", {} added", plural(r.added_points, "point"));
   rec.summary = fmt::format("simplify: {} -> {} ({}, {:.2f}x){}", plural(input, "point"), plural(item.cloud.size(), "point"), method,
-                            r.reduction(), extra);
+                            reduction, extra);
 }
 
 }  // namespace
