@@ -40,17 +40,20 @@ PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::s
 
 }  // namespace
 
+void NormalParams::validate() const {
+  const bool uses_k = neighborhood != NeighborhoodKind::Radius;
+  const bool uses_radius = neighborhood != NeighborhoodKind::Knn;
+  if (uses_k && k < 3) throw UsageError(fmt::format("estimate_normals: k must be >= 3, got {}", k));
+  if (uses_radius && !(radius >= 0.0)) throw UsageError(fmt::format("estimate_normals: radius must be >= 0, got {}", radius));
+  if (uses_radius && radius == 0.0 && !(radius_in_spacings > 0.0 && std::isfinite(radius_in_spacings)))
+    throw UsageError(fmt::format("estimate_normals: radius_in_spacings must be > 0, got {}", radius_in_spacings));
+}
+
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, const KdTree* tree,
                               const ProgressCallback& progress) {
   const std::size_t n = cloud.size();
-  const bool uses_k = params.neighborhood != NeighborhoodKind::Radius;
   const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
-  if (uses_k && params.k < 3) throw UsageError(fmt::format("estimate_normals: k must be >= 3, got {}", params.k));
-  if (uses_radius && !(params.radius >= 0.0))
-    throw UsageError(fmt::format("estimate_normals: radius must be >= 0, got {}", params.radius));
-  if (uses_radius && params.radius == 0.0 && !(params.radius_in_spacings > 0.0 && std::isfinite(params.radius_in_spacings)))
-    throw UsageError(
-        fmt::format("estimate_normals: radius_in_spacings must be > 0, got {}", params.radius_in_spacings));
+  params.validate();
   if (n < 3) throw UsageError(fmt::format("estimate_normals: needs at least 3 points, got {}", n));
   if (cloud.has_normals() && cloud.normals.size() != n)
     throw UsageError(fmt::format("estimate_normals: the cloud has {} normals for {} points", cloud.normals.size(), n));

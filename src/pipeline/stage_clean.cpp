@@ -26,6 +26,28 @@ BilateralParams bilateral_params(const StageArgs& a) {
   return p;
 }
 
+StatisticalOutlierParams sor_params(const StageArgs& a) { return {.k = a.int32("k"), .std_ratio = a.number("std_ratio")}; }
+
+RadiusOutlierParams radius_params(const StageArgs& a) {
+  RadiusOutlierParams p;
+  p.min_neighbours = a.int32("min_neighbours");
+  p.radius = a.number("radius");
+  p.radius_in_spacings = a.number("radius_in_spacings");
+  return p;
+}
+
+RansacOutlierParams ransac_params(const StageArgs& a) {
+  RansacOutlierParams p;
+  p.k = a.int32("k");
+  p.distance = a.number("distance");
+  p.distance_in_spacings = a.number("distance_in_spacings");
+  p.iterations = a.int32("iterations");
+  p.min_support = a.number("min_support");
+  p.min_relative_support = a.number("min_relative_support");
+  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
+  return p;
+}
+
 void run_clean(StageRun& run) {
   DataItem& item = run.context.item(run.output);
   StageRecord& rec = run.record;
@@ -60,26 +82,14 @@ void run_clean(StageRun& run) {
       steps += fmt::format("{}{} moved {} (rms {:.4g}, max {:.4g})", steps.empty() ? "" : ", ", name, r.moved, r.rms_displacement, r.max_displacement);
     };
     if (name == "sor") {
-      removal(remove_statistical_outliers(cloud, {.k = a.int32("k"), .std_ratio = a.number("std_ratio")}, &tree, progress),
+      removal(remove_statistical_outliers(cloud, sor_params(a), &tree, progress),
               "mean_distance_threshold");
     } else if (name == "radius") {
-      RadiusOutlierParams p;
-      p.min_neighbours = a.int32("min_neighbours");
-      p.radius = a.number("radius");
-      p.radius_in_spacings = a.number("radius_in_spacings");
-      const OutlierResult r = remove_radius_outliers(cloud, p, &tree, progress);
+      const OutlierResult r = remove_radius_outliers(cloud, radius_params(a), &tree, progress);
       rec.set_used("radius.radius", r.threshold);
       removal(r, "radius_used");
     } else if (name == "ransac") {
-      RansacOutlierParams p;
-      p.k = a.int32("k");
-      p.distance = a.number("distance");
-      p.distance_in_spacings = a.number("distance_in_spacings");
-      p.iterations = a.int32("iterations");
-      p.min_support = a.number("min_support");
-      p.min_relative_support = a.number("min_relative_support");
-      p.seed = static_cast<std::uint64_t>(a.integer("seed"));
-      const OutlierResult r = remove_ransac_outliers(cloud, p, &tree, progress);
+      const OutlierResult r = remove_ransac_outliers(cloud, ransac_params(a), &tree, progress);
       rec.set_used("ransac.distance", r.threshold);
       removal(r, "distance_used");
     } else if (name == "duplicates") {
@@ -177,6 +187,11 @@ StageSpec clean_stage() {
   };
   s.examples = {"pointsurf clean scan.ply clean.ply --method sor,duplicates", "pointsurf clean part.ply smooth.ply --method trilateral --iterations 3"};
   s.run = run_clean;
+  s.check = [](const StageArgs& a) {  // called once per listed method
+    if (a.method() == "sor") sor_params(a).validate();
+    else if (a.method() == "radius") radius_params(a).validate();
+    else if (a.method() == "ransac") ransac_params(a).validate();
+  };
   return s;
 }
 

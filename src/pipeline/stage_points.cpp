@@ -74,16 +74,18 @@ void compare_normals(const std::vector<Vector3d>& reference, const std::vector<V
   rec.metric("orientation_agreement_with_input", double(agree) / double(used));
 }
 
-void run_normals(StageRun& run) {
-  const StageArgs& a = run.args;
-  DataItem& item = run.context.item(run.output);
-  PointCloud& cloud = item.cloud;
-  if (cloud.size() < 3) throw InputError(fmt::format("{}; normals need at least 3", plural(cloud.size(), "point")));
+// The library's Params from a stage's arguments: the run and the check before any work build
+// them the same way, and the check calls their validate().
+NormalParams normal_params(const StageArgs& a) {
   NormalParams params;
   params.neighborhood = neighborhood_kind(a);
   params.k = a.int32("k");
   params.radius = a.number("radius");
   params.radius_in_spacings = a.number("radius_in_spacings");
+  return params;
+}
+
+OrientParams orient_params(const StageArgs& a) {
   OrientParams orient;
   const std::string& o = a.text("orient");
   orient.method = o == "mst" ? Orientation::Mst : o == "viewpoint" ? Orientation::Viewpoint : o == "direction" ? Orientation::Direction : Orientation::None;
@@ -92,6 +94,41 @@ void run_normals(StageRun& run) {
   orient.viewpoint = Vector3d(vp[0], vp[1], vp[2]);
   orient.direction = Vector3d(dir[0], dir[1], dir[2]);
   orient.k = a.int32("orient_k");
+  return orient;
+}
+
+CurvatureParams curvature_params(const StageArgs& a) {
+  CurvatureParams params;
+  params.neighborhood = neighborhood_kind(a);
+  params.degree = a.int32("degree");
+  params.k = a.int32("k");
+  params.radius = a.number("radius");
+  params.radius_in_spacings = a.number("radius_in_spacings");
+  params.zero_curvature = a.number("zero_curvature");
+  params.zero_in_noise = a.number("zero_in_noise");
+  params.update_normals = a.boolean("update_normals");
+  return params;
+}
+
+FeatureParams feature_params(const StageArgs& a) {
+  FeatureParams params;
+  params.k = a.int32("k");
+  params.variation_threshold = a.number("variation_threshold");
+  params.dn_deg = a.number("dn_deg");
+  params.dd = a.number("dd");
+  params.dd_in_spacings = a.number("dd_in_spacings");
+  params.min_cluster_points = a.int32("min_cluster_points");
+  params.normals = a.text("normals") == "input" ? FeatureNormals::Input : FeatureNormals::Robust;
+  return params;
+}
+
+void run_normals(StageRun& run) {
+  const StageArgs& a = run.args;
+  DataItem& item = run.context.item(run.output);
+  PointCloud& cloud = item.cloud;
+  if (cloud.size() < 3) throw InputError(fmt::format("{}; normals need at least 3", plural(cloud.size(), "point")));
+  const NormalParams params = normal_params(a);
+  const OrientParams orient = orient_params(a);
 
   std::vector<Vector3d> input_normals;
   std::swap(input_normals, cloud.normals);  // estimate from scratch; compare afterwards
@@ -138,15 +175,7 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
 void run_curvature(StageRun& run) {
   const StageArgs& a = run.args;
   PointCloud& cloud = run.context.item(run.output).cloud;
-  CurvatureParams params;
-  params.neighborhood = neighborhood_kind(a);
-  params.degree = a.int32("degree");
-  params.k = a.int32("k");
-  params.radius = a.number("radius");
-  params.radius_in_spacings = a.number("radius_in_spacings");
-  params.zero_curvature = a.number("zero_curvature");
-  params.zero_in_noise = a.number("zero_in_noise");
-  params.update_normals = a.boolean("update_normals");
+  const CurvatureParams params = curvature_params(a);
   const std::size_t needed = params.degree == 2 ? 6 : 10;
   if (cloud.size() < needed) throw InputError(fmt::format("{}; a degree-{} jet needs at least {}", plural(cloud.size(), "point"), params.degree, needed));
   const bool estimated = !cloud.has_normals();
@@ -179,14 +208,7 @@ void run_curvature(StageRun& run) {
 void run_features(StageRun& run) {
   const StageArgs& a = run.args;
   PointCloud& cloud = run.context.item(run.output).cloud;
-  FeatureParams params;
-  params.k = a.int32("k");
-  params.variation_threshold = a.number("variation_threshold");
-  params.dn_deg = a.number("dn_deg");
-  params.dd = a.number("dd");
-  params.dd_in_spacings = a.number("dd_in_spacings");
-  params.min_cluster_points = a.int32("min_cluster_points");
-  params.normals = a.text("normals") == "input" ? FeatureNormals::Input : FeatureNormals::Robust;
+  const FeatureParams params = feature_params(a);
   if (cloud.size() < static_cast<std::size_t>(params.k) + 1)
     throw InputError(fmt::format("{}; feature detection with k = {} needs at least {}", plural(cloud.size(), "point"), params.k, params.k + 1));
   const std::string& truth_name = a.text("truth_field");
@@ -263,8 +285,8 @@ StageSpec normals_stage() {
     if (a.given("direction") && orient != "direction") throw UsageError("direction: ignored unless orient is direction");
     if (a.given("orient_k") && orient != "mst") throw UsageError("orient_k: ignored unless orient is mst");
     if (orient == "viewpoint" && !a.given("viewpoint")) throw UsageError("orient viewpoint needs viewpoint X,Y,Z (the scanner position)");
-    const auto& d = a.numbers("direction");
-    if (d[0] == 0.0 && d[1] == 0.0 && d[2] == 0.0) throw UsageError("direction: must not be the zero vector");
+    normal_params(a).validate();
+    orient_params(a).validate();
   };
   return s;
 }
@@ -297,6 +319,7 @@ StageSpec curvature_stage() {
     const int min_k = a.integer("degree") == 2 ? 6 : 10;
     if (a.integer("k") != 0 && a.integer("k") < min_k)
       throw UsageError(fmt::format("k: {} must be at least {} for degree {} (or 0: the default)", a.integer("k"), min_k, a.integer("degree")));
+    curvature_params(a).validate();
   };
   return s;
 }
@@ -327,6 +350,7 @@ StageSpec features_stage() {
   s.check = [](const StageArgs& a) {
     if (a.integer("min_cluster_points") > a.integer("k"))
       throw UsageError(fmt::format("min_cluster_points: {} must be at most k = {}", a.integer("min_cluster_points"), a.integer("k")));
+    feature_params(a).validate();
   };
   return s;
 }

@@ -21,6 +21,43 @@ double total_hole_perimeter(const MeshTopology& t) {
   return total;
 }
 
+TriangulateParams triangulate_params(const StageArgs& a) {
+  TriangulateParams p;
+  p.k = a.int32("k");
+  p.radius = a.number("radius");
+  p.radius_in_spacings = a.number("radius_in_spacings");
+  p.max_offset_in_spacings = a.number("max_offset_in_spacings");
+  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
+  p.min_angle_deg = a.number("min_angle_deg");
+  p.max_angle_deg = a.number("max_angle_deg");
+  p.max_dihedral_deg = a.number("max_dihedral_deg");
+  p.max_front_angle_deg = a.number("max_front_angle_deg");
+  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
+  return p;
+}
+
+CrustParams crust_params(const StageArgs& a) {
+  CrustParams p;
+  p.cocone_angle_deg = a.number("cocone_angle_deg");
+  p.normal_filter_angle_deg = a.number("normal_filter_angle_deg");
+  p.sharp_edge_angle_deg = a.number("sharp_edge_angle_deg");
+  const std::string& b = a.text("boundary");
+  p.boundary = b == "closed" ? CrustBoundary::Closed : b == "open" ? CrustBoundary::Open : CrustBoundary::Auto;
+  p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
+  p.max_hole_edges = a.int32("max_hole_edges");
+  return p;
+}
+
+BallPivotParams ball_params(const StageArgs& a) {
+  BallPivotParams p;
+  p.radii = a.numbers("radii");
+  p.radii_in_spacings = a.numbers("radii_in_spacings");
+  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
+  p.max_mean_normal_angle_deg = a.number("max_mean_normal_angle_deg");
+  p.close_small_holes = a.boolean("close_small_holes");
+  return p;
+}
+
 void run_reconstruct(StageRun& run) {
   const StageArgs& a = run.args;
   const std::string& method = a.method();
@@ -37,17 +74,7 @@ void run_reconstruct(StageRun& run) {
   const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
   ReconstructionResult result;
   if (method == "triangulate") {
-    TriangulateParams p;
-    p.k = a.int32("k");
-    p.radius = a.number("radius");
-    p.radius_in_spacings = a.number("radius_in_spacings");
-    p.max_offset_in_spacings = a.number("max_offset_in_spacings");
-    p.max_normal_angle_deg = a.number("max_normal_angle_deg");
-    p.min_angle_deg = a.number("min_angle_deg");
-    p.max_angle_deg = a.number("max_angle_deg");
-    p.max_dihedral_deg = a.number("max_dihedral_deg");
-    p.max_front_angle_deg = a.number("max_front_angle_deg");
-    p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
+    const TriangulateParams p = triangulate_params(a);
     TriangulateResult r = reconstruct_region_growing(cloud, p, &tree, progress);
     rec.count("candidate_triangles", as_count(r.candidate_triangles));
     rec.count("selected_triangles", as_count(r.selected_triangles));
@@ -57,14 +84,7 @@ void run_reconstruct(StageRun& run) {
     rec.metric("local_spacing_mean", r.local_spacing_mean);
     result = std::move(r);
   } else if (method == "crust") {
-    CrustParams p;
-    p.cocone_angle_deg = a.number("cocone_angle_deg");
-    p.normal_filter_angle_deg = a.number("normal_filter_angle_deg");
-    p.sharp_edge_angle_deg = a.number("sharp_edge_angle_deg");
-    const std::string& b = a.text("boundary");
-    p.boundary = b == "closed" ? CrustBoundary::Closed : b == "open" ? CrustBoundary::Open : CrustBoundary::Auto;
-    p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
-    p.max_hole_edges = a.int32("max_hole_edges");
+    const CrustParams p = crust_params(a);
     CrustStats stats;
     result = reconstruct_crust(cloud, p, progress, &stats);
     rec.count("duplicate_points", as_count(stats.duplicate_points));
@@ -74,12 +94,7 @@ void run_reconstruct(StageRun& run) {
     rec.count("pruned", as_count(stats.pruned));
     rec.count("holes_filled", as_count(stats.holes_filled));
   } else {
-    BallPivotParams p;
-    p.radii = a.numbers("radii");
-    p.radii_in_spacings = a.numbers("radii_in_spacings");
-    p.max_normal_angle_deg = a.number("max_normal_angle_deg");
-    p.max_mean_normal_angle_deg = a.number("max_mean_normal_angle_deg");
-    p.close_small_holes = a.boolean("close_small_holes");
+    const BallPivotParams p = ball_params(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
     std::vector<double> radii = p.radii;
     if (radii.empty())
@@ -196,6 +211,9 @@ StageSpec reconstruct_stage() {
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
+    if (a.method() == "triangulate") triangulate_params(a).validate();
+    else if (a.method() == "crust") crust_params(a).validate();
+    else ball_params(a).validate();
   };
   return s;
 }

@@ -218,25 +218,7 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
 }
 
 void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdTree* tree) {
-  const auto bad = [](const char* name, double value, const char* expected) {
-    return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
-  };
-  if (p.k < 3) throw bad("k", p.k, ">= 3");
-  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
-  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
-    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
-  if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
-    throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
-  if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
-    throw bad("max_normal_angle_deg", p.max_normal_angle_deg, "in (0, 180]");
-  if (!(p.min_angle_deg >= 0.0 && p.min_angle_deg < 60.0)) throw bad("min_angle_deg", p.min_angle_deg, "in [0, 60)");
-  if (!(p.max_angle_deg > 60.0 && p.max_angle_deg <= 180.0)) throw bad("max_angle_deg", p.max_angle_deg, "in (60, 180]");
-  if (!(p.max_dihedral_deg > 0.0 && p.max_dihedral_deg <= 180.0))
-    throw bad("max_dihedral_deg", p.max_dihedral_deg, "in (0, 180]");
-  if (!(p.max_front_angle_deg >= 0.0 && p.max_front_angle_deg < 180.0))
-    throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
-  if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
-    throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+  p.validate();
   const std::size_t n = cloud.size();
   if (n < 3) throw UsageError(fmt::format("reconstruct_region_growing: needs at least 3 points, got {}", n));
   // Triangles hold int vertex indices, and candidate ids must stay below kNone.
@@ -824,6 +806,29 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
 }
 
 }  // namespace
+
+void TriangulateParams::validate() const {
+  const TriangulateParams& p = *this;
+  const auto bad = [](const char* name, double value, const char* expected) {
+    return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
+  };
+  if (p.k < 3) throw bad("k", p.k, ">= 3");
+  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
+  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
+    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
+  if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
+    throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
+  if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
+    throw bad("max_normal_angle_deg", p.max_normal_angle_deg, "in (0, 180]");
+  if (!(p.min_angle_deg >= 0.0 && p.min_angle_deg < 60.0)) throw bad("min_angle_deg", p.min_angle_deg, "in [0, 60)");
+  if (!(p.max_angle_deg > 60.0 && p.max_angle_deg <= 180.0)) throw bad("max_angle_deg", p.max_angle_deg, "in (60, 180]");
+  if (!(p.max_dihedral_deg > 0.0 && p.max_dihedral_deg <= 180.0))
+    throw bad("max_dihedral_deg", p.max_dihedral_deg, "in (0, 180]");
+  if (!(p.max_front_angle_deg >= 0.0 && p.max_front_angle_deg < 180.0))
+    throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
+  if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
+    throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+}
 
 TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
                                              const ProgressCallback& progress) {

@@ -181,9 +181,8 @@ SurfaceType classify_surface_type(double H, double K, double h_zero, double k_ze
   return h > 0 ? SurfaceType::SaddleRidge : (h < 0 ? SurfaceType::SaddleValley : SurfaceType::Minimal);
 }
 
-CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
-                                   const ProgressCallback& progress) {
-  const std::size_t n = cloud.size();
+void CurvatureParams::validate() const {
+  const CurvatureParams& params = *this;
   if (params.degree != 2 && params.degree != 3)
     throw UsageError(fmt::format("estimate_curvature: degree must be 2 or 3, got {}", params.degree));
   const int coefficients = params.degree == 2 ? 6 : 10;
@@ -202,6 +201,17 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
     throw UsageError(fmt::format("estimate_curvature: zero_curvature must be >= 0 (1/cloud units), got {}", params.zero_curvature));
   if (params.zero_curvature == 0.0 && !(params.zero_in_noise > 0.0 && std::isfinite(params.zero_in_noise)))
     throw UsageError(fmt::format("estimate_curvature: zero_in_noise must be > 0, got {}", params.zero_in_noise));
+}
+
+CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
+                                   const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  params.validate();
+  const int coefficients = params.degree == 2 ? 6 : 10;
+  const bool uses_k = params.neighborhood != NeighborhoodKind::Radius;
+  const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
+  const int k = params.k == 0 ? (params.degree == 2 ? 24 : 40) : params.k;
+  (void)uses_k;
   if (n < std::size_t(coefficients))
     throw UsageError(fmt::format("estimate_curvature: needs at least {} points for degree {}, got {}", coefficients,
                                  params.degree, n));

@@ -3,6 +3,7 @@
 // ranges and choices enforced, "did you mean" on typos.
 #include "pointsurf/pipeline/registry.h"
 
+#include <map>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -215,6 +216,52 @@ TEST(Registry, ClosestNameCatchesTyposOnly) {
   EXPECT_EQ(closest_name("kk", {"k", "radius"}), "k");
   EXPECT_EQ(closest_name("poisson", commands), "");
   EXPECT_EQ(closest_name("xyz", {"k"}), "");
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+// The library's validate() is the one place a value is checked; the registry's declared range
+// is what --help shows. Both must agree: a value just outside a declared bound, handed to the
+// stage's check (which builds the library's Params and calls validate()), is refused.
+TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
+  const std::map<std::string, std::vector<std::string>> validated = {
+      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "crust", "ball-pivot"}},
+      {"clean", {"sor", "radius", "ransac"}}};
+  std::size_t checked = 0;
+  for (const auto& [stage, methods] : validated) {
+    const StageSpec& s = *find_stage(stage);
+    for (const std::string& method : methods) {
+      auto defaults = [&] {
+        std::map<std::string, ParamValue> values;
+        for (const ParamSpec& p : s.params)
+          if (p.applies_to(method) && !values.count(p.name)) values[p.name] = p.default_value;
+        if (!method.empty()) values["method"] = method;
+        return values;
+      };
+      ASSERT_NO_THROW(s.check(StageArgs(defaults(), {}, method))) << stage << " " << method;
+      for (const ParamSpec& p : s.params) {
+        // normals_k feeds normal estimation, not this stage's Params; a seed is unsigned by its type.
+        if (!p.applies_to(method) || p.name == "normals_k" || p.name == "seed" || (p.type != ParamType::Int && p.type != ParamType::Double)) continue;
+        for (const bool low : {true, false}) {
+          const double bound = low ? p.min : p.max;
+          if (!std::isfinite(bound)) continue;
+          const bool open = low ? p.min_open : p.max_open;
+          const double step = p.type == ParamType::Int ? 1.0 : open ? 0.0 : 1e-6 * std::max(1.0, std::abs(bound));
+          const double outside = low ? bound - step : bound + step;
+          std::map<std::string, ParamValue> values = defaults();
+          values[p.name] = p.type == ParamType::Int ? ParamValue(static_cast<std::int64_t>(outside)) : ParamValue(outside);
+          EXPECT_THROW(s.check(StageArgs(values, {{p.name, true}}, method)), UsageError)
+              << stage << " " << method << ": " << p.name << " = " << outside << " passes validate() but is outside " << p.range_text();
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 40u);
 }
 
 }  // namespace

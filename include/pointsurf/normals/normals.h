@@ -23,6 +23,9 @@ struct NormalParams {
                                     // distance from the point to its neighbours, itself included,
                                     // the statistic of statistical outlier removal (see
                                     // statistical_outliers_from_distances): one kNN pass for both
+  /// Throws UsageError naming the first value out of range (k < 3 where k is used, a negative
+  /// radius, radius_in_spacings <= 0 where used). The one place these values are checked.
+  void validate() const;
 };
 
 struct NormalResult {
@@ -52,6 +55,9 @@ struct OrientParams {
   Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // cloud units (Viewpoint)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ(); // any length > 0 (Direction)
   int k = 10;                                           // kNN graph degree (Mst), >= 1
+  /// Throws UsageError for a non-finite viewpoint (Viewpoint), a zero or non-finite direction
+  /// (Direction) or k < 1 (Mst).
+  void validate() const;
 };
 
 struct OrientResult {

@@ -56,6 +56,9 @@ struct CurvatureParams {
                                     // the standard error of the fitted curvature, > 0
   bool keep_directions = false;     // fill CurvatureResult::d1, d2, normals
   bool update_normals = false;      // replace cloud.normals by the jet (Monge) normals, same side
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 struct CurvatureResult {
