@@ -48,6 +48,23 @@ RansacOutlierParams ransac_params(const StageArgs& a) {
   return p;
 }
 
+DuplicateParams duplicate_params(const StageArgs& a) {
+  DuplicateParams p;
+  p.exact = a.boolean("exact");
+  p.distance = a.number("distance");
+  p.distance_in_spacings = a.number("distance_in_spacings");
+  return p;
+}
+
+TrilateralParams trilateral_params(const StageArgs& a) {
+  TrilateralParams p;
+  p.position = bilateral_params(a);
+  p.sharpness_angle_deg = a.number("sharpness_angle_deg");
+  p.normal_iterations = a.int32("normal_iterations");
+  p.use_feature_field = a.boolean("use_feature_field");
+  return p;
+}
+
 void run_clean(StageRun& run) {
   DataItem& item = run.context.item(run.output);
   StageRecord& rec = run.record;
@@ -93,10 +110,7 @@ void run_clean(StageRun& run) {
       rec.set_used("ransac.distance", r.threshold);
       removal(r, "distance_used");
     } else if (name == "duplicates") {
-      DuplicateParams p;
-      p.exact = a.boolean("exact");
-      p.distance = a.number("distance");
-      p.distance_in_spacings = a.number("distance_in_spacings");
+      const DuplicateParams p = duplicate_params(a);
       const std::size_t faces = item.triangles.size();
       const DuplicateResult r = find_duplicates(cloud, p, &tree, progress);
       if (r.removed > 0) {
@@ -111,11 +125,7 @@ void run_clean(StageRun& run) {
     } else if (name == "bilateral") {
       smoothed(smooth_bilateral(cloud, bilateral_params(a), &tree, progress));
     } else {
-      TrilateralParams p;
-      p.position = bilateral_params(a);
-      p.sharpness_angle_deg = a.number("sharpness_angle_deg");
-      p.normal_iterations = a.int32("normal_iterations");
-      p.use_feature_field = a.boolean("use_feature_field");
+      const TrilateralParams p = trilateral_params(a);
       const SmoothResult r = smooth_trilateral(cloud, p, &tree, progress);
       smoothed(r);
       rec.count("trilateral.normals_changed", as_count(r.normals_changed));
@@ -191,6 +201,9 @@ StageSpec clean_stage() {
     if (a.method() == "sor") sor_params(a).validate();
     else if (a.method() == "radius") radius_params(a).validate();
     else if (a.method() == "ransac") ransac_params(a).validate();
+    else if (a.method() == "duplicates") duplicate_params(a).validate();
+    else if (a.method() == "bilateral") bilateral_params(a).validate();
+    else trilateral_params(a).validate();
   };
   return s;
 }

@@ -2,6 +2,7 @@
 // The simplify stage: six methods, one target (ratio, count or cell).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -18,6 +19,47 @@ SimplifyTarget target_of(const StageArgs& a) {
   t.count = static_cast<std::size_t>(a.integer("count"));
   if (a.has("cell")) t.cell = a.number("cell");
   return t;
+}
+
+CurvatureSimplifyParams curvature_simplify_params(const StageArgs& a) {
+  CurvatureSimplifyParams p;
+  p.target = target_of(a);
+  p.k = a.int32("k");
+  p.flat_weight = a.number("flat_weight");
+  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
+  return p;
+}
+
+RegionalParams regional_params(const StageArgs& a) {
+  RegionalParams p;
+  p.target = target_of(a);
+  p.k = a.int32("k");
+  p.region_in_spacings = a.number("region_in_spacings");
+  p.region_angle_deg = a.number("region_angle_deg");
+  p.variation_weight = a.number("variation_weight");
+  p.normal_weight = a.number("normal_weight");
+  p.distance_weight = a.number("distance_weight");
+  p.feature_threshold = a.number("feature_threshold");
+  p.max_feature_share = a.number("max_feature_share");
+  return p;
+}
+
+CurvatureDistanceParams curvature_distance_params(const StageArgs& a) {
+  CurvatureDistanceParams p;
+  p.target = target_of(a);
+  p.k = a.int32("k");
+  p.split_quantile = a.number("split_quantile");
+  p.high_to_low_distance = a.number("high_to_low_distance");
+  return p;
+}
+
+LfsParams lfs_params(const StageArgs& a) {
+  LfsParams p;
+  p.target = target_of(a);
+  p.k = a.int32("k");
+  p.adaptivity = a.number("adaptivity");
+  p.fill_neighbours = a.int32("fill_neighbours");
+  return p;
 }
 
 void run_simplify(StageRun& run) {
@@ -37,38 +79,17 @@ void run_simplify(StageRun& run) {
   } else if (method == "random") {
     r = simplify_random(cloud, {target, static_cast<std::uint64_t>(a.integer("seed"))});
   } else if (method == "curvature") {
-    CurvatureSimplifyParams p;
-    p.target = target;
-    p.k = a.int32("k");
-    p.flat_weight = a.number("flat_weight");
-    p.seed = static_cast<std::uint64_t>(a.integer("seed"));
+    const CurvatureSimplifyParams p = curvature_simplify_params(a);
     r = simplify_curvature(cloud, p, tree, progress);
   } else if (method == "regional") {
-    RegionalParams p;
-    p.target = target;
-    p.k = a.int32("k");
-    p.region_in_spacings = a.number("region_in_spacings");
-    p.region_angle_deg = a.number("region_angle_deg");
-    p.variation_weight = a.number("variation_weight");
-    p.normal_weight = a.number("normal_weight");
-    p.distance_weight = a.number("distance_weight");
-    p.feature_threshold = a.number("feature_threshold");
-    p.max_feature_share = a.number("max_feature_share");
+    RegionalParams p = regional_params(a);
     p.spacing = spacing;
     r = simplify_regional(cloud, p, tree, progress);
   } else if (method == "curvature-distance") {
-    CurvatureDistanceParams p;
-    p.target = target;
-    p.k = a.int32("k");
-    p.split_quantile = a.number("split_quantile");
-    p.high_to_low_distance = a.number("high_to_low_distance");
+    const CurvatureDistanceParams p = curvature_distance_params(a);
     r = simplify_curvature_distance(cloud, p, tree, progress);
   } else {
-    LfsParams p;
-    p.target = target;
-    p.k = a.int32("k");
-    p.adaptivity = a.number("adaptivity");
-    p.fill_neighbours = a.int32("fill_neighbours");
+    const LfsParams p = lfs_params(a);
     r = resample_lfs(cloud, p, tree, progress);
   }
   StageRecord& rec = run.record;
@@ -160,7 +181,7 @@ StageSpec simplify_stage() {
       P::number("normal_weight", reg.normal_weight, "Weight of the normal deviation in the feature factor").non_negative().only({"regional"}),
       P::number("distance_weight", reg.distance_weight, "Weight of the plane distance in the feature factor").non_negative().only({"regional"}),
       P::number("feature_threshold", reg.feature_threshold, "Feature factor above which a point is a candidate, [0, 1]; < 0: derived")
-          .range(-1.0, 1.0)
+          .range(-std::numeric_limits<double>::infinity(), 1.0)
           .only({"regional"}),
       P::number("max_feature_share", reg.max_feature_share, "At most this share of the output are feature points").range(0.0, 1.0, true, false).only(
           {"regional"}),
@@ -179,6 +200,11 @@ StageSpec simplify_stage() {
   s.check = [](const StageArgs& a) {
     const int given = int(a.given("ratio")) + int(a.given("count")) + int(a.has("cell") && a.given("cell"));
     if (given > 1) throw UsageError("ratio, count and cell: give only one of them");
+    const std::string& m = a.method();
+    if (m == "curvature") curvature_simplify_params(a).validate();
+    else if (m == "regional") regional_params(a).validate();
+    else if (m == "curvature-distance") curvature_distance_params(a).validate();
+    else if (m == "lfs") lfs_params(a).validate();
   };
   return s;
 }
