@@ -131,6 +131,7 @@ void run_write(StageRun& run) {
   const std::size_t faces = holds_faces(format) ? item.triangles.size() : 0;
   rec.count("points", as_count(item.cloud.size()));
   rec.count("faces", as_count(faces));
+  if (item.is_mesh) rec.metric("mesh_built_from", item.source);
   rec.summary = fmt::format("wrote {}{} to {}", plural(item.cloud.size(), "point"), faces > 0 ? fmt::format(", {}", plural(faces, "face")) : "",
                             file);
 }

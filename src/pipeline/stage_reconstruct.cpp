@@ -120,6 +120,7 @@ void run_reconstruct(StageRun& run) {
   rec.metric("watertight", t.watertight());
   rec.metric("mean_spacing", spacing);
   rec.metric("normals_estimated", estimated);
+  rec.metric("built_from", run.record.inputs.front());  // the tag of the cloud the mesh comes from
   if (t.triangles == 0)
     throw ComputeError(fmt::format("no triangle could be formed from {} (collinear, too sparse, or no usable normals?)",
                                    plural(cloud.size(), "point")));
@@ -143,7 +144,7 @@ void run_reconstruct(StageRun& run) {
   item.cloud.fields = std::move(mesh.vertex_fields);
   item.triangles = std::move(mesh.triangles);
   item.is_mesh = true;
-  item.source = run.inputs.front();
+  item.source = run.record.inputs.front();  // the mesh records the cloud it came from
 }
 
 }  // namespace

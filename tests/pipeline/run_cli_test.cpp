@@ -191,3 +191,31 @@ TEST_F(RunCli, StageHelpShowsItsOwnExamplesAndDefaults) {
 
 }  // namespace
 }  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST_F(RunCli, StagesOnAMeshKeepOrDropItsFacesAndSaySo) {
+  const std::string in = path("in.ply");
+  ASSERT_EQ(test::run_cli("reconstruct " + in + " " + path("mesh.ply") + " --quiet", dir_).exit_code, 0);
+  const std::size_t faces = read_mesh(path("mesh.ply")).mesh.triangle_count();
+  ASSERT_GT(faces, 0u);
+  // normals keeps the points, and so the faces
+  test::CliResult r = test::run_cli("normals " + path("mesh.ply") + " " + path("n.ply"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_mesh(path("n.ply")).mesh.triangle_count(), faces);
+  // simplify changes them: the faces go, with a warning
+  r = test::run_cli("simplify " + path("mesh.ply") + " " + path("s.ply") + " --ratio 0.5", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "warning: the input is a mesh: its " + std::to_string(faces) + " faces are dropped (simplify works on points)"))
+      << r.err;
+  EXPECT_EQ(read_mesh(path("s.ply")).mesh.triangle_count(), 0u);
+  // the report says which cloud the mesh came from
+  ASSERT_EQ(test::run_cli("reconstruct " + in + " " + path("m2.ply") + " --quiet --report " + path("r.json"), dir_).exit_code, 0);
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["stages"][1]["metrics"]["built_from"], "in1");
+  EXPECT_EQ(report["stages"][2]["metrics"]["mesh_built_from"], "in1");
+}
+
+}  // namespace
+}  // namespace pointsurf
