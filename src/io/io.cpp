@@ -73,6 +73,18 @@ void check_output_path(const std::filesystem::path& path, bool no_clobber, const
   }
 }
 
+void remove_output(const std::filesystem::path& path) noexcept {
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+}
+
+bool same_path(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ec);
+  const std::filesystem::path cb = std::filesystem::weakly_canonical(b, ec);
+  return ca == cb;
+}
+
 void check_input_path(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(fmt::format("{}: no such file", path.string()));

@@ -355,14 +355,15 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
   };
   try {
     // Before any work: every input readable, every output writable (and distinct).
-    std::set<std::string> outputs;
+    std::vector<std::string> outputs;
     for (const PipelineStep& s : pipeline.steps) {
-      if (is_reader(s)) check_input_path(s.args.text("filename"));
+      const std::string& file = s.args.has("filename") ? s.args.text("filename") : std::string();
+      if (is_reader(s)) check_input_path(file);
       if (is_writer(s)) {
-        const std::string& file = s.args.text("filename");
         check_output_path(file, options.no_clobber, s.args.text("format"));
-        if (!outputs.insert(std::filesystem::weakly_canonical(file).string()).second)
-          throw UsageError(fmt::format("{}: {} is written twice", pipeline.origin, file));
+        for (const std::string& o : outputs)
+          if (same_path(o, file)) throw UsageError(fmt::format("{}: {} is written twice", pipeline.origin, file));
+        outputs.push_back(file);
       }
     }
     // The last step reading each tag may take its data over instead of copying it.
@@ -421,10 +422,7 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
       if (options.stage_done) options.stage_done(report.stages.back());
     }
   } catch (const Error& e) {
-    for (const auto& path : written) {
-      std::error_code ec;
-      std::filesystem::remove(path, ec);
-    }
+    for (const auto& path : written) remove_output(path);
     report.error = e.what();
     report.exit_code = e.exit_code();
     finish();
