@@ -220,3 +220,22 @@ TEST_F(RunCli, StagesOnAMeshKeepOrDropItsFacesAndSaySo) {
 
 }  // namespace
 }  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST_F(RunCli, AFailedRunStillWritesItsReport) {
+  const std::string file = write_pipeline("f.json", "[\"" + path("in.ply") + "\", {\"type\": \"crop\", \"min\": [9, 9, 9]}, \"" + path("o.ply") + "\"]");
+  const test::CliResult r = test::run_cli("run " + file + " --report " + path("r.json"), dir_);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "stage 2 (crop): no point is left")) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["status"], "failed");
+  EXPECT_EQ(report["error"]["exit_code"], 2);
+  ASSERT_EQ(report["stages"].size(), 2u);  // the read, and the stage that failed
+  EXPECT_EQ(report["stages"][1]["type"], "crop");
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+}
+
+}  // namespace
+}  // namespace pointsurf
