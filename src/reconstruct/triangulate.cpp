@@ -988,14 +988,22 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
         if (!accepted[it->second]) front.push(it->second);
     }
   };
+  // Progress of the serial growth: accepted triangles against the about 2 N a closed surface
+  // has, reported every few thousand so that the bar moves through this pass.
+  std::size_t grown = 0;
+  const auto report_growth = [&] {
+    if ((++grown & 4095u) == 0) reporter.report(0.8 + 0.1 * std::min(1.0, double(grown) / double(2 * std::max<std::size_t>(n, 1))));
+  };
   for (std::uint32_t seed = 0; seed < unique; ++seed) {
     if (accepted[seed] || !try_accept(seed, 0)) continue;
     push_neighbours(seed);
+    report_growth();
     while (!front.empty()) {
       const std::uint32_t id = front.top();
       front.pop();
       if (accepted[id] || !try_accept(id, 1)) continue;
       push_neighbours(id);
+      report_growth();
     }
   }
   // Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
@@ -1018,13 +1026,16 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     for (int round = 0;; ++round) {
       result.holes_filled += fill_small_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel,
                                               filler, repaired, reopen, result.fill_triangles);
+      reporter.report(0.9 + 0.05 * double(round + 1) / double(kRepairRounds + 1));
       if (round == kRepairRounds) break;
       const std::size_t removed = open_pinches(cloud.positions, reopen, repaired, sel);
       result.pinch_triangles_removed += removed;
       if (removed == 0) break;
     }
   }
+  reporter.report(0.95);
   result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
+  reporter.report(0.98);
 
   result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
   result.topology = analyze_topology(result.mesh);
