@@ -237,6 +237,8 @@ public:
       step.tag = r.has_tag ? r.tag : fmt::format("{}{}", r.type, i + 1);
       if (!tags.insert(step.tag).second) throw UsageError(fmt::format("{}: tag \"{}\" is used twice", where, step.tag));
       const bool multi = !spec->consumes.empty() && spec->consumes.front().name == "clouds";
+      if (r.has_inputs && spec->consumes.empty())
+        throw UsageError(fmt::format("{}: takes no \"inputs\" (it reads a file)", where));
       if (r.has_inputs) {
         for (const std::string& in : r.inputs)
           if (!known_.count(in)) {

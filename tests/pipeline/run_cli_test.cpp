@@ -72,6 +72,8 @@ TEST_F(RunCli, MalformedPipelinesFailBeforeAnyWorkNamingStageAndKey) {
       {"set_unknown_stage", "[" + in + ", {\"type\": \"normals\"}, " + out + "]", "--set nromals.k=12",
        "--set \"nromals.k=12\": no stage tagged or typed \"nromals\"; did you mean \"normals\"?"},
       {"set_type_error", "[" + in + ", {\"type\": \"normals\"}, " + out + "]", "--set normals.k=abc", "stage 2 (normals): k: \"abc\" is not an integer"},
+      {"reader_with_inputs", "[" + in + ", {\"type\": \"read\", \"filename\": " + in + ", \"inputs\": \"read1\"}, " + out + "]", "",
+       "stage 2 (read): takes no \"inputs\""},
       {"written_twice", "[" + in + ", {\"type\": \"normals\"}, " + out + ", {\"type\": \"clean\"}, " + out + "]", "", "out.ply is written twice"},
       {"missing_file", "[\"" + path("no_such.ply") + "\", {\"type\": \"normals\"}, " + out + "]", "", "no_such.ply: no such file", 2},
   };
