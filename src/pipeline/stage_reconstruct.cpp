@@ -2,6 +2,7 @@
 // The reconstruct stage: a triangle mesh through the points (region-growing triangulation,
 // Crust or ball pivoting), with its topology reported.
 #include <algorithm>
+#include <limits>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -116,7 +117,10 @@ void run_reconstruct(StageRun& run) {
   rec.metric("holes_total_perimeter", total_hole_perimeter(t));
   rec.metric("largest_hole_perimeter", t.boundary_loops.empty() ? 0.0 : t.boundary_loops.front().length);
   rec.metric("euler_characteristic", static_cast<std::int64_t>(t.euler_characteristic));
-  rec.metric("genus", static_cast<std::int64_t>(t.genus()));
+  // MeshTopology::genus() is -1 where no genus is defined (several components, non-manifold):
+  // the report says null rather than a number that reads like a value.
+  if (t.genus() >= 0) rec.metric("genus", static_cast<std::int64_t>(t.genus()));
+  else rec.metric("genus", std::numeric_limits<double>::quiet_NaN());
   rec.metric("watertight", t.watertight());
   rec.metric("mean_spacing", spacing);
   rec.metric("normals_estimated", estimated);
