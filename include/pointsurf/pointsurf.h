@@ -10,6 +10,7 @@
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "pointsurf/spatial/neighborhood.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/shape/curvature.h"
 #include "pointsurf/features/feature_points.h"

@@ -40,19 +40,12 @@ PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::s
 
 }  // namespace
 
-void NormalParams::validate() const {
-  const bool uses_k = neighborhood != NeighborhoodKind::Radius;
-  const bool uses_radius = neighborhood != NeighborhoodKind::Knn;
-  if (uses_k && k < 3) throw UsageError(fmt::format("estimate_normals: k must be >= 3, got {}", k));
-  if (uses_radius && !(radius >= 0.0)) throw UsageError(fmt::format("estimate_normals: radius must be >= 0, got {}", radius));
-  if (uses_radius && radius == 0.0 && !(radius_in_spacings > 0.0 && std::isfinite(radius_in_spacings)))
-    throw UsageError(fmt::format("estimate_normals: radius_in_spacings must be > 0, got {}", radius_in_spacings));
-}
+void NormalParams::validate() const { neighborhood_settings().validate("estimate_normals", 3); }
 
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, const KdTree* tree,
                               const ProgressCallback& progress) {
   const std::size_t n = cloud.size();
-  const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
+  const Neighborhood settings = params.neighborhood_settings();
   params.validate();
   if (n < 3) throw UsageError(fmt::format("estimate_normals: needs at least 3 points, got {}", n));
   if (cloud.has_normals() && cloud.normals.size() != n)
@@ -65,7 +58,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
 
   NormalResult result;
-  if (uses_radius) result.radius_used = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(*tree);
+  result.radius_used = settings.resolve_radius(*tree);
 
   // Results go to fresh arrays, committed at the end, so a cancelled run leaves the cloud as
   // it was. Existing normals keep their side: each new normal is flipped to agree with the old.
@@ -86,11 +79,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
     for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
       const std::uint32_t i = order[pos];
       const Eigen::Vector3d& p = cloud.positions[i];
-      switch (params.neighborhood) {
-        case NeighborhoodKind::Knn: tree->knn(p, k, neighbors); break;
-        case NeighborhoodKind::Radius: tree->radius(p, result.radius_used, neighbors); break;
-        case NeighborhoodKind::Hybrid: tree->hybrid(p, k, result.radius_used, neighbors); break;
-      }
+      settings.query(*tree, p, k, result.radius_used, neighbors);
       PointNormal fit = fit_normal(*tree, p, neighbors);
       if (fit.degenerate) ++local_degenerate;
       if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;

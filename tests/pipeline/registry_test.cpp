@@ -38,7 +38,9 @@ TEST(Registry, StagesAreUniqueAndEveryParameterIsDocumented) {
     EXPECT_TRUE(names.insert(s.name).second) << s.name;
     EXPECT_FALSE(s.summary.empty()) << s.name;
     EXPECT_TRUE(s.run) << s.name;
-    if (!s.methods.empty()) EXPECT_NE(std::find(s.methods.begin(), s.methods.end(), s.default_method), s.methods.end()) << s.name;
+    if (!s.methods.empty()) {
+      EXPECT_NE(std::find(s.methods.begin(), s.methods.end(), s.default_method), s.methods.end()) << s.name;
+    }
     std::set<std::pair<std::string, std::string>> keys;  // (key, method): one declaration each
     for (const ParamSpec& p : s.params) {
       EXPECT_FALSE(p.doc.empty()) << s.name << "." << p.name;
@@ -46,9 +48,12 @@ TEST(Registry, StagesAreUniqueAndEveryParameterIsDocumented) {
         EXPECT_NE(std::find(s.methods.begin(), s.methods.end(), m), s.methods.end()) << s.name << "." << p.name << ": " << m;
         EXPECT_TRUE(keys.insert({p.name, m}).second) << s.name << "." << p.name << " declared twice for " << m;
       }
-      if (p.methods.empty()) EXPECT_TRUE(keys.insert({p.name, ""}).second) << s.name << "." << p.name;
-      if (p.type == ParamType::Choice && !format_value(p.default_value).empty())
+      if (p.methods.empty()) {
+        EXPECT_TRUE(keys.insert({p.name, ""}).second) << s.name << "." << p.name;
+      }
+      if (p.type == ParamType::Choice && !format_value(p.default_value).empty()) {
         EXPECT_NE(std::find(p.choices.begin(), p.choices.end(), format_value(p.default_value)), p.choices.end()) << s.name << "." << p.name;
+      }
     }
   }
   for (const char* stage : {"read", "write", "crop", "range", "merge", "transform", "clean", "simplify", "normals", "curvature", "features",
@@ -187,9 +192,10 @@ TEST(Registry, RangesAndChoicesAreEnforcedAtTheirBounds) {
         EXPECT_THROW(parse_param_text(p, format_value(p.type == ParamType::Int ? ParamValue(std::int64_t(outside)) : ParamValue(outside))),
                      UsageError)
             << where;
-        if (!p.min_open)
+        if (!p.min_open) {
           EXPECT_NO_THROW(parse_param_text(p, format_value(p.type == ParamType::Int ? ParamValue(std::int64_t(p.min)) : ParamValue(p.min))))
               << where;
+        }
       }
       if (std::isfinite(p.max)) {
         const double outside = p.type == ParamType::Int ? p.max + 1 : p.max_open ? p.max : p.max + 1e-9 * std::max(1.0, std::abs(p.max));

@@ -8,10 +8,9 @@
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "pointsurf/spatial/neighborhood.h"
 
 namespace pointsurf {
-
-enum class NeighborhoodKind { Knn, Radius, Hybrid };
 
 struct NormalParams {
   NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
@@ -23,6 +22,8 @@ struct NormalParams {
                                     // distance from the point to its neighbours, itself included,
                                     // the statistic of statistical outlier removal (see
                                     // statistical_outliers_from_distances): one kNN pass for both
+  /// The neighbourhood fields as the one Neighborhood type (spatial/neighborhood.h).
+  Neighborhood neighborhood_settings() const noexcept { return {neighborhood, k, radius, radius_in_spacings}; }
   /// Throws UsageError naming the first value out of range (k < 3 where k is used, a negative
   /// radius, radius_in_spacings <= 0 where used). The one place these values are checked.
   void validate() const;
