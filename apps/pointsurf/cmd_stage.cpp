@@ -22,6 +22,31 @@ std::string option_name(const std::string& stage, const std::string& key) {
   return dashed(key);
 }
 
+// "  --option META   text", the text wrapped at 110 columns under its own column.
+std::string help_row(const std::string& left, const std::string& text) {
+  constexpr std::size_t indent = 33, width = 110;
+  std::string out = fmt::format("  {:<30} ", left);
+  if (out.size() > indent) out = "  " + left + "\n" + std::string(indent, ' ');
+  std::size_t column = indent;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(start, end - start);
+    if (column > indent && column + 1 + word.size() > width) {
+      out += "\n" + std::string(indent, ' ');
+      column = indent;
+    } else if (column > indent) {
+      out += ' ';
+      ++column;
+    }
+    out += word;
+    column += word.size();
+    start = end + 1;
+  }
+  return out + "\n";
+}
+
 // One help line per parameter declaration.
 std::string param_line(const std::string& stage, const ParamSpec& p, bool show_methods) {
   std::string left = option_name(stage, p.name);
@@ -39,7 +64,7 @@ std::string param_line(const std::string& stage, const ParamSpec& p, bool show_m
   }
   std::string n;
   for (const std::string& s : notes) n += (n.empty() ? "" : "; ") + s;
-  return fmt::format("  {:<30} {}{}{}\n", left, methods, p.doc, n.empty() ? "" : " (" + n + ")");
+  return help_row(left, methods + p.doc + (n.empty() ? "" : " (" + n + ")"));
 }
 
 std::string stage_help(const StageSpec& s) {
@@ -50,8 +75,8 @@ std::string stage_help(const StageSpec& s) {
   if (!s.methods.empty()) {
     std::string list;
     for (const std::string& m : s.methods) list += (list.empty() ? "" : "|") + m;
-    out += fmt::format("  {:<30} {} (default {})\n", "--method " + list,
-                       s.method_list ? "Comma-separated methods, applied in order" : "Method", s.default_method);
+    out += help_row("--method " + list,
+                    fmt::format("{} (default {})", s.method_list ? "Comma-separated methods, applied in order" : "Method", s.default_method));
   }
   for (const ParamSpec& p : s.params) out += param_line(s.name, p, !s.methods.empty());
   out += "\nInput options:\n";

@@ -154,8 +154,10 @@ TEST(Registry, HelpShowsEveryDefaultAndTheyAreTheLibrarys) {
   // Walk the registry: every parameter's line in --help carries its default.
   for (const StageSpec& s : registered_stages()) {
     if (s.name == "read" || s.name == "write") continue;
-    const test::CliResult r = test::run_cli(s.name + " --help", dir);
+    test::CliResult r = test::run_cli(s.name + " --help", dir);
     ASSERT_EQ(r.exit_code, 0) << s.name << ": " << r.err;
+    // Each option's text is wrapped under its column: join the continuation lines.
+    for (std::size_t at; (at = r.out.find("\n" + std::string(33, ' '))) != std::string::npos;) r.out.replace(at, 34, " ");
     for (const ParamSpec& p : s.params) {
       const std::string def = format_value(p.default_value);
       if (def.empty()) continue;
