@@ -62,21 +62,13 @@ demo() {
   build
   local cli="$BUILD_DIR/pointsurf" out="$ROOT/out"
   mkdir -p "$out"
+  cd "$ROOT"  # the example pipelines name data/ and out/ relative to the repository
   log "demo: aerial LiDAR tile data/b9_training.ply (22,300 points at x ~ 596,648 m)"
-  "$cli" info "$ROOT/data/b9_training.ply" --report "$out/b9_info.json"
-  "$cli" clean "$ROOT/data/b9_training.ply" "$out/b9_clean.ply" --method sor,duplicates --report "$out/b9_clean.json"
-  "$cli" normals "$out/b9_clean.ply" "$out/b9_normals.ply" --orient mst --report "$out/b9_normals.json"
-  "$cli" features "$out/b9_normals.ply" "$out/b9_features.ply" --report "$out/b9_features.json"
-  "$cli" simplify "$out/b9_features.ply" "$out/b9_regional.ply" --method regional --ratio 0.25 --report "$out/b9_simplify.json"
-  "$cli" reconstruct "$out/b9_normals.ply" "$out/b9_mesh.ply" --method triangulate --report "$out/b9_mesh.json"
+  "$cli" info data/b9_training.ply --report out/b9_info.json
+  "$cli" run examples/b9_mesh.json --report out/b9_run.json
   log "demo: kitten scan data/kitten.xyz"
-  "$cli" info "$ROOT/data/kitten.xyz" --report "$out/kitten_info.json"
-  "$cli" clean "$ROOT/data/kitten.xyz" "$out/kitten_clean.ply" --method sor,trilateral --report "$out/kitten_clean.json"
-  "$cli" normals "$out/kitten_clean.ply" "$out/kitten_normals.ply" --orient mst --report "$out/kitten_normals.json"
-  "$cli" curvature "$out/kitten_normals.ply" "$out/kitten_curvature.ply" --report "$out/kitten_curvature.json"
-  "$cli" simplify "$out/kitten_curvature.ply" "$out/kitten_regional.ply" --method regional --ratio 0.2 --report "$out/kitten_simplify.json"
-  "$cli" reconstruct "$out/kitten_normals.ply" "$out/kitten_mesh.ply" --method triangulate --report "$out/kitten_mesh.json"
-  "$cli" reconstruct "$out/kitten_normals.ply" "$out/kitten_ball_pivot.ply" --method ball-pivot --report "$out/kitten_ball_pivot.json"
+  "$cli" info data/kitten.xyz --report out/kitten_info.json
+  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
 }

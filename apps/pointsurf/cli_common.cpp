@@ -1,163 +1,138 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cli_common.h"
 
-#include <sys/resource.h>
 #include <unistd.h>
 
-#include <cctype>
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
-#include <utility>
+#include <memory>
+#include <thread>
 
 #include <fmt/format.h>
 
 #include "pointsurf/core/error.h"
-#include "pointsurf/normals/normals.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/pipeline/registry.h"
 
 namespace pointsurf::cli {
 
-void add_common_options(CLI::App& cmd, CommonOptions& options) {
-  cmd.add_option("--report", options.report_path, "Write a JSON report of the run (parameters, counts, timings) to FILE")
-      ->type_name("FILE.json");
-  cmd.add_option("--threads", options.threads, "Worker threads (default: all cores)")->type_name("N");
-  cmd.add_flag("--quiet,-q", options.quiet, "No progress bar, no warnings on stderr (they still go to the report)");
-  cmd.add_flag("--strict", options.strict, "Points with NaN/Inf coordinates are an error instead of being dropped and counted");
-  cmd.add_option("--columns", options.columns,
-                 "Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)")
-      ->type_name("SPEC");
-  cmd.add_option("--input-format", options.input_format, "Read the input as this format instead of detecting it")
-      ->type_name("ply|xyz|pcd|las|off|obj|stl");
+std::string dashed(const std::string& key) {
+  std::string out = "--" + key;
+  std::replace(out.begin(), out.end(), '_', '-');
+  return out;
 }
 
-void add_output_options(CLI::App& cmd, OutputOptions& options) {
-  cmd.add_flag("--ascii", options.ascii, "Write ascii PLY/PCD/STL instead of binary");
-  cmd.add_flag("--float", options.single_precision,
-               "Write float32 positions (PLY, PCD); refused for coordinates where float32 loses precision");
-  cmd.add_flag("--big-endian", options.big_endian, "Write binary big-endian PLY");
-  cmd.add_flag("--compressed", options.compressed, "Write PCD as binary_compressed (LZF)");
-  cmd.add_option("--las-offset", options.las_offset, "LAS offset (default: near the data's minimum)")->type_name("X,Y,Z");
-  cmd.add_option("--las-scale", options.las_scale, "LAS scale, cloud units per count (default 1e-4)")->type_name("S");
-}
-
-WriteOptions OutputOptions::to_write_options() const {
-  WriteOptions w;
-  w.ascii = ascii;
-  if (ascii) w.ply_encoding = PlyEncoding::Ascii;
-  else if (big_endian) w.ply_encoding = PlyEncoding::BinaryBigEndian;
-  w.single_precision = single_precision;
-  w.pcd_compressed = compressed;
-  if (!las_offset.empty()) w.las_offset = parse_vector3(las_offset, "--las-offset");
-  if (las_scale < 0.0 || !std::isfinite(las_scale)) throw UsageError(fmt::format("--las-scale: {} must be positive", las_scale));
-  if (las_scale > 0.0) w.las_scale = las_scale;
-  return w;
-}
-
-double peak_rss_mb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is KiB on Linux
-}
-
-Eigen::Vector3d parse_vector3(const std::string& text, const std::string& option) {
-  Eigen::Vector3d v;
-  std::stringstream ss(text);
-  std::string item;
-  int i = 0;
-  while (std::getline(ss, item, ',')) {
-    if (i >= 3) break;
-    try {
-      std::size_t used = 0;
-      v[i] = std::stod(item, &used);
-      if (used != item.size() || !std::isfinite(v[i])) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw UsageError(fmt::format("{}: '{}' is not a number (expected X,Y,Z)", option, item));
+std::vector<std::string> scan_arguments(const std::vector<std::string>& args, const std::vector<OptionDef>& options) {
+  std::vector<std::string> positionals;
+  auto find = [&](const std::string& name) -> const OptionDef* {
+    for (const OptionDef& o : options)
+      if (o.name == name) return &o;
+    return nullptr;
+  };
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg.size() < 2 || arg[0] != '-' || (arg[1] != '-' && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
+      positionals.push_back(arg);
+      continue;
     }
-    ++i;
-  }
-  if (i != 3 || std::getline(ss, item, ','))
-    throw UsageError(fmt::format("{}: '{}': expected three comma-separated numbers X,Y,Z", option, text));
-  return v;
-}
-
-Report::Report(std::string command) : start_(std::chrono::steady_clock::now()) {
-  json_ = {{"command", std::move(command)},
-           {"version", POINTSURF_VERSION},
-           {"inputs", nlohmann::json::array()},
-           {"outputs", nlohmann::json::array()},
-           {"parameters", nlohmann::json::object()},
-           {"stages", nlohmann::json::array()},
-           {"total_seconds", 0.0},
-           {"peak_rss_mb", 0.0},
-           {"warnings", nlohmann::json::array()}};
-}
-
-void Report::warn(const std::string& message, bool quiet) {
-  json_["warnings"].push_back(message);
-  if (!quiet) fmt::print(stderr, "warning: {}\n", message);
-}
-
-std::size_t Report::begin_stage(const std::string& name) {
-  json_["stages"].push_back({{"name", name},
-                             {"seconds", 0.0},
-                             {"peak_rss_mb", 0.0},
-                             {"counts", nlohmann::json::object()},
-                             {"metrics", nlohmann::json::object()}});
-  stage_starts_.push_back(std::chrono::steady_clock::now());
-  return stage_starts_.size() - 1;
-}
-
-void Report::end_stage(std::size_t index) {
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_starts_[index]).count();
-  json_["stages"][index]["seconds"] = seconds;
-  json_["stages"][index]["peak_rss_mb"] = peak_rss_mb();
-}
-
-void Report::finish() {
-  json_["total_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  json_["peak_rss_mb"] = peak_rss_mb();
-}
-
-void Report::write(const std::filesystem::path& path) const {
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}", path.filename().string(), ::getpid());
-  {
-    std::ofstream out(tmp);
-    if (!out) throw Error(fmt::format("{}: cannot write the report", path.string()));
-    out << json_.dump(2) << '\n';
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw Error(fmt::format("{}: cannot write the report", path.string()));
+    if (arg == "--") {
+      positionals.insert(positionals.end(), args.begin() + static_cast<std::ptrdiff_t>(i) + 1, args.end());
+      break;
     }
+    std::string name = arg, value;
+    bool has_value = false;
+    if (const std::size_t eq = arg.find('='); eq != std::string::npos) {
+      name = arg.substr(0, eq);
+      value = arg.substr(eq + 1);
+      has_value = true;
+    }
+    if (name == "-h") name = "--help";
+    if (name == "-q") name = "--quiet";
+    const OptionDef* o = find(name);
+    if (o == nullptr && name.rfind("--no-", 0) == 0 && !has_value) {
+      // --no-close-small-holes: the flag set to false.
+      const OptionDef* flag = find("--" + name.substr(5));
+      if (flag != nullptr && flag->flag) {
+        flag->set("false");
+        continue;
+      }
+    }
+    if (o == nullptr) {
+      std::vector<std::string> names;
+      for (const OptionDef& d : options) names.push_back(d.name);
+      const std::string near = closest_name(name, names);
+      throw UsageError(fmt::format("unknown option {}{}", name, near.empty() ? "" : fmt::format("; did you mean {}?", near)));
+    }
+    if (o->flag) {
+      o->set(has_value ? value : "true");
+      continue;
+    }
+    if (!has_value) {
+      if (i + 1 >= args.size()) throw UsageError(fmt::format("{} needs a value ({})", name, o->meta.empty() ? "VALUE" : o->meta));
+      value = args[++i];
+    }
+    o->set(value);
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(fmt::format("{}: cannot write the report: {}", path.string(), ec.message()));
+  return positionals;
+}
+
+void add_common_options(std::vector<OptionDef>& options, CommonOptions& common) {
+  options.push_back({"--report", false, "FILE.json", [&common](const std::string& v) { common.report_path = v; }});
+  options.push_back({"--threads", false, "N", [&common](const std::string& v) {
+                       std::size_t used = 0;
+                       int n = -1;
+                       try {
+                         n = std::stoi(v, &used);
+                       } catch (const std::exception&) {
+                         used = 0;
+                       }
+                       if (used != v.size() || n < 0) throw UsageError(fmt::format("--threads: \"{}\" is not a count >= 0", v));
+                       common.threads = n;
+                     }});
+  auto flag = [](bool& target, const char* name) {
+    return [&target, name](const std::string& v) {
+      if (v != "true" && v != "false") throw UsageError(fmt::format("{}: \"{}\" is not true or false", name, v));
+      target = v == "true";
+    };
+  };
+  options.push_back({"--quiet", true, "", flag(common.quiet, "--quiet")});
+  options.push_back({"--no-clobber", true, "", flag(common.no_clobber, "--no-clobber")});
+  options.push_back({"--help", true, "", flag(common.help, "--help")});
+}
+
+std::string common_options_help() {
+  return "Common options:\n"
+         "  --report FILE.json   Write the JSON run report (parameters used, counts, seconds, memory, warnings), also on failure\n"
+         "  --threads N          Worker threads (default 0: all cores; at most the number of cores)\n"
+         "  --quiet, -q          No progress bar, summary lines or warnings on stderr (the report keeps them)\n"
+         "  --no-clobber         Refuse to overwrite an existing output file\n"
+         "  --help, -h           This help\n";
+}
+
+void check_common_options(const CommonOptions& common) {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  if (common.threads > static_cast<int>(cores))
+    throw UsageError(fmt::format("--threads: {} exceeds the {} cores of this machine", common.threads, cores));
+  if (!common.report_path.empty()) {
+    if (std::filesystem::path(common.report_path).extension() != ".json")
+      throw UsageError(fmt::format("--report: {}: expected a .json file name", common.report_path));
+    check_output_path(common.report_path, false, "json");
   }
 }
 
 ProgressBar::ProgressBar(std::string label, bool enabled)
-    : label_(std::move(label)), enabled_(enabled && ::isatty(STDERR_FILENO)),
-      start_(std::chrono::steady_clock::now()), last_(start_) {}
+    : label_(std::move(label)), enabled_(enabled && ::isatty(STDERR_FILENO)), start_(std::chrono::steady_clock::now()), last_(start_) {}
 
-ProgressBar::~ProgressBar() {
+ProgressBar::~ProgressBar() { finish(); }
+
+void ProgressBar::finish() {
   if (shown_) {
     if (last_fraction_ < 1.0) update(1.0);
-    std::fputc('\n', stderr);
+    std::fputs("\r\033[K", stderr);  // the summary line takes its place
+    shown_ = false;
   }
-}
-
-ProgressCallback ProgressBar::callback() {
-  if (!enabled_) return {};
-  return [this](double fraction) {
-    update(fraction);
-    return true;
-  };
+  enabled_ = false;
 }
 
 void ProgressBar::update(double fraction) {
@@ -168,134 +143,72 @@ void ProgressBar::update(double fraction) {
   if (shown_ && fraction < 1.0 && now - last_ < std::chrono::milliseconds(100)) return;
   last_ = now;
   shown_ = true;
-  fraction = std::clamp(fraction, 0.0, 1.0);
+  fraction = std::clamp(fraction, last_fraction_, 1.0);  // never backwards
   last_fraction_ = fraction;
   constexpr int width = 30;
   const int filled = static_cast<int>(fraction * width);
-  fmt::print(stderr, "\r{:<10} [{}{}] {:3.0f}%  {:.1f} s", label_, std::string(filled, '#'), std::string(width - filled, '.'),
+  fmt::print(stderr, "\r{:<18} [{}{}] {:3.0f}%  {:.1f} s", label_, std::string(filled, '#'), std::string(width - filled, '.'),
              100.0 * fraction, elapsed);
   std::fflush(stderr);
 }
 
-namespace {
-
-nlohmann::json describe_cloud(const std::filesystem::path& path, const std::string& format, const PointCloud& cloud) {
-  nlohmann::json fields = nlohmann::json::array();
-  for (const ScalarField& f : cloud.fields) fields.push_back(f.name);
-  return {{"path", path.string()},     {"format", format},
-          {"points", cloud.size()},    {"normals", cloud.has_normals()},
-          {"colors", cloud.has_colors()}, {"fields", fields}};
-}
-
-}  // namespace
-
-std::string ascii_lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-std::string with_file(const std::filesystem::path& path, const std::string& message) {
-  // Some readers name the file in their warnings already.
-  if (message.rfind(path.string(), 0) == 0) return message;
-  return fmt::format("{}: {}", path.string(), message);
-}
-
-CloudReadResult read_cloud_reported(const std::filesystem::path& path, const CommonOptions& common, Report& report) {
-  const std::size_t stage = report.begin_stage("read");
-  ReadOptions options;
-  options.strict = common.strict;
-  options.columns = common.columns;
-  options.format = ascii_lower(common.input_format);
-  CloudReadResult result = read_point_cloud(path, options);
-  report.end_stage(stage);
-  nlohmann::json& s = report.stage(stage);
-  s["counts"]["points"] = result.cloud.size();
-  s["counts"]["dropped_nonfinite"] = result.dropped_nonfinite;
-  nlohmann::json input = describe_cloud(path, result.format, result.cloud);
-  input["encoding"] = result.encoding;
-  input["faces"] = result.face_count;
-  input["dropped_nonfinite"] = result.dropped_nonfinite;
-  report.add_input(input);
-  for (const std::string& w : result.warnings) report.warn(with_file(path, w), common.quiet);
-  if (result.dropped_nonfinite > 0)
-    report.warn(fmt::format("{}: {} points with NaN/Inf coordinates dropped (--strict makes this an error)", path.string(),
-                            result.dropped_nonfinite),
-                common.quiet);
-  if (result.cloud.empty()) throw InputError(fmt::format("{}: no points", path.string()));
-  return result;
-}
-
-void warn_lost_attributes(const std::filesystem::path& path, bool normals, bool colors, const FieldSet& fields, std::size_t faces,
-                          const WriteOptions& options, const CommonOptions& common, Report& report) {
-  const std::string format = options.format.empty() ? format_from_extension(path) : options.format;
-  std::vector<std::string> lost;
-  const bool holds_faces = format == "ply" || format == "off" || format == "obj" || format == "stl";
-  if (faces > 0 && !holds_faces) lost.push_back(fmt::format("{} faces", faces));
-  if (format == "stl") {
-    if (normals) lost.push_back("normals");
-    if (colors) lost.push_back("colours");
-  }
-  if (format == "las" && normals) lost.push_back("normals");
-  if (format == "xyz" && ascii_lower(path.extension().string()) != ".csv" && !fields.empty()) lost.push_back("field names (values are kept as columns)");
-  if (format == "off" || format == "obj" || format == "stl") {
-    for (const ScalarField& f : fields) lost.push_back(fmt::format("field '{}'", f.name));
-  } else if (format == "las") {
-    // The slots write_las fills (formats 6 and 7 have no NIR).
-    static const char* const las_fields[] = {"intensity", "return_number", "number_of_returns", "classification",
-                                             "gps_time",  "user_data",     "scan_angle",        "point_source_id"};
-    for (const ScalarField& f : fields) {
-      const bool known = std::any_of(std::begin(las_fields), std::end(las_fields), [&](const char* n) { return f.name == n; });
-      if (!known) lost.push_back(fmt::format("field '{}'", f.name));
+void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}", path.filename().string(), ::getpid());
+  {
+    std::ofstream out(tmp);
+    out << text;
+    out.close();
+    if (!out) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw Error(fmt::format("{}: cannot write", path.string()));
     }
   }
-  if (!lost.empty()) {
-    std::string list;
-    for (const std::string& l : lost) list += (list.empty() ? "" : ", ") + l;
-    report.warn(fmt::format("{}: the {} format cannot hold: {}", path.string(), format, list), common.quiet);
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Error(fmt::format("{}: cannot write: {}", path.string(), ec.message()));
   }
 }
 
-void write_cloud_reported(const std::filesystem::path& path, const PointCloud& cloud, const OutputOptions& out,
-                          const CommonOptions& common, Report& report) {
-  const WriteOptions options = out.to_write_options();
-  warn_lost_attributes(path, cloud.has_normals(), cloud.has_colors(), cloud.fields, 0, options, common, report);
-  const std::size_t stage = report.begin_stage("write");
-  write_point_cloud(path, cloud, options);
-  report.end_stage(stage);
-  report.stage(stage)["counts"]["points"] = cloud.size();
-  report.add_output(describe_cloud(path, format_from_extension(path), cloud));
-}
-
-void estimate_missing_normals(PointCloud& cloud, const KdTree& tree, int k, const CommonOptions& common, Report& report) {
-  const std::size_t stage = report.begin_stage("normals");
-  NormalResult estimated;
-  OrientResult oriented;
-  {
-    ProgressBar bar("normals", !common.quiet);
-    estimated = estimate_normals(cloud, {.k = k, .keep_variation = false}, &tree, bar.callback());
-    oriented = orient_normals(cloud, {}, &tree, bar.callback());
+void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command) {
+  Context context;
+  RunReport report;
+  report.command = command;
+  RunOptions options;
+  options.no_clobber = common.no_clobber;
+  std::unique_ptr<ProgressBar> bar;
+  const std::size_t n = pipeline.steps.size();
+  options.progress = [&](const StageRecord& r) -> ProgressCallback {
+    bar = std::make_unique<ProgressBar>(fmt::format("[{}/{}] {}", r.index, n, r.type), !common.quiet);
+    ProgressBar* b = bar.get();
+    return [b](double f) {
+      b->update(f);
+      return true;
+    };
+  };
+  options.stage_done = [&](const StageRecord& r) {
+    if (bar) bar->finish();
+    if (common.quiet) return;
+    fmt::print(stderr, "[{}/{}] {} ({:.2f} s)\n", r.index, n, r.summary, r.seconds);
+    for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);
+  };
+  try {
+    run_pipeline(pipeline, context, report, options);
+  } catch (...) {
+    if (bar) bar->finish();
+    if (!common.report_path.empty()) {
+      try {
+        write_text_atomically(common.report_path, report_json(report));
+      } catch (const Error&) {
+        // The run's own error matters more.
+      }
+    }
+    throw;
   }
-  report.end_stage(stage);
-  report.stage(stage)["counts"] = {
-      {"points", cloud.size()}, {"degenerate", estimated.degenerate}, {"flipped", oriented.flipped}, {"components", oriented.components}};
-  report.stage(stage)["metrics"] = {{"k", k}, {"orientation", "mst"}, {"reason", "the input has no normals"}};
-}
-
-namespace {
-std::vector<std::pair<int, CommandFactory>>& command_registry() {
-  static std::vector<std::pair<int, CommandFactory>> registry;  // built during static initialisation
-  return registry;
-}
-}  // namespace
-
-CommandRegistration::CommandRegistration(int order, CommandFactory factory) { command_registry().emplace_back(order, factory); }
-
-std::vector<CommandFactory> registered_commands() {
-  auto entries = command_registry();
-  std::stable_sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<CommandFactory> factories;
-  for (const auto& entry : entries) factories.push_back(entry.second);
-  return factories;
+  if (!common.report_path.empty()) write_text_atomically(common.report_path, report_json(report));
 }
 
 }  // namespace pointsurf::cli

@@ -2,100 +2,131 @@
 // pointsurf info IN [--json]: format, counts, bounding box, mean spacing, fields.
 #include <algorithm>
 #include <cstdio>
-#include <memory>
 #include <utility>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::cli {
 namespace {
 
-struct InfoState {
+std::string info_help() {
+  return "pointsurf info IN [--json] [options]\nDescribe a cloud or mesh: format, counts, bounding box, mean spacing, fields.\n\n"
+         "Options:\n"
+         "  --json                         Print the description as JSON on stdout\n"
+         "  --columns SPEC                 Column meaning of XYZ/TXT/CSV input (see pointsurf normals --help)\n"
+         "  --input-format FORMAT          Read as this format instead of detecting it\n"
+         "  --strict                       Points with NaN/Inf coordinates are an error\n\n" +
+         common_options_help() + "\nExample:\n  pointsurf info scan.las --json\n";
+}
+
+int run_info(const std::vector<std::string>& args) {
   CommonOptions common;
-  std::string input;
   bool json = false;
-};
-
-std::string scalar_type_name(ScalarType t) { return std::string(scalar_type_ply_name(t)); }
-
-void run_info(const InfoState& s) {
-  Report report("info");
-  report.parameters() = {{"input", s.input}};
-  const std::string format = s.common.input_format.empty() ? detect_format(s.input) : ascii_lower(s.common.input_format);
+  ReadOptions options;
+  auto boolean = [](bool& target) {
+    return [&target](const std::string& v) {
+      if (v != "true" && v != "false") throw UsageError(fmt::format("\"{}\" is not true or false", v));
+      target = v == "true";
+    };
+  };
+  std::vector<OptionDef> defs = {{"--json", true, "", boolean(json)},
+                                 {"--strict", true, "", boolean(options.strict)},
+                                 {"--columns", false, "SPEC", [&](const std::string& v) { options.columns = v; }},
+                                 {"--input-format", false, "FORMAT", [&](const std::string& v) { options.format = v; }}};
+  add_common_options(defs, common);
+  const std::vector<std::string> positionals = scan_arguments(args, defs);
+  if (common.help) {
+    fmt::print("{}", info_help());
+    return 0;
+  }
+  if (positionals.size() != 1) throw UsageError(fmt::format("expected one input file, got {} (see pointsurf info --help)", positionals.size()));
+  check_common_options(common);
+  const std::string& input = positionals.front();
+  check_input_path(input);
+  const auto start = std::chrono::steady_clock::now();
+  const std::string format = options.format.empty() ? detect_format(input) : options.format;
   const bool mesh_format = format == "ply" || format == "off" || format == "obj" || format == "stl";
+  options.format = format;
 
   PointCloud cloud;
   std::size_t faces = 0;
   nlohmann::json info;
-  {
-    const std::size_t stage = report.begin_stage("read");
-    ReadOptions options;
-    options.strict = s.common.strict;
-    options.columns = s.common.columns;
-    options.format = format;  // detected once above, not again by the reader
-    if (mesh_format) {
-      MeshReadResult r = read_mesh(s.input, options);
-      faces = r.mesh.triangle_count();
-      info["encoding"] = r.encoding;
-      info["dropped_nonfinite"] = r.dropped_nonfinite;
-      info["dropped_faces"] = r.dropped_faces;
-      info["polygons_triangulated"] = r.polygons_triangulated;
-      for (const std::string& w : r.warnings) report.warn(with_file(s.input, w), true);
-      // The mesh is not used again: its vertex data moves into the cloud instead of being copied.
-      cloud.positions = std::move(r.mesh.vertices);
-      cloud.normals = std::move(r.mesh.vertex_normals);
-      cloud.colors = std::move(r.mesh.vertex_colors);
-      cloud.fields = std::move(r.mesh.vertex_fields);
-    } else {
-      CloudReadResult r = read_point_cloud(s.input, options);
-      info["encoding"] = r.encoding;
-      info["dropped_nonfinite"] = r.dropped_nonfinite;
-      for (const std::string& w : r.warnings) report.warn(with_file(s.input, w), true);
-      cloud = std::move(r.cloud);
-    }
-    report.end_stage(stage);
-    report.stage(stage)["counts"]["points"] = cloud.size();
+  std::vector<std::string> warnings;
+  if (mesh_format) {
+    MeshReadResult r = read_mesh(input, options);
+    faces = r.mesh.triangle_count();
+    info["encoding"] = r.encoding;
+    info["dropped_nonfinite"] = r.dropped_nonfinite;
+    info["dropped_faces"] = r.dropped_faces;
+    info["polygons_triangulated"] = r.polygons_triangulated;
+    warnings = std::move(r.warnings);
+    cloud.positions = std::move(r.mesh.vertices);
+    cloud.normals = std::move(r.mesh.vertex_normals);
+    cloud.colors = std::move(r.mesh.vertex_colors);
+    cloud.fields = std::move(r.mesh.vertex_fields);
+  } else {
+    CloudReadResult r = read_point_cloud(input, options);
+    info["encoding"] = r.encoding;
+    info["dropped_nonfinite"] = r.dropped_nonfinite;
+    warnings = std::move(r.warnings);
+    cloud = std::move(r.cloud);
   }
-  info["path"] = s.input;
+  // A file of words read as text gives no point: that is bad input, not an empty answer.
+  if (cloud.empty()) throw InputError(fmt::format("{}: no points (is it a point cloud?)", input));
+  info["path"] = input;
   info["format"] = format;
   info["points"] = cloud.size();
   info["faces"] = faces;
   info["normals"] = cloud.has_normals();
   info["colors"] = cloud.has_colors();
   const BoundingBox box = bounding_box(cloud.positions);
-  if (!box.empty()) {
-    info["bbox_min"] = {box.min.x(), box.min.y(), box.min.z()};
-    info["bbox_max"] = {box.max.x(), box.max.y(), box.max.z()};
-    info["bbox_diagonal"] = box.diagonal();
-  }
-  if (cloud.size() >= 2) {
-    const std::size_t stage = report.begin_stage("mean_spacing");
-    const double spacing = mean_spacing(cloud.positions);
-    report.end_stage(stage);
-    report.stage(stage)["metrics"]["mean_spacing"] = spacing;
-    info["mean_spacing"] = spacing;
-  }
+  info["bbox_min"] = {box.min.x(), box.min.y(), box.min.z()};
+  info["bbox_max"] = {box.max.x(), box.max.y(), box.max.z()};
+  info["bbox_diagonal"] = box.diagonal();
+  if (cloud.size() >= 2) info["mean_spacing"] = mean_spacing(cloud.positions);
   nlohmann::json fields = nlohmann::json::array();
   for (const ScalarField& f : cloud.fields) {
     const auto [lo, hi] = f.values.empty() ? std::pair<double, double>{0.0, 0.0}
                                             : std::pair<double, double>{*std::min_element(f.values.begin(), f.values.end()),
                                                                         *std::max_element(f.values.begin(), f.values.end())};
-    fields.push_back({{"name", f.name}, {"type", scalar_type_name(f.type)}, {"min", lo}, {"max", hi}});
+    fields.push_back({{"name", f.name}, {"type", std::string(scalar_type_ply_name(f.type))}, {"min", lo}, {"max", hi}});
   }
   info["fields"] = fields;
-  report.add_input(info);
-  report.finish();
-  if (!s.common.report_path.empty()) report.write(s.common.report_path);
 
-  if (s.json) {
-    fmt::print("{}\n", info.dump(2));
-    return;
+  if (!common.report_path.empty()) {
+    // The one report schema: a run with one stage "info" whose metrics are the description.
+    RunReport report;
+    report.command = "info";
+    report.origin = input;
+    report.ok = true;
+    StageRecord r;
+    r.index = 1;
+    r.type = "info";
+    r.tag = "info";
+    r.parameters = {{"filename", input}, {"format", format}};
+    r.count("points", static_cast<std::int64_t>(cloud.size()));
+    r.count("faces", static_cast<std::int64_t>(faces));
+    r.metric("description", info.dump());
+    r.warnings = warnings;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    r.peak_rss_mb = peak_rss_mb();
+    report.stages.push_back(r);
+    report.warnings = warnings;
+    report.total_seconds = r.seconds;
+    report.peak_rss_mb = r.peak_rss_mb;
+    write_text_atomically(common.report_path, report_json(report));
   }
-  fmt::print("file         {}\n", s.input);
+  if (json) {
+    fmt::print("{}\n", info.dump(2));
+    return 0;
+  }
+  fmt::print("file         {}\n", input);
   fmt::print("format       {} ({})\n", format, info["encoding"].get<std::string>());
   fmt::print("points       {}\n", cloud.size());
   if (mesh_format) fmt::print("faces        {}\n", faces);
@@ -103,30 +134,19 @@ void run_info(const InfoState& s) {
     fmt::print("dropped      {} points with NaN/Inf coordinates\n", info["dropped_nonfinite"].get<std::size_t>());
   fmt::print("normals      {}\n", cloud.has_normals() ? "yes" : "no");
   fmt::print("colours      {}\n", cloud.has_colors() ? "yes" : "no");
-  if (!box.empty()) {
-    fmt::print("bbox min     {:.6f} {:.6f} {:.6f}\n", box.min.x(), box.min.y(), box.min.z());
-    fmt::print("bbox max     {:.6f} {:.6f} {:.6f}\n", box.max.x(), box.max.y(), box.max.z());
-    fmt::print("extent       {:.6g} {:.6g} {:.6g} (diagonal {:.6g})\n", box.extent().x(), box.extent().y(), box.extent().z(),
-               box.diagonal());
-  }
+  fmt::print("bbox min     {:.6f} {:.6f} {:.6f}\n", box.min.x(), box.min.y(), box.min.z());
+  fmt::print("bbox max     {:.6f} {:.6f} {:.6f}\n", box.max.x(), box.max.y(), box.max.z());
+  fmt::print("extent       {:.6g} {:.6g} {:.6g} (diagonal {:.6g})\n", box.extent().x(), box.extent().y(), box.extent().z(), box.diagonal());
   if (info.contains("mean_spacing")) fmt::print("mean spacing {:.6g}\n", info["mean_spacing"].get<double>());
   for (const auto& f : fields)
-    fmt::print("field        {} ({}) range [{:g}, {:g}]\n", f["name"].get<std::string>(), f["type"].get<std::string>(),
-               f["min"].get<double>(), f["max"].get<double>());
-  for (const auto& w : report.json()["warnings"]) fmt::print("warning      {}\n", w.get<std::string>());
+    fmt::print("field        {} ({}) range [{:g}, {:g}]\n", f["name"].get<std::string>(), f["type"].get<std::string>(), f["min"].get<double>(),
+               f["max"].get<double>());
+  for (const std::string& w : warnings) fmt::print("warning      {}\n", w);
+  return 0;
 }
 
 }  // namespace
 
-Command register_info(CLI::App& app) {
-  auto state = std::make_shared<InfoState>();
-  CLI::App* cmd = app.add_subcommand("info", "Describe a cloud or mesh: format, counts, bounding box, mean spacing, fields");
-  cmd->add_option("input", state->input, "Input file")->required();
-  cmd->add_flag("--json", state->json, "Print the description as JSON on stdout");
-  add_common_options(*cmd, state->common);
-  return {cmd, [state] { run_info(*state); }, &state->common};
-}
-
-const CommandRegistration info_registration{10, register_info};
+Command info_command() { return {"info", "Describe a cloud or mesh: format, counts, bounding box, mean spacing, fields", run_info, info_help}; }
 
 }  // namespace pointsurf::cli

@@ -1,64 +1,106 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// pointsurf: from a raw 3D scan to a verified surface.
+// pointsurf: from a raw 3D scan to a verified surface. The stage commands come from the
+// pipeline registry; info, convert and run are the tool's own.
 // Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.
 #include <cstdio>
 #include <exception>
-#include <memory>
 #include <new>
 #include <optional>
+#include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/pipeline/registry.h"
+
+namespace {
+
+std::vector<pointsurf::cli::Command> all_commands() {
+  using namespace pointsurf::cli;
+  std::vector<Command> commands = {info_command(), convert_command()};
+  for (Command& c : stage_commands()) commands.push_back(std::move(c));
+  commands.push_back(run_command());
+  return commands;
+}
+
+std::string main_help(const std::vector<pointsurf::cli::Command>& commands) {
+  std::string out = "pointsurf " POINTSURF_VERSION
+                    ": from a raw 3D scan (point cloud) to a verified surface.\n"
+                    "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.0-1.4, OFF, OBJ, STL.\n"
+                    "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.\n\n"
+                    "Usage: pointsurf COMMAND [ARGS] [options]    (pointsurf COMMAND --help for its options and defaults)\n\n"
+                    "Commands:\n";
+  for (const auto& c : commands) out += fmt::format("  {:<12} {}\n", c.name, c.summary);
+  out += "\nExamples:\n"
+         "  pointsurf info scan.las --json\n"
+         "  pointsurf normals scan.xyz oriented.ply --k 30 --orient mst --report run.json\n"
+         "  pointsurf run examples/kitten_mesh.json --set normals.k=20\n";
+  return out;
+}
+
+// Threads for the library: tbb's limit for the duration of the command.
+int threads_from(const std::vector<std::string>& args) {
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    std::string v;
+    if (args[i] == "--threads" && i + 1 < args.size()) v = args[i + 1];
+    else if (args[i].rfind("--threads=", 0) == 0) v = args[i].substr(10);
+    else continue;
+    try {
+      return std::max(0, std::stoi(v));
+    } catch (const std::exception&) {
+      return 0;  // the command's own scan reports the bad value
+    }
+  }
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace pointsurf;
-  CLI::App app{"pointsurf " POINTSURF_VERSION
-               ": from a raw 3D scan (point cloud) to a verified surface.\n"
-               "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.0-1.4, OFF, OBJ, STL.\n"
-               "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.",
-               "pointsurf"};
-  app.footer(
-      "Examples:\n"
-      "  pointsurf info scan.las --json\n"
-      "  pointsurf convert scan.pcd scan.ply\n"
-      "  pointsurf normals scan.xyz oriented.ply --k 30 --orient mst --report run.json\n"
-      "Every command takes --report FILE.json, --threads N, --quiet, --strict; see 'pointsurf COMMAND --help'.");
-  app.require_subcommand(1);
-  app.set_version_flag("--version", POINTSURF_VERSION);
-  std::vector<cli::Command> commands;
-  for (cli::CommandFactory factory : cli::registered_commands()) commands.push_back(factory(app));
-
+  const std::vector<cli::Command> commands = all_commands();
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty()) {
+    fmt::print(stderr, "{}\npointsurf: error: a command is required\n", main_help(commands));
+    return 1;
+  }
+  const std::string name = args.front();
+  if (name == "--help" || name == "-h" || name == "help") {
+    fmt::print("{}", main_help(commands));
+    return 0;
+  }
+  if (name == "--version") {
+    fmt::print("{}\n", POINTSURF_VERSION);
+    return 0;
+  }
+  const cli::Command* command = nullptr;
+  for (const cli::Command& c : commands)
+    if (c.name == name) command = &c;
+  if (command == nullptr) {
+    std::vector<std::string> names;
+    for (const cli::Command& c : commands) names.push_back(c.name);
+    const std::string near = closest_name(name, names);
+    fmt::print(stderr, "pointsurf: error: unknown command \"{}\"{}\n", name,
+               near.empty() ? " (see pointsurf --help)" : fmt::format("; did you mean \"{}\"?", near));
+    return 1;
+  }
+  args.erase(args.begin());
   try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);  // prints help, version or the error message
-    return code == 0 ? 0 : 1;
+    std::optional<tbb::global_control> threads;
+    if (const int n = threads_from(args); n > 0)
+      threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(n));
+    return command->run(args);
+  } catch (const Error& e) {
+    fmt::print(stderr, "pointsurf {}: error: {}\n", name, e.what());
+    return e.exit_code();
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "pointsurf {}: error: out of memory\n", name);
+    return 3;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "pointsurf {}: error: {}\n", name, e.what());
+    return 3;
   }
-
-  for (cli::Command& command : commands) {
-    if (!command.app->parsed()) continue;
-    try {
-      if (command.common->threads < 0) throw UsageError(fmt::format("--threads: {} must be >= 0", command.common->threads));
-      std::optional<tbb::global_control> threads;
-      if (command.common->threads > 0)
-        threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(command.common->threads));
-      command.run();
-      return 0;
-    } catch (const Error& e) {
-      fmt::print(stderr, "pointsurf {}: error: {}\n", command.app->get_name(), e.what());
-      return e.exit_code();
-    } catch (const std::bad_alloc&) {
-      fmt::print(stderr, "pointsurf {}: error: out of memory\n", command.app->get_name());
-      return 3;
-    } catch (const std::exception& e) {
-      fmt::print(stderr, "pointsurf {}: error: {}\n", command.app->get_name(), e.what());
-      return 3;
-    }
-  }
-  return 1;
 }

@@ -11,18 +11,23 @@
 
 #include "clean/detail/clean_common.h"
 #include "pointsurf/clean/remove_outliers.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
 
+void DuplicateParams::validate() const {
+  constexpr std::string_view fn = "find_duplicates";
+  if (!exact) {
+    detail::check_length(fn, "distance", distance, false);
+    if (distance == 0.0) detail::check_positive(fn, "distance_in_spacings", distance_in_spacings);
+  }
+}
+
 DuplicateResult find_duplicates(const PointCloud& cloud, const DuplicateParams& params, const KdTree* tree,
                                 const ProgressCallback& progress) {
   constexpr std::string_view fn = "find_duplicates";
-  if (!params.exact) {
-    detail::check_length(fn, "distance", params.distance, false);
-    if (params.distance == 0.0) detail::check_positive(fn, "distance_in_spacings", params.distance_in_spacings);
-  }
+  params.validate();
   detail::check_cloud(fn, cloud, 1, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);

@@ -17,7 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include "clean/detail/clean_common.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
@@ -208,11 +208,34 @@ bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const
 
 }  // namespace
 
+void StatisticalOutlierParams::validate() const {
+  constexpr std::string_view fn = "remove_statistical_outliers";
+  if (k < 1) throw UsageError(fmt::format("{}: k must be >= 1, got {}", fn, k));
+  detail::check_positive(fn, "std_ratio", std_ratio);
+}
+
+void RadiusOutlierParams::validate() const {
+  constexpr std::string_view fn = "remove_radius_outliers";
+  if (min_neighbours < 1) throw UsageError(fmt::format("{}: min_neighbours must be >= 1, got {}", fn, min_neighbours));
+  detail::check_length(fn, "radius", radius, false);
+  if (radius == 0.0) detail::check_positive(fn, "radius_in_spacings", radius_in_spacings);
+}
+
+void RansacOutlierParams::validate() const {
+  constexpr std::string_view fn = "remove_ransac_outliers";
+  if (k < 4) throw UsageError(fmt::format("{}: k must be >= 4, got {}", fn, k));
+  if (iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, iterations));
+  if (!(min_support > 0.0 && min_support <= 1.0)) throw UsageError(fmt::format("{}: min_support must be in (0, 1], got {}", fn, min_support));
+  if (!(min_relative_support >= 0.0 && min_relative_support <= 1.0))
+    throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, min_relative_support));
+  detail::check_length(fn, "distance", distance, false);
+  if (distance == 0.0) detail::check_positive(fn, "distance_in_spacings", distance_in_spacings);
+}
+
 OutlierResult remove_statistical_outliers(const PointCloud& cloud, const StatisticalOutlierParams& params, const KdTree* tree,
                                           const ProgressCallback& progress) {
   constexpr std::string_view fn = "remove_statistical_outliers";
-  if (params.k < 1) throw UsageError(fmt::format("{}: k must be >= 1, got {}", fn, params.k));
-  detail::check_positive(fn, "std_ratio", params.std_ratio);
+  params.validate();
   detail::check_cloud(fn, cloud, 2, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
@@ -253,9 +276,7 @@ OutlierResult statistical_outliers_from_distances(std::span<const double> mean_d
 OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlierParams& params, const KdTree* tree,
                                      const ProgressCallback& progress) {
   constexpr std::string_view fn = "remove_radius_outliers";
-  if (params.min_neighbours < 1) throw UsageError(fmt::format("{}: min_neighbours must be >= 1, got {}", fn, params.min_neighbours));
-  detail::check_length(fn, "radius", params.radius, false);
-  if (params.radius == 0.0) detail::check_positive(fn, "radius_in_spacings", params.radius_in_spacings);
+  params.validate();
   detail::check_cloud(fn, cloud, 2, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
@@ -277,14 +298,7 @@ OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlie
 OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlierParams& params, const KdTree* tree,
                                      const ProgressCallback& progress) {
   constexpr std::string_view fn = "remove_ransac_outliers";
-  if (params.k < 4) throw UsageError(fmt::format("{}: k must be >= 4, got {}", fn, params.k));
-  if (params.iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, params.iterations));
-  if (!(params.min_support > 0.0 && params.min_support <= 1.0))
-    throw UsageError(fmt::format("{}: min_support must be in (0, 1], got {}", fn, params.min_support));
-  if (!(params.min_relative_support >= 0.0 && params.min_relative_support <= 1.0))
-    throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, params.min_relative_support));
-  detail::check_length(fn, "distance", params.distance, false);
-  if (params.distance == 0.0) detail::check_positive(fn, "distance_in_spacings", params.distance_in_spacings);
+  params.validate();
   detail::check_cloud(fn, cloud, 4, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);

@@ -15,7 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "clean/detail/clean_common.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
@@ -37,12 +37,7 @@ struct Resolved {
 };
 
 Resolved check_and_resolve(std::string_view fn, const PointCloud& cloud, const BilateralParams& params, const KdTree* tree) {
-  detail::check_length(fn, "radius", params.radius, false);
-  if (params.radius == 0.0) detail::check_positive(fn, "radius_in_spacings", params.radius_in_spacings);
-  detail::check_length(fn, "height_sigma", params.height_sigma, false);
-  if (params.height_sigma == 0.0) detail::check_positive(fn, "height_sigma_in_spacings", params.height_sigma_in_spacings);
-  if (params.max_neighbours < 3) throw UsageError(fmt::format("{}: max_neighbours must be >= 3, got {}", fn, params.max_neighbours));
-  if (params.iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, params.iterations));
+  params.validate();
   detail::check_cloud(fn, cloud, 3, tree);
   if (!cloud.has_normals())
     throw UsageError(fmt::format("{}: the cloud has no normals; estimate and orient them first (estimate_normals)", fn));
@@ -161,12 +156,27 @@ SmoothResult smooth_bilateral(PointCloud& cloud, const BilateralParams& params, 
   return result;
 }
 
+void BilateralParams::validate() const {
+  constexpr std::string_view fn = "smooth_bilateral";
+  detail::check_length(fn, "radius", radius, false);
+  if (radius == 0.0) detail::check_positive(fn, "radius_in_spacings", radius_in_spacings);
+  detail::check_length(fn, "height_sigma", height_sigma, false);
+  if (height_sigma == 0.0) detail::check_positive(fn, "height_sigma_in_spacings", height_sigma_in_spacings);
+  if (max_neighbours < 3) throw UsageError(fmt::format("{}: max_neighbours must be >= 3, got {}", fn, max_neighbours));
+  if (iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, iterations));
+}
+
+void TrilateralParams::validate() const {
+  constexpr std::string_view fn = "smooth_trilateral";
+  if (!(sharpness_angle_deg > 0.0 && sharpness_angle_deg <= 90.0))
+    throw UsageError(fmt::format("{}: sharpness_angle_deg must be in (0, 90] degrees, got {}", fn, sharpness_angle_deg));
+  if (normal_iterations < 1) throw UsageError(fmt::format("{}: normal_iterations must be >= 1, got {}", fn, normal_iterations));
+  position.validate();
+}
+
 SmoothResult smooth_trilateral(PointCloud& cloud, const TrilateralParams& params, const KdTree* tree, const ProgressCallback& progress) {
   constexpr std::string_view fn = "smooth_trilateral";
-  if (!(params.sharpness_angle_deg > 0.0 && params.sharpness_angle_deg <= 90.0))
-    throw UsageError(fmt::format("{}: sharpness_angle_deg must be in (0, 90] degrees, got {}", fn, params.sharpness_angle_deg));
-  if (params.normal_iterations < 1)
-    throw UsageError(fmt::format("{}: normal_iterations must be >= 1, got {}", fn, params.normal_iterations));
+  params.validate();
   const BilateralParams& bp = params.position;
   Resolved r = check_and_resolve(fn, cloud, bp, tree);
   std::optional<KdTree> own;

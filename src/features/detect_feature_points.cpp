@@ -18,7 +18,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/local_pca.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/features/feature_points.h"
 
@@ -139,9 +139,8 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
 
 }  // namespace
 
-FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& params, const KdTree* tree,
-                                    const ProgressCallback& progress) {
-  const std::size_t n = cloud.size();
+void FeatureParams::validate() const {
+  const FeatureParams& params = *this;
   if (params.k < 6) throw UsageError(fmt::format("detect_feature_points: k must be >= 6, got {}", params.k));
   if (!(params.variation_threshold >= 0.0 && params.variation_threshold < 1.0 / 3.0))
     throw UsageError(fmt::format("detect_feature_points: variation_threshold must be in [0, 1/3) (0: derived), got {}",
@@ -155,6 +154,12 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
   if (params.min_cluster_points < 3 || params.min_cluster_points > params.k)
     throw UsageError(fmt::format("detect_feature_points: min_cluster_points must be in [3, k = {}], got {}", params.k,
                                  params.min_cluster_points));
+}
+
+FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& params, const KdTree* tree,
+                                    const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  params.validate();
   if (n < static_cast<std::size_t>(params.k) + 1)
     throw UsageError(fmt::format("detect_feature_points: needs at least k + 1 = {} points, got {}", params.k + 1, n));
   const bool input_normals = params.normals == FeatureNormals::Input;

@@ -58,6 +58,40 @@ bool looks_binary(std::string_view head) {
 
 }  // namespace
 
+void check_output_path(const std::filesystem::path& path, bool no_clobber, const std::string& format) {
+  if (format.empty()) format_from_extension(path);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw UsageError(fmt::format("{}: is a directory, not an output file", path.string()));
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+  if (!std::filesystem::is_directory(dir, ec))
+    throw UsageError(fmt::format("{}: cannot write: directory {} does not exist", path.string(), dir.string()));
+  if (::access(dir.c_str(), W_OK) != 0)
+    throw UsageError(fmt::format("{}: cannot write: directory {} is not writable", path.string(), dir.string()));
+  if (std::filesystem::exists(path, ec)) {
+    if (no_clobber) throw UsageError(fmt::format("{}: exists (--no-clobber)", path.string()));
+    if (::access(path.c_str(), W_OK) != 0) throw UsageError(fmt::format("{}: exists and is not writable", path.string()));
+  }
+}
+
+void remove_output(const std::filesystem::path& path) noexcept {
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+}
+
+bool same_path(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code ec;
+  const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ec);
+  const std::filesystem::path cb = std::filesystem::weakly_canonical(b, ec);
+  return ca == cb;
+}
+
+void check_input_path(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(fmt::format("{}: no such file", path.string()));
+  if (std::filesystem::is_directory(path, ec)) throw InputError(fmt::format("{}: is a directory, not a file", path.string()));
+  if (::access(path.c_str(), R_OK) != 0) throw InputError(fmt::format("{}: cannot read (permission denied)", path.string()));
+}
+
 std::string format_from_extension(const std::filesystem::path& path) {
   const std::string ext = lower(path.extension().string());
   if (ext == ".ply") return "ply";

@@ -13,7 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/local_pca.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
 
@@ -40,17 +40,13 @@ PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::s
 
 }  // namespace
 
+void NormalParams::validate() const { neighborhood_settings().validate("estimate_normals", 3); }
+
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, const KdTree* tree,
                               const ProgressCallback& progress) {
   const std::size_t n = cloud.size();
-  const bool uses_k = params.neighborhood != NeighborhoodKind::Radius;
-  const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
-  if (uses_k && params.k < 3) throw UsageError(fmt::format("estimate_normals: k must be >= 3, got {}", params.k));
-  if (uses_radius && !(params.radius >= 0.0))
-    throw UsageError(fmt::format("estimate_normals: radius must be >= 0, got {}", params.radius));
-  if (uses_radius && params.radius == 0.0 && !(params.radius_in_spacings > 0.0 && std::isfinite(params.radius_in_spacings)))
-    throw UsageError(
-        fmt::format("estimate_normals: radius_in_spacings must be > 0, got {}", params.radius_in_spacings));
+  const Neighborhood settings = params.neighborhood_settings();
+  params.validate();
   if (n < 3) throw UsageError(fmt::format("estimate_normals: needs at least 3 points, got {}", n));
   if (cloud.has_normals() && cloud.normals.size() != n)
     throw UsageError(fmt::format("estimate_normals: the cloud has {} normals for {} points", cloud.normals.size(), n));
@@ -62,7 +58,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
 
   NormalResult result;
-  if (uses_radius) result.radius_used = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(*tree);
+  result.radius_used = settings.resolve_radius(*tree);
 
   // Results go to fresh arrays, committed at the end, so a cancelled run leaves the cloud as
   // it was. Existing normals keep their side: each new normal is flipped to agree with the old.
@@ -83,11 +79,7 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
     for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
       const std::uint32_t i = order[pos];
       const Eigen::Vector3d& p = cloud.positions[i];
-      switch (params.neighborhood) {
-        case NeighborhoodKind::Knn: tree->knn(p, k, neighbors); break;
-        case NeighborhoodKind::Radius: tree->radius(p, result.radius_used, neighbors); break;
-        case NeighborhoodKind::Hybrid: tree->hybrid(p, k, result.radius_used, neighbors); break;
-      }
+      settings.query(*tree, p, k, result.radius_used, neighbors);
       PointNormal fit = fit_normal(*tree, p, neighbors);
       if (fit.degenerate) ++local_degenerate;
       if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;

@@ -14,7 +14,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
 
@@ -337,9 +337,18 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
 
 }  // namespace
 
+void OrientParams::validate() const {
+  if (method == Orientation::Viewpoint && !viewpoint.allFinite()) throw UsageError("orient_normals: the viewpoint must be finite");
+  if (method == Orientation::Direction && (!direction.allFinite() || direction.squaredNorm() == 0.0))
+    throw UsageError(fmt::format("orient_normals: the direction must be a finite non-zero vector, got ({}, {}, {})", direction.x(),
+                                 direction.y(), direction.z()));
+  if (method == Orientation::Mst && k < 1) throw UsageError(fmt::format("orient_normals: k must be >= 1, got {}", k));
+}
+
 OrientResult orient_normals(PointCloud& cloud, const OrientParams& params, const KdTree* tree,
                             const ProgressCallback& progress) {
   const std::size_t n = cloud.size();
+  params.validate();
   if (!cloud.has_normals()) throw UsageError("orient_normals: the cloud has no normals (estimate them first)");
   if (cloud.normals.size() != n)
     throw UsageError(fmt::format("orient_normals: the cloud has {} normals for {} points", cloud.normals.size(), n));

@@ -21,7 +21,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
@@ -602,17 +602,8 @@ private:
 
 }  // namespace
 
-ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
-                                               const ProgressCallback& progress) {
-  const std::size_t n = cloud.size();
-  if (n < 3) throw UsageError(fmt::format("reconstruct_ball_pivoting: needs at least 3 points, got {}", n));
-  if (n > std::size_t(std::numeric_limits<int>::max() / 4))
-    throw UsageError(fmt::format("reconstruct_ball_pivoting: at most {} points, got {}", std::numeric_limits<int>::max() / 4, n));
-  if (!cloud.has_normals())
-    throw UsageError("reconstruct_ball_pivoting: the cloud has no normals; ball pivoting needs oriented normals "
-                     "(estimate and orient them first)");
-  if (cloud.normals.size() != n)
-    throw UsageError(fmt::format("reconstruct_ball_pivoting: the cloud has {} normals for {} points", cloud.normals.size(), n));
+void BallPivotParams::validate() const {
+  const BallPivotParams& params = *this;
   for (const double r : params.radii)
     if (!(r > 0.0 && std::isfinite(r)))
       throw UsageError(fmt::format("reconstruct_ball_pivoting: radii must be > 0 and finite, got {}", r));
@@ -629,6 +620,20 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   if (!(params.max_mean_normal_angle_deg > 0.0 && params.max_mean_normal_angle_deg <= 180.0))
     throw UsageError(fmt::format("reconstruct_ball_pivoting: max_mean_normal_angle_deg must be in (0, 180], got {}",
                                  params.max_mean_normal_angle_deg));
+}
+
+ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
+                                               const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  if (n < 3) throw UsageError(fmt::format("reconstruct_ball_pivoting: needs at least 3 points, got {}", n));
+  if (n > std::size_t(std::numeric_limits<int>::max() / 4))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: at most {} points, got {}", std::numeric_limits<int>::max() / 4, n));
+  if (!cloud.has_normals())
+    throw UsageError("reconstruct_ball_pivoting: the cloud has no normals; ball pivoting needs oriented normals "
+                     "(estimate and orient them first)");
+  if (cloud.normals.size() != n)
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: the cloud has {} normals for {} points", cloud.normals.size(), n));
+  params.validate();
   if (tree != nullptr && tree->size() != n)
     throw UsageError(fmt::format("reconstruct_ball_pivoting: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
   for (std::size_t i = 0; i < n; ++i)

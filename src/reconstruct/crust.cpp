@@ -35,7 +35,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -236,7 +236,10 @@ std::vector<int> components(const Complex& cx, const std::vector<char>& alive, i
   return comp;
 }
 
-void check_params(const CrustParams& params) {
+}  // namespace
+
+void CrustParams::validate() const {
+  const CrustParams& params = *this;
   if (!(params.cocone_angle_deg > 0.0 && params.cocone_angle_deg < 90.0))
     throw UsageError(fmt::format("crust: cocone_angle_deg = {}, expected a value in (0, 90)", params.cocone_angle_deg));
   if (!(params.normal_filter_angle_deg > 0.0 && params.normal_filter_angle_deg <= 90.0))
@@ -252,12 +255,14 @@ void check_params(const CrustParams& params) {
     throw UsageError(fmt::format("crust: max_hole_edges = {}, expected a value >= 0 (0: off)", params.max_hole_edges));
 }
 
+namespace {
+
 }  // namespace
 
 ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParams& params,
                                        const ProgressCallback& progress, CrustStats* stats_out) {
   const auto t_start = Clock::now();
-  check_params(params);
+  params.validate();
   cloud.validate();
   const std::size_t n = cloud.size();
   if (n < 4) throw UsageError(fmt::format("crust: the cloud has {} points, expected at least 4", n));

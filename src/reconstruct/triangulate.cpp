@@ -20,7 +20,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "reconstruct/detail/triangulate_half_edges.h"
@@ -218,25 +218,7 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
 }
 
 void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdTree* tree) {
-  const auto bad = [](const char* name, double value, const char* expected) {
-    return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
-  };
-  if (p.k < 3) throw bad("k", p.k, ">= 3");
-  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
-  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
-    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
-  if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
-    throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
-  if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
-    throw bad("max_normal_angle_deg", p.max_normal_angle_deg, "in (0, 180]");
-  if (!(p.min_angle_deg >= 0.0 && p.min_angle_deg < 60.0)) throw bad("min_angle_deg", p.min_angle_deg, "in [0, 60)");
-  if (!(p.max_angle_deg > 60.0 && p.max_angle_deg <= 180.0)) throw bad("max_angle_deg", p.max_angle_deg, "in (60, 180]");
-  if (!(p.max_dihedral_deg > 0.0 && p.max_dihedral_deg <= 180.0))
-    throw bad("max_dihedral_deg", p.max_dihedral_deg, "in (0, 180]");
-  if (!(p.max_front_angle_deg >= 0.0 && p.max_front_angle_deg < 180.0))
-    throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
-  if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
-    throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+  p.validate();
   const std::size_t n = cloud.size();
   if (n < 3) throw UsageError(fmt::format("reconstruct_region_growing: needs at least 3 points, got {}", n));
   // Triangles hold int vertex indices, and candidate ids must stay below kNone.
@@ -825,6 +807,29 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
 
 }  // namespace
 
+void TriangulateParams::validate() const {
+  const TriangulateParams& p = *this;
+  const auto bad = [](const char* name, double value, const char* expected) {
+    return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
+  };
+  if (p.k < 3) throw bad("k", p.k, ">= 3");
+  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
+  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
+    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
+  if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
+    throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
+  if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
+    throw bad("max_normal_angle_deg", p.max_normal_angle_deg, "in (0, 180]");
+  if (!(p.min_angle_deg >= 0.0 && p.min_angle_deg < 60.0)) throw bad("min_angle_deg", p.min_angle_deg, "in [0, 60)");
+  if (!(p.max_angle_deg > 60.0 && p.max_angle_deg <= 180.0)) throw bad("max_angle_deg", p.max_angle_deg, "in (60, 180]");
+  if (!(p.max_dihedral_deg > 0.0 && p.max_dihedral_deg <= 180.0))
+    throw bad("max_dihedral_deg", p.max_dihedral_deg, "in (0, 180]");
+  if (!(p.max_front_angle_deg >= 0.0 && p.max_front_angle_deg < 180.0))
+    throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
+  if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
+    throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+}
+
 TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
                                              const ProgressCallback& progress) {
   check_params(cloud, params, tree);
@@ -983,14 +988,22 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
         if (!accepted[it->second]) front.push(it->second);
     }
   };
+  // Progress of the serial growth: accepted triangles against the about 2 N a closed surface
+  // has, reported every few thousand so that the bar moves through this pass.
+  std::size_t grown = 0;
+  const auto report_growth = [&] {
+    if ((++grown & 4095u) == 0) reporter.report(0.8 + 0.1 * std::min(1.0, double(grown) / double(2 * std::max<std::size_t>(n, 1))));
+  };
   for (std::uint32_t seed = 0; seed < unique; ++seed) {
     if (accepted[seed] || !try_accept(seed, 0)) continue;
     push_neighbours(seed);
+    report_growth();
     while (!front.empty()) {
       const std::uint32_t id = front.top();
       front.pop();
       if (accepted[id] || !try_accept(id, 1)) continue;
       push_neighbours(id);
+      report_growth();
     }
   }
   // Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
@@ -1013,13 +1026,16 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     for (int round = 0;; ++round) {
       result.holes_filled += fill_small_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel,
                                               filler, repaired, reopen, result.fill_triangles);
+      reporter.report(0.9 + 0.05 * double(round + 1) / double(kRepairRounds + 1));
       if (round == kRepairRounds) break;
       const std::size_t removed = open_pinches(cloud.positions, reopen, repaired, sel);
       result.pinch_triangles_removed += removed;
       if (removed == 0) break;
     }
   }
+  reporter.report(0.95);
   result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
+  reporter.report(0.98);
 
   result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
   result.topology = analyze_topology(result.mesh);

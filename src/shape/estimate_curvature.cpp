@@ -14,7 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/local_pca.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/shape/curvature.h"
 
@@ -181,27 +181,30 @@ SurfaceType classify_surface_type(double H, double K, double h_zero, double k_ze
   return h > 0 ? SurfaceType::SaddleRidge : (h < 0 ? SurfaceType::SaddleValley : SurfaceType::Minimal);
 }
 
-CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
-                                   const ProgressCallback& progress) {
-  const std::size_t n = cloud.size();
+void CurvatureParams::validate() const {
+  const CurvatureParams& params = *this;
   if (params.degree != 2 && params.degree != 3)
     throw UsageError(fmt::format("estimate_curvature: degree must be 2 or 3, got {}", params.degree));
   const int coefficients = params.degree == 2 ? 6 : 10;
-  const bool uses_k = params.neighborhood != NeighborhoodKind::Radius;
-  const bool uses_radius = params.neighborhood != NeighborhoodKind::Knn;
-  const int k = params.k == 0 ? (params.degree == 2 ? 24 : 40) : params.k;
-  if (uses_k && k < coefficients)
+  const Neighborhood settings = params.neighborhood_settings();
+  // k has its own rule here (0: the degree's default), so the shared check skips it.
+  if (settings.uses_k() && settings.k < coefficients)
     throw UsageError(fmt::format("estimate_curvature: k must be 0 (default) or >= {} for degree {}, got {}", coefficients,
                                  params.degree, params.k));
-  if (uses_radius && !(params.radius >= 0.0 && std::isfinite(params.radius)))
-    throw UsageError(fmt::format("estimate_curvature: radius must be >= 0, got {}", params.radius));
-  if (uses_radius && params.radius == 0.0 && !(params.radius_in_spacings > 0.0 && std::isfinite(params.radius_in_spacings)))
-    throw UsageError(
-        fmt::format("estimate_curvature: radius_in_spacings must be > 0, got {}", params.radius_in_spacings));
+  settings.validate("estimate_curvature", 0);
   if (!(params.zero_curvature >= 0.0 && std::isfinite(params.zero_curvature)))
     throw UsageError(fmt::format("estimate_curvature: zero_curvature must be >= 0 (1/cloud units), got {}", params.zero_curvature));
   if (params.zero_curvature == 0.0 && !(params.zero_in_noise > 0.0 && std::isfinite(params.zero_in_noise)))
     throw UsageError(fmt::format("estimate_curvature: zero_in_noise must be > 0, got {}", params.zero_in_noise));
+}
+
+CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
+                                   const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  params.validate();
+  const int coefficients = params.degree == 2 ? 6 : 10;
+  const Neighborhood settings = params.neighborhood_settings();
+  const int k = settings.k;
   if (n < std::size_t(coefficients))
     throw UsageError(fmt::format("estimate_curvature: needs at least {} points for degree {}, got {}", coefficients,
                                  params.degree, n));
@@ -217,8 +220,8 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
 
   CurvatureResult result;
-  if (uses_k) result.k_used = k;
-  if (uses_radius) result.radius_used = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(*tree);
+  if (settings.uses_k()) result.k_used = k;
+  result.radius_used = settings.resolve_radius(*tree);
 
   std::vector<double> k1(n), k2(n), variation(n);
   std::vector<double> noise(n), radius(n), rms(n);  // per point; NaN where degenerate
@@ -234,11 +237,7 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
     for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
       const std::uint32_t i = order[pos];
       const Vector3d& p = cloud.positions[i];
-      switch (params.neighborhood) {
-        case NeighborhoodKind::Knn: tree->knn(p, std::size_t(k), neighbors); break;
-        case NeighborhoodKind::Radius: tree->radius(p, result.radius_used, neighbors); break;
-        case NeighborhoodKind::Hybrid: tree->hybrid(p, std::size_t(k), result.radius_used, neighbors); break;
-      }
+      settings.query(*tree, p, std::size_t(k), result.radius_used, neighbors);
       const PointShape s = params.degree == 2 ? fit_jet<6>(*tree, p, cloud.normals[i], neighbors)
                                               : fit_jet<10>(*tree, p, cloud.normals[i], neighbors);
       k1[i] = s.k1;

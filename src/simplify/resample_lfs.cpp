@@ -8,7 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/simplify/simplify.h"
 #include "simplify/detail/simplify_common.h"
@@ -36,7 +36,11 @@ struct Inserted {
   double s;                // position along it, (0, 1)
 };
 
-void check_params(const LfsParams& p) {
+
+}  // namespace
+
+void LfsParams::validate() const {
+  const LfsParams& p = *this;
   constexpr std::string_view f = "resample_lfs";
   detail::check_k(f, p.k);
   if (!(p.adaptivity >= 1.0) || !std::isfinite(p.adaptivity))
@@ -44,12 +48,10 @@ void check_params(const LfsParams& p) {
   if (p.fill_neighbours < 1) throw UsageError(fmt::format("{}: fill_neighbours must be >= 1, got {}", f, p.fill_neighbours));
 }
 
-}  // namespace
-
 SimplifyResult resample_lfs(const PointCloud& cloud, const LfsParams& params, const KdTree* tree, const ProgressCallback& progress) {
   constexpr std::string_view f = "resample_lfs";
   detail::check_simplify_input(f, cloud, params.target, true, true);
-  check_params(params);
+  params.validate();
   const std::size_t n = cloud.size();
   if (n < 3) throw UsageError(fmt::format("{}: needs at least 3 points, got {}", f, n));
   std::optional<KdTree> own;

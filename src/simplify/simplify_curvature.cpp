@@ -26,12 +26,16 @@ std::uint64_t splitmix64(std::uint64_t x) {
 
 }  // namespace
 
-SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
+void CurvatureSimplifyParams::validate() const {
+  detail::check_k("simplify_curvature", k);
+  if (!(flat_weight >= 0.0) || !std::isfinite(flat_weight))
+    throw UsageError(fmt::format("simplify_curvature: flat_weight must be >= 0, got {}", flat_weight));
+}
+
+SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimplifyParams& params, const KdTree* tree,
                                   const ProgressCallback& progress) {
   detail::check_simplify_input("simplify_curvature", cloud, params.target, false);
-  detail::check_k("simplify_curvature", params.k);
-  if (!(params.flat_weight >= 0.0) || !std::isfinite(params.flat_weight))
-    throw UsageError(fmt::format("simplify_curvature: flat_weight must be >= 0, got {}", params.flat_weight));
+  params.validate();
   const std::size_t n = cloud.size();
   const std::size_t m = detail::target_count(params.target, n);
   std::vector<double> variation;

@@ -4,22 +4,27 @@
 
 #include <fmt/format.h>
 
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/simplify/simplify.h"
 #include "simplify/detail/simplify_common.h"
 
 namespace pointsurf {
 
+void CurvatureDistanceParams::validate() const {
+  constexpr std::string_view f = "simplify_curvature_distance";
+  detail::check_k(f, k);
+  if (!(split_quantile > 0.0 && split_quantile < 1.0))
+    throw UsageError(fmt::format("{}: split_quantile must be in (0, 1), got {}", f, split_quantile));
+  if (!(high_to_low_distance > 0.0 && high_to_low_distance <= 1.0))
+    throw UsageError(fmt::format("{}: high_to_low_distance must be in (0, 1], got {}", f, high_to_low_distance));
+}
+
 SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const CurvatureDistanceParams& params, const KdTree* tree,
                                            const ProgressCallback& progress) {
   constexpr std::string_view f = "simplify_curvature_distance";
   detail::check_simplify_input(f, cloud, params.target, true);
-  detail::check_k(f, params.k);
-  if (!(params.split_quantile > 0.0 && params.split_quantile < 1.0))
-    throw UsageError(fmt::format("{}: split_quantile must be in (0, 1), got {}", f, params.split_quantile));
-  if (!(params.high_to_low_distance > 0.0 && params.high_to_low_distance <= 1.0))
-    throw UsageError(fmt::format("{}: high_to_low_distance must be in (0, 1], got {}", f, params.high_to_low_distance));
+  params.validate();
   const std::size_t n = cloud.size();
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_or_own(f, cloud, tree, own);

@@ -11,7 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/detail/lexicographic.h"
-#include "normals/detail/progress_reporter.h"
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/simplify/simplify.h"
 #include "simplify/detail/simplify_common.h"
@@ -74,7 +74,11 @@ void compute_statistics(CellScratch& s, const std::vector<Vector3d>& positions, 
   }
 }
 
-void check_params(const RegionalParams& p) {
+
+}  // namespace
+
+void RegionalParams::validate() const {
+  const RegionalParams& p = *this;
   constexpr std::string_view f = "simplify_regional";
   detail::check_k(f, p.k);
   if (!(p.region_in_spacings > 0.0) || !std::isfinite(p.region_in_spacings))
@@ -95,12 +99,10 @@ void check_params(const RegionalParams& p) {
     throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
 }
 
-}  // namespace
-
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
                                  const ProgressCallback& progress) {
   detail::check_simplify_input("simplify_regional", cloud, params.target, true);
-  check_params(params);
+  params.validate();
   const std::size_t n = cloud.size();
   SimplifyResult result;
   result.input_points = n;

@@ -67,7 +67,7 @@ TEST(MeshTopology, OpenPatchHasOneBoundaryLoopWithItsPerimeter) {
   EXPECT_EQ(t.boundary_loops[0].vertices.size(), 16u);
   EXPECT_NEAR(t.boundary_loops[0].length, 4.0, 1e-12);
   EXPECT_EQ(t.euler_characteristic, 1);
-  EXPECT_EQ(t.genus(), -1);
+  EXPECT_EQ(t.genus(), 0);  // a disc: (2 - 1 - 1) / 2
   EXPECT_EQ(t.non_manifold_vertices, 0u);
 }
 
@@ -75,6 +75,7 @@ TEST(MeshTopology, CylinderHasTwoLoops) {
   const MeshTopology t = analyze_topology(grid(6, 10, false, true));  // wrapped in one direction only
   EXPECT_EQ(t.boundary_loops.size(), 2u);
   EXPECT_EQ(t.euler_characteristic, 0);
+  EXPECT_EQ(t.genus(), 0);  // an annulus: (2 - 0 - 2) / 2
 }
 
 TEST(MeshTopology, HoleInAClosedSurfaceIsOneLoop) {
@@ -93,6 +94,7 @@ TEST(MeshTopology, FlippedTriangleIsInconsistent) {
   EXPECT_EQ(t.inconsistent_edges, 3u);
   EXPECT_FALSE(t.oriented());
   EXPECT_FALSE(t.watertight());
+  EXPECT_EQ(t.genus(), -1);  // not orientable as given
 }
 
 TEST(MeshTopology, ThreeTrianglesOnOneEdgeAreNonManifold) {

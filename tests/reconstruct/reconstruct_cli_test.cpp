@@ -38,10 +38,16 @@ protected:
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  nlohmann::json stage(const std::string& report, const std::string& name) const {
+  // The report's record of the stage of type `type`, with "figures": its counts and metrics
+  // together.
+  nlohmann::json stage(const std::string& report, const std::string& type) const {
     const nlohmann::json json = nlohmann::json::parse(test::read_bytes(dir_ / report));
-    for (const auto& s : json["stages"])
-      if (s["name"] == name) return s;
+    for (nlohmann::json s : json["stages"])
+      if (s["type"] == type) {
+        s["figures"] = s["counts"];
+        s["figures"].update(s["metrics"]);
+        return s;
+      }
     return nullptr;
   }
   std::filesystem::path dir_;
@@ -64,21 +70,22 @@ TEST_F(ReconstructCli, BallPivotWritesAClosedSphereWithNormalsAndReportsItsTopol
   EXPECT_TRUE(t.watertight());
   EXPECT_EQ(t.genus(), 0);
 
-  const nlohmann::json bp = stage("run.json", "ball-pivot");
+  const nlohmann::json bp = stage("run.json", "reconstruct");
   ASSERT_FALSE(bp.is_null());
-  const nlohmann::json& m = bp["metrics"];
+  EXPECT_EQ(bp["parameters"]["method"], "ball-pivot");
+  const nlohmann::json& m = bp["figures"];
   EXPECT_EQ(m["holes"], 0);
   EXPECT_EQ(m["holes_total_perimeter"], 0.0);
   EXPECT_EQ(m["non_manifold_edges"], 0);
   EXPECT_EQ(m["components"], 1);
   EXPECT_EQ(m["genus"], 0);
   EXPECT_EQ(m["triangles"], mesh.triangle_count());
-  // Default radii: 1.5, 3 and 6 mean spacings, in cloud units.
+  // Default radii: 1.5, 3 and 6 mean spacings, reported in cloud units as the radii used.
   const double spacing = m["mean_spacing"].get<double>();
-  ASSERT_EQ(bp["counts"]["radii_used"].size(), 3u);
-  EXPECT_NEAR(bp["counts"]["radii_used"][0].get<double>(), 1.5 * spacing, 1e-12);
-  EXPECT_NEAR(bp["counts"]["radii_used"][2].get<double>(), 6.0 * spacing, 1e-12);
-  EXPECT_TRUE(stage("run.json", "normals").is_null());  // the input had normals
+  ASSERT_EQ(bp["parameters"]["radii"].size(), 3u);
+  EXPECT_NEAR(bp["parameters"]["radii"][0].get<double>(), 1.5 * spacing, 1e-12);
+  EXPECT_NEAR(bp["parameters"]["radii"][2].get<double>(), 6.0 * spacing, 1e-12);
+  EXPECT_FALSE(m["normals_estimated"].get<bool>());  // the input had normals
 }
 
 TEST_F(ReconstructCli, EstimatesMissingNormalsAndSaysSo) {
@@ -91,13 +98,13 @@ TEST_F(ReconstructCli, EstimatesMissingNormalsAndSaysSo) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::contains(r.err, "no normals in the input; estimated")) << r.err;
   EXPECT_TRUE(test::contains(r.err, "(normals estimated)")) << r.err;
-  ASSERT_FALSE(stage("run.json", "normals").is_null());
+  EXPECT_TRUE(stage("run.json", "reconstruct")["figures"]["normals_estimated"].get<bool>());
   const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
   EXPECT_EQ(mesh.vertex_normals.size(), torus.size());
   const MeshTopology t = analyze_topology(mesh);
   EXPECT_TRUE(t.edge_manifold());
   EXPECT_EQ(t.components, 1u);
-  EXPECT_EQ(stage("run.json", "ball-pivot")["metrics"]["non_manifold_edges"], 0);
+  EXPECT_EQ(stage("run.json", "reconstruct")["figures"]["non_manifold_edges"], 0);
 }
 
 TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
@@ -107,8 +114,8 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
                                   path("run.json"),
                               dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const nlohmann::json bp = stage("run.json", "ball-pivot");
-  EXPECT_EQ(bp["counts"]["radii_used"], nlohmann::json::parse("[0.1, 0.2]"));
+  const nlohmann::json bp = stage("run.json", "reconstruct");
+  EXPECT_EQ(bp["parameters"]["radii"], nlohmann::json::parse("[0.1, 0.2]"));
   EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
 }
 
@@ -142,13 +149,17 @@ TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
   write_point_cloud(path("sphere.ply"), test::sample_sphere(500, 1.0));
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method poisson", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--method: 'poisson': expected triangulate, crust or ball-pivot")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--method: \"poisson\" is not one of triangulate, crust or ball-pivot")) << r.err;
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --radii 0.1,abc", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--radii: '0.1,abc': expected positive numbers separated by commas")) << r.err;
-  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --ball-normal-angle 0", dir_);
+  EXPECT_TRUE(test::contains(r.err, "--radii: \"0.1,abc\": \"abc\" is not a number")) << r.err;
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --max-normal-angle-deg 0", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--ball-normal-angle: 0 must be in (0, 180]")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--max-normal-angle-deg: 0 is out of range (0, 180]")) << r.err;
+  // A parameter of another method is an error naming both, not silently ignored.
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method triangulate --radii 0.1", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--radii belongs to method ball-pivot, not to method triangulate")) << r.err;
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.xyzw") + " --method ball-pivot", dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_FALSE(std::filesystem::exists(dir_ / "out.ply"));

@@ -376,7 +376,7 @@ TEST(CurvatureCli, EstimatesNormalsWhenMissingAndWritesTheFields) {
   EXPECT_EQ(report["command"], "curvature");
   bool has_stage = false;
   for (const auto& stage : report["stages"])
-    if (stage["name"] == "curvature") {
+    if (stage["type"] == "curvature") {
       has_stage = true;
       EXPECT_EQ(stage["counts"]["peak"].get<std::size_t>() + stage["counts"]["ridge"].get<std::size_t>() +
                     stage["counts"]["flat"].get<std::size_t>() + stage["counts"]["saddle_ridge"].get<std::size_t>() +
@@ -384,13 +384,15 @@ TEST(CurvatureCli, EstimatesNormalsWhenMissingAndWritesTheFields) {
                     stage["counts"]["saddle_valley"].get<std::size_t>() + stage["counts"]["minimal"].get<std::size_t>() +
                     stage["counts"]["undefined"].get<std::size_t>(),
                 sphere.size());
-      EXPECT_GT(stage["metrics"]["zero_curvature"].get<double>(), 0.0);
+      // The value used, never the placeholder 0 ("derived"): the report holds what ran.
+      EXPECT_GT(stage["parameters"]["zero_curvature"].get<double>(), 0.0);
+      EXPECT_EQ(stage["parameters"]["k"], 24);
     }
   EXPECT_TRUE(has_stage);
 
   r = run_cli("curvature " + (dir / "in.ply").string() + " " + (dir / "o2.ply").string() + " --degree 4", dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--degree: 4 must be 2 or 3")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--degree: 4 is out of range [2, 3]")) << r.err;
   r = run_cli("curvature " + (dir / "in.ply").string() + " " + (dir / "o2.ply").string() + " --k 3", dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--k: 3 must be at least 6 for degree 2")) << r.err;

@@ -193,7 +193,7 @@ TEST(SimplifyCurvature, KeepsEdgesMoreOftenThanUniformAndIsSeeded) {
   const PointCloud cube = bare_cube(20000);
   const double spacing = mean_spacing(cube.positions);
   const std::vector<char> edge = near_cube_edge(cube, 0.5 * spacing);
-  CurvatureParams params;
+  CurvatureSimplifyParams params;
   params.target.ratio = 0.1;
   const SimplifyResult r = simplify_curvature(cube, params);
   expect_valid(r, cube);
@@ -219,7 +219,7 @@ TEST(SimplifyRegional, KeepsCubeEdgesAtTenfoldReductionBetterThanCurvatureAndGri
   const double regional_share = edge_share_kept(regional, edge);
   EXPECT_GE(regional_share, 0.95);  // measured 0.955 (0.988 at 50k, 0.992 at 100k points)
 
-  CurvatureParams curvature;
+  CurvatureSimplifyParams curvature;
   curvature.target.count = regional.cloud.size();
   const double curvature_share = edge_share_kept(simplify_curvature(cube, curvature, &tree), edge);
   EXPECT_GT(regional_share, curvature_share);
@@ -437,7 +437,7 @@ TEST(Simplify, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { simplify_random(sphere, random); }, "target.count 201 exceeds the 200 input points");
   random.target.cell = 0.5;
   expect_error<UsageError>([&] { simplify_random(sphere, random); }, "is not supported by this method");
-  CurvatureParams curvature;
+  CurvatureSimplifyParams curvature;
   curvature.k = 2;
   expect_error<UsageError>([&] { simplify_curvature(sphere, curvature); }, "simplify_curvature: k must be >= 3, got 2");
   curvature.k = 10;

@@ -16,6 +16,9 @@ struct DuplicateParams {
                                       // duplicates (distance 0); `distance` is then ignored
   double distance = 0.0;              // cloud units, >= 0; 0: distance_in_spacings * mean spacing
   double distance_in_spacings = 0.1;  // used when distance == 0 and not exact, > 0
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 struct DuplicateResult {

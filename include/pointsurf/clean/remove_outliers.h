@@ -27,6 +27,9 @@ struct StatisticalOutlierParams {
   int k = 20;              // neighbours per point, the point itself included (Open3D's
                            // nb_neighbors), >= 1
   double std_ratio = 2.0;  // drop a point whose mean distance is >= mean + std_ratio * std, > 0
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// Statistical outlier removal (Rusu et al. 2008), defined exactly as Open3D 0.16's
@@ -57,6 +60,9 @@ struct RadiusOutlierParams {
                                     // within the radius, >= 1
   double radius = 0.0;              // cloud units, >= 0; 0: radius_in_spacings * mean spacing
   double radius_in_spacings = 4.0;  // used when radius == 0, > 0
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// Radius outlier removal: drops points with fewer than `min_neighbours` other points within
@@ -81,6 +87,9 @@ struct RansacOutlierParams {
                                       // plane, keeps it (see below), in [0, 1]
   std::uint64_t seed = 1;             // random planes depend only on the seed, the point's
                                       // coordinates and its neighbours (not on point order)
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// Local RANSAC outlier removal (Fischler & Bolles 1981). For each point p, planes through 3

@@ -19,6 +19,9 @@ struct BilateralParams {
                                         // normal, cloud units, >= 0; 0: height_sigma_in_spacings * spacing
   double height_sigma_in_spacings = 1.0;// used when height_sigma == 0, > 0
   int iterations = 2;                   // passes, >= 1
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 struct TrilateralParams {
@@ -30,6 +33,9 @@ struct TrilateralParams {
   bool use_feature_field = true;        // when the cloud has a field "feature" (1 edge, 2
                                         // corner), feature points do not lend their normals
                                         // to others (their PCA normals mix two faces)
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// What a smoothing pass did. Displacements are between input and output positions.

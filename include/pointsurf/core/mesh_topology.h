@@ -38,10 +38,17 @@ struct MeshTopology {
   bool watertight() const noexcept {
     return closed() && edge_manifold() && non_manifold_vertices == 0 && oriented() && triangles > 0;
   }
-  /// Genus of a closed, connected, orientable manifold: (2 - chi) / 2; -1 when that is not the case.
+  /// Genus of the surface, the one definition of the project: for one connected, orientable
+  /// (consistently oriented), edge-manifold component whose boundary edges all lie on the
+  /// reported loops, (2 - chi - b) / 2 with b the number of boundary loops (a sphere or a disc
+  /// 0, a torus 1); -1 otherwise (several components, non-manifold or inconsistent edges).
   long genus() const noexcept {
-    if (!watertight() || components != 1) return -1;
-    return (2 - euler_characteristic) / 2;
+    if (triangles == 0 || components != 1 || !edge_manifold() || !oriented()) return -1;
+    std::size_t loop_edges = 0;
+    for (const BoundaryLoop& loop : boundary_loops) loop_edges += loop.vertices.size();
+    if (loop_edges != boundary_edges) return -1;
+    const long twice = 2 - euler_characteristic - static_cast<long>(boundary_loops.size());
+    return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
   }
 };
 

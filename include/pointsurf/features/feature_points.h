@@ -34,6 +34,9 @@ struct FeatureParams {
   double dd_in_spacings = 1.0;       // used when dd == 0, > 0
   int min_cluster_points = 5;        // fewest neighbours a cluster needs to give a plane, in [3, k]
   FeatureNormals normals = FeatureNormals::Robust;
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 struct FeatureResult {

@@ -34,6 +34,22 @@ std::string detect_format(const std::filesystem::path& path);
 /// ".las" -> "las"); throws UsageError for an unknown extension.
 std::string format_from_extension(const std::filesystem::path& path);
 
+/// Checks, before any work, that `path` can be written: a known extension (unless
+/// `format` is given), an existing writable directory, not a directory itself, and, with
+/// `no_clobber`, no file there yet. Throws UsageError naming the path. Creates nothing.
+void check_output_path(const std::filesystem::path& path, bool no_clobber = false, const std::string& format = {});
+
+/// Checks that `path` names a readable regular file; throws InputError naming it otherwise.
+void check_input_path(const std::filesystem::path& path);
+
+/// Removes an output written by a run that then failed, so that none is left behind.
+/// Ignores a file that is already gone. Never throws.
+void remove_output(const std::filesystem::path& path) noexcept;
+
+/// Whether two paths name the same file once made absolute and normalised (the file need not
+/// exist).
+bool same_path(const std::filesystem::path& a, const std::filesystem::path& b);
+
 struct ReadOptions {
   bool strict = false;      // NaN/Inf coordinates are an InputError instead of being dropped
   std::string format;       // force a format ("ply", "xyz", ...); empty: detect from content

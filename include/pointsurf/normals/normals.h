@@ -8,10 +8,9 @@
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "pointsurf/spatial/neighborhood.h"
 
 namespace pointsurf {
-
-enum class NeighborhoodKind { Knn, Radius, Hybrid };
 
 struct NormalParams {
   NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
@@ -23,6 +22,11 @@ struct NormalParams {
                                     // distance from the point to its neighbours, itself included,
                                     // the statistic of statistical outlier removal (see
                                     // statistical_outliers_from_distances): one kNN pass for both
+  /// The neighbourhood fields as the one Neighborhood type (spatial/neighborhood.h).
+  Neighborhood neighborhood_settings() const noexcept { return {neighborhood, k, radius, radius_in_spacings}; }
+  /// Throws UsageError naming the first value out of range (k < 3 where k is used, a negative
+  /// radius, radius_in_spacings <= 0 where used). The one place these values are checked.
+  void validate() const;
 };
 
 struct NormalResult {
@@ -52,6 +56,9 @@ struct OrientParams {
   Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // cloud units (Viewpoint)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ(); // any length > 0 (Direction)
   int k = 10;                                           // kNN graph degree (Mst), >= 1
+  /// Throws UsageError for a non-finite viewpoint (Viewpoint), a zero or non-finite direction
+  /// (Direction) or k < 1 (Mst).
+  void validate() const;
 };
 
 struct OrientResult {

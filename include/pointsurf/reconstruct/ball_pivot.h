@@ -31,6 +31,9 @@ struct BallPivotParams {
   // surface around it leaves no such triangulation for is widened once by the triangles along
   // it (up to 12 edges) and tried again. Default true.
   bool close_small_holes = true;
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// Interpolating mesh through the points of `cloud` by rolling balls of the given radii over

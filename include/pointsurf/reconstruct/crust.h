@@ -40,6 +40,9 @@ struct CrustParams {
   int max_hole_edges = 16;              // >= 0: boundary loops of at most this many edges are closed
                                         // with triangles of the samples (ear clipping, no new
                                         // vertex); 0 (or 1, 2): off
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 /// Counts from each stage of reconstruct_crust, for reports.

@@ -35,6 +35,9 @@ struct TriangulateParams {
   double max_hole_perimeter_in_spacings = 20.0;  // holes (at most 64 corners) whose perimeter is
                                        // at most this many local spacings are closed at the end;
                                        // 0: none closed (nor pinches repaired)
+  /// Throws UsageError naming the first value outside the ranges above. The one place they
+  /// are checked (reconstruct_region_growing and the pipeline call it).
+  void validate() const;
 };
 
 struct TriangulateResult : ReconstructionResult {

@@ -56,6 +56,14 @@ struct CurvatureParams {
                                     // the standard error of the fitted curvature, > 0
   bool keep_directions = false;     // fill CurvatureResult::d1, d2, normals
   bool update_normals = false;      // replace cloud.normals by the jet (Monge) normals, same side
+  /// The neighbourhood fields as the one Neighborhood type (spatial/neighborhood.h), k resolved
+  /// (0: 24 for degree 2, 40 for degree 3).
+  Neighborhood neighborhood_settings() const noexcept {
+    return {neighborhood, k == 0 ? (degree == 2 ? 24 : 40) : k, radius, radius_in_spacings};
+  }
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
 };
 
 struct CurvatureResult {

@@ -85,13 +85,16 @@ struct RandomParams {
 /// Fisher-Yates). O(N). Throws UsageError for a bad target or an empty cloud.
 SimplifyResult simplify_random(const PointCloud& cloud, const RandomParams& params = {});
 
-struct CurvatureParams {
+struct CurvatureSimplifyParams {
   SimplifyTarget target;       // ratio or count (cell is rejected)
   int k = 20;                  // neighbours for normals/variation when the cloud has no field
                                // "variation" (>= 3)
   double flat_weight = 0.1;    // weight of a flat point relative to the mean variation, >= 0:
                                // w_i = variation_i + flat_weight × mean(variation)
   std::uint64_t seed = 42;
+  /// Throws UsageError naming the first value out of range (the target is checked against
+  /// the cloud by the algorithm): the one place these values are checked.
+  void validate() const;
 };
 
 /// Curvature-based simplification: a weighted random subset of exactly the target count, the
@@ -101,7 +104,7 @@ struct CurvatureParams {
 /// u^(1/w)). High-curvature points are kept more often, not always. Uses the field
 /// "variation" when present, else PCA with `k` neighbours (through `tree` when given; it must
 /// be built over cloud.positions). Parallel; throws UsageError for bad parameters.
-SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureParams& params = {}, const KdTree* tree = nullptr,
+SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimplifyParams& params = {}, const KdTree* tree = nullptr,
                                   const ProgressCallback& progress = {});
 
 struct RegionalParams {
@@ -119,6 +122,9 @@ struct RegionalParams {
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
                                        // (with a cloud that already has normals and the field
                                        // "variation", a given spacing means no kd-tree is needed)
+  /// Throws UsageError naming the first value out of range (the target is checked against
+  /// the cloud by the algorithm): the one place these values are checked.
+  void validate() const;
 };
 
 /// Regional simplification: cluster by position and normal, decide per point by a feature
@@ -159,6 +165,9 @@ struct CurvatureDistanceParams {
   double split_quantile = 0.9;          // points with variation above this quantile form the
                                         // high part, (0, 1)
   double high_to_low_distance = 0.4;    // d_high = this × d_low, (0, 1]
+  /// Throws UsageError naming the first value out of range (the target is checked against
+  /// the cloud by the algorithm): the one place these values are checked.
+  void validate() const;
 };
 
 /// Curvature-distance simplification: split the points by surface variation into a high and a
@@ -175,6 +184,9 @@ struct LfsParams {
   int k = 16;                           // neighbours for normals, variation and LFS (>= 3)
   double adaptivity = 4.0;              // LFS clamped to [median / a, median × a], a >= 1
   int fill_neighbours = 6;              // kNN edges tested for gaps when filling (>= 1)
+  /// Throws UsageError naming the first value out of range (the target is checked against
+  /// the cloud by the algorithm): the one place these values are checked.
+  void validate() const;
 };
 
 /// Local-feature-size adaptive resampling. Per point, LFS_i = min(curvature radius, distance

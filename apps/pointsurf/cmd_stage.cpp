@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// `pointsurf STAGE IN... OUT [--options]` for every registered stage, generated from the
+// registry: options, --help with defaults, and the run as a one-stage pipeline
+// [read IN, STAGE, write OUT], so the command and the pipeline give the same output.
+#include <algorithm>
+#include <map>
+#include <regex>
+#include <set>
+
+#include <fmt/format.h>
+
+#include "cli_common.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/pipeline/registry.h"
+
+namespace pointsurf::cli {
+namespace {
+
+// CLI spelling of a key of the reader or writer, which share "format".
+std::string option_name(const std::string& stage, const std::string& key) {
+  if (key == "format") return stage == "read" ? "--input-format" : "--output-format";
+  return dashed(key);
+}
+
+// "  --option META   text", the text wrapped at 110 columns under its own column.
+std::string help_row(const std::string& left, const std::string& text) {
+  constexpr std::size_t indent = 33, width = 110;
+  std::string out = fmt::format("  {:<30} ", left);
+  if (out.size() > indent) out = "  " + left + "\n" + std::string(indent, ' ');
+  std::size_t column = indent;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(start, end - start);
+    if (column > indent && column + 1 + word.size() > width) {
+      out += "\n" + std::string(indent, ' ');
+      column = indent;
+    } else if (column > indent) {
+      out += ' ';
+      ++column;
+    }
+    out += word;
+    column += word.size();
+    start = end + 1;
+  }
+  return out + "\n";
+}
+
+// One help line per parameter declaration.
+std::string param_line(const std::string& stage, const ParamSpec& p, bool show_methods) {
+  std::string left = option_name(stage, p.name);
+  if (p.type != ParamType::Bool) left += " " + (p.meta.empty() ? std::string("VALUE") : p.meta);
+  std::vector<std::string> notes;
+  const std::string def = format_value(p.default_value);
+  if (p.type == ParamType::Bool) notes.push_back(fmt::format("default {}", def));
+  else if (!def.empty()) notes.push_back("default " + def);
+  if (!p.unit.empty()) notes.push_back(p.unit);
+  if (p.has_range() && p.type != ParamType::Vector3) notes.push_back("range " + p.range_text());
+  std::string methods;
+  if (show_methods && !p.methods.empty()) {
+    for (const std::string& m : p.methods) methods += (methods.empty() ? "" : ",") + m;
+    methods = "[" + methods + "] ";
+  }
+  std::string n;
+  for (const std::string& s : notes) n += (n.empty() ? "" : "; ") + s;
+  return help_row(left, methods + p.doc + (n.empty() ? "" : " (" + n + ")"));
+}
+
+std::string stage_help(const StageSpec& s) {
+  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
+  std::string out = fmt::format("pointsurf {} {} OUT [options]\n{}\n", s.name, multi ? "IN1 IN2 [IN...]" : "IN", s.summary);
+  if (!s.description.empty()) out += s.description + "\n";
+  if (!s.params.empty() || !s.methods.empty()) out += "\nOptions (pipeline keys are the same with _ for -):\n";
+  if (!s.methods.empty()) {
+    std::string list;
+    for (const std::string& m : s.methods) list += (list.empty() ? "" : "|") + m;
+    out += help_row("--method " + list,
+                    fmt::format("{} (default {})", s.method_list ? "Comma-separated methods, applied in order" : "Method", s.default_method));
+  }
+  for (const ParamSpec& p : s.params) out += param_line(s.name, p, !s.methods.empty());
+  out += "\nInput options:\n";
+  for (const ParamSpec& p : find_stage("read")->params)
+    if (p.name != "filename") out += param_line("read", p, false);
+  out += "\nOutput options:\n";
+  for (const ParamSpec& p : find_stage("write")->params)
+    if (p.name != "filename") out += param_line("write", p, false);
+  out += "\n" + common_options_help();
+  if (!s.examples.empty()) {
+    out += "\nExamples:\n";
+    for (const std::string& e : s.examples) out += "  " + e + "\n";
+  }
+  return out;
+}
+
+// "stage 2 (normals): k: 2 is out of range" -> "--k: 2 is out of range": the command line's
+// words for a one-stage pipeline's message.
+std::string cli_message(const std::string& message, const StageSpec& s) {
+  static const std::regex prefix(R"(^cli: stage \d+ \((\w+)\): ([a-z_0-9]+)([:, ].*)$)");
+  std::smatch m;
+  if (std::regex_match(message, m, prefix)) {
+    const std::string stage = m[1].str(), key = m[2].str();
+    const StageSpec* owner = find_stage(stage);
+    if (owner != nullptr && (owner->find_param(key) != nullptr || key == "method")) return option_name(stage, key) + m[3].str();
+  }
+  static const std::regex bare(R"(^cli: stage \d+ \(\w+\): (.*)$)");
+  if (std::regex_match(message, m, bare)) {
+    // `key "radii" belongs to ...` -> `--radii belongs to ...`
+    static const std::regex key(R"(key \"([a-z_0-9]+)\")");
+    std::string rest = m[1].str();
+    std::smatch k;
+    if (std::regex_search(rest, k, key)) rest = k.prefix().str() + dashed(k[1].str()) + k.suffix().str();
+    return rest;
+  }
+  if (message.rfind("cli: ", 0) == 0) return message.substr(5);
+  (void)s;
+  return message;
+}
+
+int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
+  CommonOptions common;
+  std::vector<OptionDef> options;
+  // Values as given, per owner (stage, read, write): the pipeline parses and checks them.
+  std::vector<std::pair<std::string, std::string>> stage_params, read_params, write_params;
+  std::set<std::string> seen;
+  auto add = [&](const std::string& owner, const ParamSpec& p, std::vector<std::pair<std::string, std::string>>& target) {
+    const std::string name = option_name(owner, p.name);
+    if (!seen.insert(name).second) return;
+    options.push_back({name, p.type == ParamType::Bool, p.meta, [&target, key = p.name, name](const std::string& v) {
+                         for (const auto& kv : target)
+                           if (kv.first == key) throw UsageError(fmt::format("{} given twice", name));
+                         target.emplace_back(key, v);
+                       }});
+  };
+  if (!s.methods.empty())
+    options.push_back({"--method", false, "METHOD", [&](const std::string& v) {
+                         for (const auto& kv : stage_params)
+                           if (kv.first == "method") throw UsageError("--method given twice");
+                         stage_params.emplace_back("method", v);
+                       }});
+  for (const ParamSpec& p : s.params) add(s.name, p, stage_params);
+  for (const ParamSpec& p : find_stage("read")->params)
+    if (p.name != "filename") add("read", p, read_params);
+  for (const ParamSpec& p : find_stage("write")->params)
+    if (p.name != "filename") add("write", p, write_params);
+  add_common_options(options, common);
+
+  std::vector<std::string> positionals;
+  try {
+    positionals = scan_arguments(args, options);
+  } catch (const UsageError& e) {
+    throw UsageError(std::string(e.what()) + fmt::format(" (see pointsurf {} --help)", s.name));
+  }
+  if (common.help) {
+    fmt::print("{}", stage_help(s));
+    return 0;
+  }
+  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
+  if (positionals.size() < (multi ? 3u : 2u) || (!multi && positionals.size() > 2))
+    throw UsageError(fmt::format("expected {} OUT, got {} file name{} (see pointsurf {} --help)", multi ? "IN1 IN2 [IN...]" : "IN",
+                                 positionals.size(), positionals.size() == 1 ? "" : "s", s.name));
+  check_common_options(common);
+  std::vector<StepText> steps;
+  std::vector<std::string> inputs;
+  for (std::size_t i = 0; i + 1 < positionals.size(); ++i) {
+    StepText read{"read", fmt::format("in{}", i + 1), {}, read_params};
+    read.params.emplace_back("filename", positionals[i]);
+    inputs.push_back(read.tag);
+    steps.push_back(std::move(read));
+  }
+  StepText stage{s.name, s.name, multi ? inputs : std::vector<std::string>{}, stage_params};
+  steps.push_back(std::move(stage));
+  StepText write{"write", "out", {}, write_params};
+  write.params.emplace_back("filename", positionals.back());
+  steps.push_back(std::move(write));
+  Pipeline pipeline;
+  try {
+    pipeline = build_pipeline(steps, "cli");
+  } catch (const UsageError& e) {
+    throw UsageError(cli_message(e.what(), s));
+  }
+  try {
+    run_with_report(pipeline, common, s.name);
+  } catch (const Error& e) {
+    const std::string m = cli_message(fmt::format("cli: {}", e.what()), s);
+    if (e.exit_code() == 1) throw UsageError(m);
+    if (e.exit_code() == 2) throw InputError(m);
+    throw ComputeError(m);
+  }
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> stage_commands() {
+  std::vector<Command> out;
+  for (const StageSpec& s : registered_stages()) {
+    if (s.name == "read" || s.name == "write") continue;
+    out.push_back({s.name, s.summary, [&s](const std::vector<std::string>& args) { return run_stage(s, args); }, [&s] { return stage_help(s); }});
+  }
+  return out;
+}
+
+}  // namespace pointsurf::cli

@@ -1,0 +1,149 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// A stage as the pipeline, the command line, the report and the bindings see it: its name, what
+// it consumes and produces, its parameters (name, type, default, unit, range or choices, one-line
+// doc, the methods they belong to) and a run function over a Context. Declared once, in the
+// registry (pointsurf/pipeline/registry.h); every front end is generated from the declaration.
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "pointsurf/core/progress.h"
+
+namespace pointsurf {
+
+class Context;
+
+/// Parameter types. Vector3 and DoubleList hold their numbers in a std::vector<double>.
+enum class ParamType { Bool, Int, Double, String, Choice, ChoiceList, Vector3, DoubleList };
+
+/// Name of a type as the messages and --help spell it ("integer", "number", ...).
+const char* param_type_name(ParamType type) noexcept;
+
+/// One parameter value: bool, integer, number, text (String, Choice, ChoiceList as "a,b") or
+/// numbers (Vector3, DoubleList).
+using ParamValue = std::variant<bool, std::int64_t, double, std::string, std::vector<double>>;
+
+/// A value as text, the way --help, the summary lines and --set write it (numbers in the
+/// shortest form that reads back exactly, lists comma separated).
+std::string format_value(const ParamValue& value);
+
+struct ParamSpec {
+  std::string name;                  // key in pipelines, reports and Python; the CLI writes
+                                     // it --name-with-dashes
+  ParamType type = ParamType::Double;
+  ParamValue default_value;          // taken from a default-constructed Params struct
+  std::string unit;                  // "cloud units", "degrees", "mean spacings", "" (none)
+  double min = -std::numeric_limits<double>::infinity();  // numeric range (Int, Double, lists)
+  double max = std::numeric_limits<double>::infinity();
+  bool min_open = false, max_open = false;  // (min or [min; max) or max]
+  std::vector<std::string> choices;  // Choice, ChoiceList
+  std::string doc;                   // one line
+  std::vector<std::string> methods;  // methods it belongs to; empty: every method
+  std::string meta;                  // placeholder in --help ("N", "R", "X,Y,Z")
+
+  bool has_range() const noexcept;
+  /// "[3, inf)", "(0, 90]", "" when unbounded.
+  std::string range_text() const;
+  bool applies_to(const std::string& method) const;
+};
+
+/// What a stage reads or writes.
+enum class DataKind { Cloud, Mesh, Any };
+
+struct Slot {
+  std::string name;  // "cloud", "mesh", "reference", "source", "target"
+  DataKind kind = DataKind::Cloud;
+};
+
+/// Key-value results of one stage run: counts (integers) and metrics (numbers or text).
+using ResultValue = std::variant<std::int64_t, double, std::string, bool, std::vector<double>>;
+using ResultList = std::vector<std::pair<std::string, ResultValue>>;
+
+/// What one stage did: the values it used, its counts, metrics, warnings, time and memory.
+struct StageRecord {
+  std::size_t index = 0;             // position in the pipeline, 1-based
+  std::string type, tag;
+  std::vector<std::string> inputs;   // tags of the data it read
+  std::vector<std::pair<std::string, ParamValue>> parameters;  // every value used, resolved
+  ResultList counts, metrics;
+  std::vector<std::string> warnings;
+  std::string summary;               // one line for stderr
+  double seconds = 0.0;
+  double peak_rss_mb = 0.0;          // high-water resident memory at the end of the stage
+  double rss_rise_mb = 0.0;          // peak_rss_mb minus the high-water mark at its start
+  std::size_t tree_builds = 0;       // kd-trees built during the stage
+
+  /// Replaces the recorded value of a parameter by the one actually used (a derived default).
+  void set_used(const std::string& name, ParamValue value);
+  void count(std::string name, std::int64_t value) { counts.emplace_back(std::move(name), value); }
+  void metric(std::string name, ResultValue value) { metrics.emplace_back(std::move(name), std::move(value)); }
+};
+
+/// The parameters of one stage run, resolved: every parameter of the chosen method, given or
+/// default.
+class StageArgs {
+public:
+  StageArgs() = default;
+  StageArgs(std::map<std::string, ParamValue> values, std::map<std::string, bool> given, std::string method)
+      : values_(std::move(values)), given_(std::move(given)), method_(std::move(method)) {}
+  bool has(const std::string& name) const { return values_.count(name) > 0; }
+  bool given(const std::string& name) const;  // set explicitly (not a default)
+  bool boolean(const std::string& name) const;
+  std::int64_t integer(const std::string& name) const;
+  int int32(const std::string& name) const { return static_cast<int>(integer(name)); }
+  double number(const std::string& name) const;
+  const std::string& text(const std::string& name) const;
+  const std::vector<double>& numbers(const std::string& name) const;
+  const std::string& method() const noexcept { return method_; }
+  const std::map<std::string, ParamValue>& values() const noexcept { return values_; }
+
+private:
+  const ParamValue& at(const std::string& name) const;
+  std::map<std::string, ParamValue> values_;
+  std::map<std::string, bool> given_;
+  std::string method_;
+};
+
+/// A running stage's view of the context: its resolved parameters, the tags of its inputs and
+/// output, its record and a progress callback (already labelled by the runner).
+struct StageRun {
+  Context& context;
+  const StageArgs& args;
+  std::vector<std::string> inputs;   // tags, one per consumed slot (several for merge)
+  std::string output;                // tag the result goes under
+  StageRecord& record;
+  ProgressCallback progress;
+  /// For stages whose "method" is a list (clean): the parameters resolved for each listed
+  /// method alone, in order; otherwise one entry equal to `args`.
+  const std::vector<StageArgs>& per_method;
+};
+
+struct StageSpec {
+  std::string name;                  // "normals", "clean", ...
+  std::string summary;               // one line for the command list
+  std::string description;           // a paragraph for --help
+  std::vector<Slot> consumes;        // empty: a reader; a slot with name "clouds": any number
+  std::optional<Slot> produces;      // empty: produces nothing (an evaluation, a writer)
+  std::vector<std::string> methods;  // empty: no "method" parameter
+  std::string default_method;
+  bool method_list = false;          // "method" takes a comma-separated list applied in order
+  std::vector<ParamSpec> params;     // "method" is implied by `methods`
+  std::vector<std::string> examples; // command lines for --help
+  int order = 0;                     // place in the command list (data flow)
+  std::function<void(StageRun&)> run;
+  /// Checks across parameters made before any work (e.g. a viewpoint given without
+  /// orient = viewpoint); throws UsageError. May be empty.
+  std::function<void(const StageArgs&)> check;
+
+  const ParamSpec* find_param(const std::string& name) const;          // any method
+  std::vector<const ParamSpec*> params_named(const std::string& name) const;
+};
+
+}  // namespace pointsurf

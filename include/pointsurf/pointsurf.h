@@ -1,0 +1,28 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Everything pointsurf offers, in module order (core, io, spatial, normals, shape, features,
+// clean, simplify, reconstruct, pipeline). Include the module headers instead to keep builds fast.
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/core/scalar_field.h"
+#include "pointsurf/core/triangle_mesh.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/spatial/kd_tree.h"
+#include "pointsurf/spatial/neighborhood.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/shape/curvature.h"
+#include "pointsurf/features/feature_points.h"
+#include "pointsurf/clean/remove_duplicates.h"
+#include "pointsurf/clean/remove_outliers.h"
+#include "pointsurf/clean/smooth_points.h"
+#include "pointsurf/simplify/simplify.h"
+#include "pointsurf/reconstruct/reconstruction.h"
+#include "pointsurf/reconstruct/triangulate.h"
+#include "pointsurf/reconstruct/crust.h"
+#include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/pipeline/stage.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/pipeline/registry.h"
+#include "pointsurf/pipeline/pipeline.h"

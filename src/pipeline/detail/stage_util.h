@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Small helpers the stage run functions share.
+#include <cstddef>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/pipeline/stage.h"
+
+namespace pointsurf::detail {
+
+/// "1 point", "2 points".
+inline std::string plural(std::size_t n, const std::string& singular, const std::string& plural_form = {}) {
+  return fmt::format("{} {}", n, n == 1 ? singular : (plural_form.empty() ? singular + "s" : plural_form));
+}
+
+/// A stage that changes the point set of a mesh cannot keep its faces: drop them and say so.
+inline void drop_faces(DataItem& item, StageRecord& record) {
+  if (item.triangles.empty() && !item.is_mesh) return;
+  if (!item.triangles.empty())
+    record.warnings.push_back(fmt::format("the input is a mesh: its {} are dropped ({} works on points)",
+                                          plural(item.triangles.size(), "face"), record.type));
+  item.triangles.clear();
+  item.is_mesh = false;
+}
+
+inline std::int64_t as_count(std::size_t n) { return static_cast<std::int64_t>(n); }
+
+}  // namespace pointsurf::detail
+
+namespace pointsurf::detail {
+
+/// A callback for one part [begin, end] of a stage's progress (empty when `whole` is).
+inline ProgressCallback sub_progress(const ProgressCallback& whole, double begin, double end) {
+  if (!whole) return {};
+  return [whole, begin, end](double f) { return whole(begin + (end - begin) * f); };
+}
+
+/// Name of a neighbourhood kind as the parameter "neighborhood" spells it.
+inline const char* neighborhood_name(int kind) { return kind == 0 ? "knn" : kind == 1 ? "radius" : "hybrid"; }
+
+}  // namespace pointsurf::detail

@@ -1,0 +1,192 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The reader and writer stages: a file name in a pipeline stands for one of them.
+#include <algorithm>
+#include <cctype>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/pipeline/context.h"
+
+namespace pointsurf::detail {
+namespace {
+
+const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "off", "obj", "stl"};
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool holds_faces(const std::string& format) { return format == "ply" || format == "off" || format == "obj" || format == "stl"; }
+
+void run_read(StageRun& run) {
+  const std::string& file = run.args.text("filename");
+  ReadOptions options;
+  options.strict = run.args.boolean("strict");
+  options.columns = run.args.text("columns");
+  options.format = run.args.text("format");
+  const std::string format = options.format.empty() ? detect_format(file) : options.format;
+  options.format = format;
+  StageRecord& rec = run.record;
+  std::size_t dropped = 0;
+  std::vector<std::string> warnings;
+  DataItem item;
+  item.source = file;
+  std::string encoding;
+  if (holds_faces(format)) {
+    MeshReadResult r = read_mesh(file, options);
+    dropped = r.dropped_nonfinite;
+    warnings = std::move(r.warnings);
+    encoding = r.encoding;
+    if (r.dropped_faces > 0) warnings.push_back(fmt::format("{} dropped (degenerate or on dropped vertices)", plural(r.dropped_faces, "face")));
+    if (r.polygons_triangulated > 0) warnings.push_back(fmt::format("{} split into triangles", plural(r.polygons_triangulated, "polygon")));
+    item.cloud.positions = std::move(r.mesh.vertices);
+    item.cloud.normals = std::move(r.mesh.vertex_normals);
+    item.cloud.colors = std::move(r.mesh.vertex_colors);
+    item.cloud.fields = std::move(r.mesh.vertex_fields);
+    item.triangles = std::move(r.mesh.triangles);
+    item.is_mesh = !item.triangles.empty();
+  } else {
+    CloudReadResult r = read_point_cloud(file, options);
+    dropped = r.dropped_nonfinite;
+    warnings = std::move(r.warnings);
+    encoding = r.encoding;
+    item.cloud = std::move(r.cloud);
+  }
+  for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
+  if (dropped > 0)
+    rec.warnings.push_back(fmt::format("{}: {} with NaN/Inf coordinates dropped (strict makes this an error)", file, plural(dropped, "point")));
+  if (item.cloud.empty()) throw InputError(fmt::format("{}: no points", file));
+  rec.set_used("format", format);
+  rec.count("points", as_count(item.cloud.size()));
+  rec.count("faces", as_count(item.triangles.size()));
+  rec.count("dropped_nonfinite", as_count(dropped));
+  rec.metric("encoding", encoding);
+  rec.metric("normals", item.cloud.has_normals());
+  rec.metric("colors", item.cloud.has_colors());
+  std::vector<std::string> fields;
+  for (const ScalarField& f : item.cloud.fields) fields.push_back(f.name);
+  std::string field_list;
+  for (const std::string& f : fields) field_list += (field_list.empty() ? "" : ",") + f;
+  rec.metric("fields", field_list);
+  rec.summary = fmt::format("read {}{} from {} ({})", plural(item.cloud.size(), "point"),
+                            item.triangles.empty() ? "" : fmt::format(", {}", plural(item.triangles.size(), "face")), file, format);
+  run.context.set(run.output, std::move(item));
+}
+
+// What the output format cannot hold, said before writing.
+std::vector<std::string> lost_attributes(const std::string& path, const std::string& format, const DataItem& item) {
+  std::vector<std::string> lost;
+  const PointCloud& c = item.cloud;
+  if (!item.triangles.empty() && !holds_faces(format)) lost.push_back(plural(item.triangles.size(), "face"));
+  if (format == "stl") {
+    if (c.has_normals()) lost.push_back("normals");
+    if (c.has_colors()) lost.push_back("colours");
+  }
+  if (format == "las" && c.has_normals()) lost.push_back("normals");
+  const std::string ext = lower(std::filesystem::path(path).extension().string());
+  if (format == "xyz" && ext != ".csv" && !c.fields.empty()) lost.push_back("field names (values are kept as columns)");
+  if (format == "off" || format == "obj" || format == "stl") {
+    for (const ScalarField& f : c.fields) lost.push_back(fmt::format("field '{}'", f.name));
+  } else if (format == "las") {
+    static const char* const las_fields[] = {"intensity", "return_number", "number_of_returns", "classification",
+                                             "gps_time",  "user_data",     "scan_angle",        "point_source_id"};
+    for (const ScalarField& f : c.fields)
+      if (std::none_of(std::begin(las_fields), std::end(las_fields), [&](const char* n) { return f.name == n; }))
+        lost.push_back(fmt::format("field '{}'", f.name));
+  }
+  return lost;
+}
+
+void run_write(StageRun& run) {
+  const std::string& file = run.args.text("filename");
+  const DataItem& item = run.context.item(run.inputs.front());
+  WriteOptions w;
+  w.format = run.args.text("format");
+  w.ascii = run.args.boolean("ascii");
+  if (w.ascii) w.ply_encoding = PlyEncoding::Ascii;
+  else if (run.args.boolean("big_endian")) w.ply_encoding = PlyEncoding::BinaryBigEndian;
+  w.single_precision = run.args.boolean("float");
+  w.pcd_compressed = run.args.boolean("compressed");
+  const std::vector<double>& offset = run.args.numbers("las_offset");
+  if (offset.size() == 3) w.las_offset = Vector3d(offset[0], offset[1], offset[2]);
+  if (run.args.given("las_scale")) w.las_scale = run.args.number("las_scale");
+  const std::string format = w.format.empty() ? format_from_extension(file) : w.format;
+  StageRecord& rec = run.record;
+  rec.set_used("format", format);
+  const std::vector<std::string> lost = lost_attributes(file, format, item);
+  if (!lost.empty()) {
+    std::string list;
+    for (const std::string& l : lost) list += (list.empty() ? "" : ", ") + l;
+    rec.warnings.push_back(fmt::format("{}: the {} format cannot hold: {}", file, format, list));
+  }
+  if (item.triangles.empty()) {
+    write_point_cloud(file, item.cloud, w);
+  } else {
+    TriangleMesh mesh = TriangleMesh::from_cloud(item.cloud, item.triangles);
+    write_mesh(file, mesh, w);
+  }
+  const std::size_t faces = holds_faces(format) ? item.triangles.size() : 0;
+  rec.count("points", as_count(item.cloud.size()));
+  rec.count("faces", as_count(faces));
+  if (item.is_mesh) rec.metric("mesh_built_from", item.source);
+  rec.summary = fmt::format("wrote {}{} to {}", plural(item.cloud.size(), "point"), faces > 0 ? fmt::format(", {}", plural(faces, "face")) : "",
+                            file);
+}
+
+}  // namespace
+
+StageSpec read_stage() {
+  StageSpec s;
+  s.name = "read";
+  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, OFF, OBJ, STL; format from the content)";
+  s.description = "A file name at the start of a pipeline is a reader. Mesh files keep their faces.";
+  s.order = 0;
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = {
+      P::text("filename", "", "File to read").meta("FILE"),
+      P::choice("format", "", kFormats, "Read as this format instead of detecting it from the content").meta("FORMAT"),
+      P::text("columns", ReadOptions{}.columns,
+              "Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)")
+          .meta("SPEC"),
+      P::boolean("strict", ReadOptions{}.strict, "Points with NaN/Inf coordinates are an error instead of being dropped and counted"),
+  };
+  s.run = run_read;
+  s.check = [](const StageArgs& a) {
+    if (a.text("filename").empty()) throw UsageError("filename: missing (the file to read)");
+  };
+  return s;
+}
+
+StageSpec write_stage() {
+  StageSpec s;
+  s.name = "write";
+  s.summary = "Write a cloud or mesh; the format follows the extension";
+  s.description = "A file name after a stage is a writer; it writes the latest data (or its \"inputs\").";
+  s.order = 1000;
+  s.consumes = {Slot{"data", DataKind::Any}};
+  const WriteOptions w;
+  s.params = {
+      P::text("filename", "", "File to write (.ply .xyz .txt .pts .csv .pcd .las .off .obj .stl)").meta("FILE"),
+      P::choice("format", w.format, kFormats, "Write this format whatever the extension").meta("FORMAT"),
+      P::boolean("ascii", w.ascii, "Write ascii PLY/PCD/STL instead of binary"),
+      P::boolean("float", w.single_precision, "Write float32 positions (PLY, PCD); refused where float32 loses precision"),
+      P::boolean("big_endian", w.ply_encoding == PlyEncoding::BinaryBigEndian, "Write binary big-endian PLY"),
+      P::boolean("compressed", w.pcd_compressed, "Write PCD as binary_compressed (LZF)"),
+      P::vector3("las_offset", {}, "LAS offset (default: near the data's minimum)").unit("cloud units"),
+      P::number("las_scale", 0.0, "LAS scale, cloud units per count (default: 1e-4 or coarser for large extents)")
+          .unit("cloud units")
+          .positive()
+          .meta("S"),
+  };
+  s.run = run_write;
+  s.check = [](const StageArgs& a) {
+    if (a.text("filename").empty()) throw UsageError("filename: missing (the file to write)");
+    if (a.boolean("ascii") && a.boolean("big_endian")) throw UsageError("ascii and big_endian: give only one (big_endian is a binary encoding)");
+  };
+  return s;
+}
+
+}  // namespace pointsurf::detail

@@ -1,0 +1,358 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stages over the points of one cloud that keep them in place: normals, curvature, features.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/features/feature_points.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/shape/curvature.h"
+
+namespace pointsurf::detail {
+namespace {
+
+const std::vector<std::string> kNeighborhoods = {"knn", "radius", "hybrid"};
+const std::vector<std::string> kOrientations = {"mst", "viewpoint", "direction", "none"};
+
+const char* orientation_name(Orientation o) {
+  switch (o) {
+    case Orientation::Mst: return "mst";
+    case Orientation::Viewpoint: return "viewpoint";
+    case Orientation::Direction: return "direction";
+    case Orientation::None: return "none";
+  }
+  return "";
+}
+
+// "neighborhood" given: that kind; not given: radius when only the radius is given, hybrid
+// when both k and radius are, else knn.
+NeighborhoodKind neighborhood_kind(const StageArgs& a) {
+  if (a.given("neighborhood")) {
+    const std::string& n = a.text("neighborhood");
+    return n == "knn" ? NeighborhoodKind::Knn : n == "radius" ? NeighborhoodKind::Radius : NeighborhoodKind::Hybrid;
+  }
+  if (a.given("radius") || a.given("radius_in_spacings")) return a.given("k") ? NeighborhoodKind::Hybrid : NeighborhoodKind::Radius;
+  return NeighborhoodKind::Knn;
+}
+
+void check_neighborhood(const StageArgs& a) {
+  const NeighborhoodKind kind = neighborhood_kind(a);
+  if (kind == NeighborhoodKind::Knn && (a.given("radius") || a.given("radius_in_spacings")))
+    throw UsageError("radius: ignored with neighborhood knn (use radius or hybrid)");
+  if (kind == NeighborhoodKind::Radius && a.given("k")) throw UsageError("k: ignored with neighborhood radius (use knn or hybrid)");
+  if (a.given("radius") && a.given("radius_in_spacings")) throw UsageError("radius and radius_in_spacings: give only one");
+}
+
+std::vector<ParamSpec> neighborhood_params(int k, double radius, double radius_in_spacings, const std::string& k_doc) {
+  return {P::choice("neighborhood", "knn", kNeighborhoods,
+                    "Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius "
+                    "when only radius is given, hybrid when k is given too"),
+          P::integer("k", k, k_doc),
+          P::number("radius", radius, "Neighbourhood radius; 0: radius_in_spacings x mean spacing").unit("cloud units").non_negative().meta("R"),
+          P::number("radius_in_spacings", radius_in_spacings, "Radius in mean spacings when radius is 0").unit("mean spacings").positive()};
+}
+
+// Angles between estimated normals and the normals the input came with.
+void compare_normals(const std::vector<Vector3d>& reference, const std::vector<Vector3d>& estimated, StageRecord& rec) {
+  double sum = 0.0;
+  std::size_t agree = 0, used = 0;
+  for (std::size_t i = 0; i < reference.size() && i < estimated.size(); ++i) {
+    const double nr = reference[i].norm(), ne = estimated[i].norm();
+    if (nr == 0.0 || ne == 0.0) continue;
+    const double c = reference[i].dot(estimated[i]) / (nr * ne);
+    sum += std::acos(std::min(1.0, std::abs(c))) * 180.0 / std::numbers::pi;
+    agree += c > 0.0;
+    ++used;
+  }
+  if (used == 0) return;
+  rec.count("input_normals_compared", as_count(used));
+  rec.metric("mean_angle_to_input_deg", sum / double(used));
+  rec.metric("orientation_agreement_with_input", double(agree) / double(used));
+}
+
+// The library's Params from a stage's arguments: the run and the check before any work build
+// them the same way, and the check calls their validate().
+NormalParams normal_params(const StageArgs& a) {
+  NormalParams params;
+  params.neighborhood = neighborhood_kind(a);
+  params.k = a.int32("k");
+  params.radius = a.number("radius");
+  params.radius_in_spacings = a.number("radius_in_spacings");
+  return params;
+}
+
+OrientParams orient_params(const StageArgs& a) {
+  OrientParams orient;
+  const std::string& o = a.text("orient");
+  orient.method = o == "mst" ? Orientation::Mst : o == "viewpoint" ? Orientation::Viewpoint : o == "direction" ? Orientation::Direction : Orientation::None;
+  const auto& vp = a.numbers("viewpoint");
+  const auto& dir = a.numbers("direction");
+  orient.viewpoint = Vector3d(vp[0], vp[1], vp[2]);
+  orient.direction = Vector3d(dir[0], dir[1], dir[2]);
+  orient.k = a.int32("orient_k");
+  return orient;
+}
+
+CurvatureParams curvature_params(const StageArgs& a) {
+  CurvatureParams params;
+  params.neighborhood = neighborhood_kind(a);
+  params.degree = a.int32("degree");
+  params.k = a.int32("k");
+  params.radius = a.number("radius");
+  params.radius_in_spacings = a.number("radius_in_spacings");
+  params.zero_curvature = a.number("zero_curvature");
+  params.zero_in_noise = a.number("zero_in_noise");
+  params.update_normals = a.boolean("update_normals");
+  return params;
+}
+
+FeatureParams feature_params(const StageArgs& a) {
+  FeatureParams params;
+  params.k = a.int32("k");
+  params.variation_threshold = a.number("variation_threshold");
+  params.dn_deg = a.number("dn_deg");
+  params.dd = a.number("dd");
+  params.dd_in_spacings = a.number("dd_in_spacings");
+  params.min_cluster_points = a.int32("min_cluster_points");
+  params.normals = a.text("normals") == "input" ? FeatureNormals::Input : FeatureNormals::Robust;
+  return params;
+}
+
+void run_normals(StageRun& run) {
+  const StageArgs& a = run.args;
+  DataItem& item = run.context.item(run.output);
+  PointCloud& cloud = item.cloud;
+  if (cloud.size() < 3) throw InputError(fmt::format("{}; normals need at least 3", plural(cloud.size(), "point")));
+  const NormalParams params = normal_params(a);
+  const OrientParams orient = orient_params(a);
+
+  std::vector<Vector3d> input_normals;
+  std::swap(input_normals, cloud.normals);  // estimate from scratch; compare afterwards
+  const KdTree& tree = run.context.tree(run.output);
+  const double spacing = run.context.mean_spacing(run.output);
+  const NormalResult estimated = estimate_normals(cloud, params, &tree, sub_progress(run.progress, 0.0, 0.5));
+  StageRecord& rec = run.record;
+  rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
+  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", estimated.radius_used);
+  rec.count("points", as_count(cloud.size()));
+  rec.count("degenerate", as_count(estimated.degenerate));
+  rec.metric("mean_spacing", spacing);
+  if (estimated.degenerate > 0)
+    rec.warnings.push_back(fmt::format("{} fewer than 3 neighbours or a degenerate neighbourhood: normal (0,0,0)",
+                                       estimated.degenerate == 1 ? "1 point has" : fmt::format("{} points have", estimated.degenerate)));
+  std::string oriented_text = "not oriented";
+  if (orient.method != Orientation::None) {
+    const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
+    rec.count("flipped", as_count(r.flipped));
+    if (orient.method == Orientation::Mst) rec.count("components", as_count(r.components));
+    oriented_text = orient.method == Orientation::Mst ? fmt::format("oriented mst ({}, {} flipped)", plural(r.components, "component"), r.flipped)
+                                                      : fmt::format("oriented by {} ({} flipped)", orientation_name(orient.method), r.flipped);
+  }
+  if (!input_normals.empty()) compare_normals(input_normals, cloud.normals, rec);
+  rec.summary = fmt::format("normals: {} ({} {}), {}; mean spacing {:.4g}", plural(cloud.size(), "normal"),
+                            params.neighborhood == NeighborhoodKind::Knn ? "k" : params.neighborhood == NeighborhoodKind::Radius ? "radius" : "hybrid",
+                            params.neighborhood == NeighborhoodKind::Knn ? std::to_string(params.k) : fmt::format("{:.4g}", estimated.radius_used),
+                            oriented_text, spacing);
+}
+
+// Normals for stages that need oriented ones when the input has none: PCA over `k`
+// neighbours and MST orientation through the context's tree; said in the record.
+void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback& progress) {
+  PointCloud& cloud = run.context.item(run.output).cloud;
+  const KdTree& tree = run.context.tree(run.output);
+  NormalParams params;
+  params.k = k;
+  params.keep_variation = false;
+  estimate_normals(cloud, params, &tree, sub_progress(progress, 0.0, 0.5));
+  orient_normals(cloud, {}, &tree, sub_progress(progress, 0.5, 1.0));
+  run.record.warnings.push_back(fmt::format("no normals in the input; estimated (PCA, k = {}) and MST-oriented", k));
+}
+
+void run_curvature(StageRun& run) {
+  const StageArgs& a = run.args;
+  PointCloud& cloud = run.context.item(run.output).cloud;
+  const CurvatureParams params = curvature_params(a);
+  const std::size_t needed = params.degree == 2 ? 6 : 10;
+  if (cloud.size() < needed) throw InputError(fmt::format("{}; a degree-{} jet needs at least {}", plural(cloud.size(), "point"), params.degree, needed));
+  const bool estimated = !cloud.has_normals();
+  if (estimated) estimate_missing_normals_impl(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.3));
+  const KdTree& tree = run.context.tree(run.output);
+  const CurvatureResult r = estimate_curvature(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
+  StageRecord& rec = run.record;
+  rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
+  if (params.neighborhood != NeighborhoodKind::Radius) rec.set_used("k", std::int64_t{r.k_used});
+  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", r.radius_used);
+  rec.set_used("zero_curvature", r.zero_curvature);
+  rec.count("points", as_count(cloud.size()));
+  rec.count("degenerate", as_count(r.degenerate));
+  for (int t = 0; t < kSurfaceTypeCount; ++t) rec.count(surface_type_name(static_cast<SurfaceType>(t)), as_count(r.type_counts[std::size_t(t)]));
+  rec.metric("median_residual", r.median_residual);
+  rec.metric("normals_estimated", estimated);
+  if (r.degenerate > 0)
+    rec.warnings.push_back(fmt::format("{} a zero normal, too few neighbours or a singular jet fit: curvature 0, surface_type 0 (undefined)",
+                                       r.degenerate == 1 ? "1 point has" : fmt::format("{} points have", r.degenerate)));
+  std::size_t best = 1;
+  for (std::size_t t = 2; t < r.type_counts.size(); ++t)
+    if (r.type_counts[t] > r.type_counts[best]) best = t;
+  rec.summary = fmt::format("curvature: {} (degree {}, {}{}), zero at {:.3g}, mostly {} ({:.1f} %), {} degenerate",
+                            plural(cloud.size(), "point"), params.degree,
+                            params.neighborhood == NeighborhoodKind::Radius ? fmt::format("radius {:.4g}", r.radius_used) : fmt::format("k {}", r.k_used),
+                            estimated ? ", normals estimated" : "", r.zero_curvature, surface_type_name(static_cast<SurfaceType>(best)),
+                            100.0 * double(r.type_counts[best]) / double(std::max<std::size_t>(cloud.size(), 1)), r.degenerate);
+}
+
+void run_features(StageRun& run) {
+  const StageArgs& a = run.args;
+  PointCloud& cloud = run.context.item(run.output).cloud;
+  const FeatureParams params = feature_params(a);
+  if (cloud.size() < static_cast<std::size_t>(params.k) + 1)
+    throw InputError(fmt::format("{}; feature detection with k = {} needs at least {}", plural(cloud.size(), "point"), params.k, params.k + 1));
+  const std::string& truth_name = a.text("truth_field");
+  if (!truth_name.empty() && !cloud.fields.contains(truth_name))
+    throw UsageError(fmt::format("truth_field: the input has no field \"{}\"", truth_name));
+  bool estimated = false;
+  if (params.normals == FeatureNormals::Input && !cloud.has_normals()) {
+    estimate_missing_normals_impl(run, params.k, sub_progress(run.progress, 0.0, 0.3));
+    estimated = true;
+  }
+  const KdTree& tree = run.context.tree(run.output);
+  const FeatureResult r = detect_feature_points(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
+  StageRecord& rec = run.record;
+  rec.set_used("variation_threshold", r.variation_threshold_used);
+  rec.set_used("dd", r.dd_used);
+  rec.count("points", as_count(cloud.size()));
+  rec.count("candidates", as_count(r.candidates));
+  rec.count("edges", as_count(r.edges));
+  rec.count("corners", as_count(r.corners));
+  rec.metric("mean_spacing", r.mean_spacing);
+  std::string scored;
+  if (!truth_name.empty()) {
+    const std::vector<double>& truth = cloud.fields.find(truth_name)->values;
+    const std::vector<double>& labels = cloud.fields.find("feature")->values;
+    std::size_t labelled = 0, expected = 0, both = 0;
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      const bool l = labels[i] != 0.0, t = truth[i] != 0.0;
+      labelled += l;
+      expected += t;
+      both += l && t;
+    }
+    const double precision = labelled == 0 ? 0.0 : double(both) / double(labelled);
+    const double recall = expected == 0 ? 0.0 : double(both) / double(expected);
+    rec.count("truth_points", as_count(expected));
+    rec.metric("precision", precision);
+    rec.metric("recall", recall);
+    scored = fmt::format(", precision {:.3f} recall {:.3f} against '{}'", precision, recall, truth_name);
+  }
+  rec.summary = fmt::format("features: {}, {}, {} edge and {} corner {} (threshold {:.4g}, dd {:.4g}){}", plural(cloud.size(), "point"),
+                            plural(r.candidates, "candidate"), r.edges, r.corners, r.edges + r.corners == 1 ? "point" : "points",
+                            r.variation_threshold_used,
+                            r.dd_used, scored);
+}
+
+}  // namespace
+
+void estimate_missing_normals(StageRun& run, int k, const ProgressCallback& progress) { estimate_missing_normals_impl(run, k, progress); }
+
+StageSpec normals_stage() {
+  const NormalParams n;
+  const OrientParams o;
+  StageSpec s;
+  s.name = "normals";
+  s.summary = "Estimate normals by PCA and orient them (MST propagation by default)";
+  s.description = "PCA normals (Hoppe et al. 1992) over k nearest neighbours, a radius or both, then a consistent orientation. "
+                  "Adds the field \"variation\". A mesh keeps its faces.";
+  s.order = 50;
+  s.consumes = {Slot{"cloud", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = neighborhood_params(n.k, n.radius, n.radius_in_spacings, "Neighbours per point (knn; hybrid: at most k within r)");
+  s.params[1] = P::integer("k", n.k, "Neighbours per point (knn; hybrid: at most k within r)").at_least(3);
+  s.params.push_back(P::choice("orient", orientation_name(o.method), kOrientations,
+                               "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction or none"));
+  s.params.push_back(P::vector3("viewpoint", as_list(o.viewpoint), "Scanner position (orient viewpoint)").unit("cloud units"));
+  s.params.push_back(P::vector3("direction", as_list(o.direction), "Direction normals should face (orient direction)"));
+  s.params.push_back(P::integer("orient_k", o.k, "Neighbours per point in the MST graph (orient mst)").at_least(1));
+  s.examples = {"pointsurf normals scan.xyz oriented.ply --k 30 --orient mst",
+                "pointsurf normals scan.las oriented.ply --orient viewpoint --viewpoint 0,0,1.8"};
+  s.run = run_normals;
+  s.check = [](const StageArgs& a) {
+    check_neighborhood(a);
+    const std::string& orient = a.text("orient");
+    if (a.given("viewpoint") && orient != "viewpoint") throw UsageError("viewpoint: ignored unless orient is viewpoint");
+    if (a.given("direction") && orient != "direction") throw UsageError("direction: ignored unless orient is direction");
+    if (a.given("orient_k") && orient != "mst") throw UsageError("orient_k: ignored unless orient is mst");
+    if (orient == "viewpoint" && !a.given("viewpoint")) throw UsageError("orient viewpoint needs viewpoint X,Y,Z (the scanner position)");
+    normal_params(a).validate();
+    orient_params(a).validate();
+  };
+  return s;
+}
+
+StageSpec curvature_stage() {
+  const CurvatureParams c;
+  StageSpec s;
+  s.name = "curvature";
+  s.summary = "Principal curvatures, mean and Gaussian curvature, variation and HK surface type by jet fitting";
+  s.description = "Fields k1 >= k2, mean, gauss, variation, surface_type (Cazals and Pouget 2005). Normals are estimated and "
+                  "MST-oriented when the input has none.";
+  s.order = 60;
+  s.consumes = {Slot{"cloud", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = neighborhood_params(c.k, c.radius, c.radius_in_spacings, "");
+  s.params[1] = P::integer("k", c.k, "Neighbours per point; 0: 24 for degree 2, 40 for degree 3 (at least 6 or 10)").at_least(0);
+  s.params.push_back(P::integer("degree", c.degree, "Jet degree, 2 or 3").range(2, 3));
+  s.params.push_back(P::number("zero_curvature", c.zero_curvature,
+                               "Curvature below which H or a principal curvature counts as zero; 0: derived from the fit residuals")
+                         .unit("1/cloud units")
+                         .non_negative()
+                         .meta("Z"));
+  s.params.push_back(P::number("zero_in_noise", c.zero_in_noise, "Derived zero threshold in standard errors of the fitted curvature").positive());
+  s.params.push_back(P::boolean("update_normals", c.update_normals, "Write the jet (Monge) normals instead of the input ones"));
+  s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3));
+  s.examples = {"pointsurf curvature part.ply part_curvature.ply --degree 3"};
+  s.run = run_curvature;
+  s.check = [](const StageArgs& a) {
+    check_neighborhood(a);
+    const int min_k = a.integer("degree") == 2 ? 6 : 10;
+    if (a.integer("k") != 0 && a.integer("k") < min_k)
+      throw UsageError(fmt::format("k: {} must be at least {} for degree {} (or 0: the default)", a.integer("k"), min_k, a.integer("degree")));
+    curvature_params(a).validate();
+  };
+  return s;
+}
+
+StageSpec features_stage() {
+  const FeatureParams f;
+  StageSpec s;
+  s.name = "features";
+  s.summary = "Sharp-feature points: field \"feature\" = 0 none, 1 edge, 2 corner";
+  s.description = "Candidates by surface variation, then clusters of neighbour normals give planes; a point on two planes is an "
+                  "edge, on three or more a corner.";
+  s.order = 70;
+  s.consumes = {Slot{"cloud", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = {P::integer("k", f.k, "Neighbours per point").at_least(6),
+              P::number("variation_threshold", f.variation_threshold,
+                        "Candidate surface-variation threshold; 0: max(0.01, 4 x median variation)")
+                  .range(0.0, 1.0 / 3.0, false, true),
+              P::number("dn_deg", f.dn_deg, "Normal-angle clustering threshold").unit("degrees").range(0.0, 90.0, true, true),
+              P::number("dd", f.dd, "Point-to-plane distance; 0: dd_in_spacings x mean spacing").unit("cloud units").non_negative(),
+              P::number("dd_in_spacings", f.dd_in_spacings, "Point-to-plane distance when dd is 0").unit("mean spacings").positive(),
+              P::integer("min_cluster_points", f.min_cluster_points, "Fewest neighbours a cluster needs to give a plane, at most k").at_least(3),
+              P::choice("normals", f.normals == FeatureNormals::Robust ? "robust" : "input", {"robust", "input"},
+                        "Normals to cluster by: robust (flattest shifted neighbourhood) or input (estimated when absent)"),
+              P::text("truth_field", "", "Field marking true feature points (non-zero): report precision and recall").meta("NAME")};
+  s.examples = {"pointsurf features part.ply part_features.ply --report features.json"};
+  s.run = run_features;
+  s.check = [](const StageArgs& a) {
+    if (a.integer("min_cluster_points") > a.integer("k"))
+      throw UsageError(fmt::format("min_cluster_points: {} must be at most k = {}", a.integer("min_cluster_points"), a.integer("k")));
+    feature_params(a).validate();
+  };
+  return s;
+}
+
+}  // namespace pointsurf::detail

@@ -1,0 +1,226 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The reconstruct stage: a triangle mesh through the points (region-growing triangulation,
+// Crust or ball pivoting), with its topology reported.
+#include <algorithm>
+#include <limits>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/reconstruct/crust.h"
+#include "pointsurf/reconstruct/triangulate.h"
+
+namespace pointsurf::detail {
+namespace {
+
+double total_hole_perimeter(const MeshTopology& t) {
+  double total = 0.0;
+  for (const BoundaryLoop& loop : t.boundary_loops) total += loop.length;
+  return total;
+}
+
+TriangulateParams triangulate_params(const StageArgs& a) {
+  TriangulateParams p;
+  p.k = a.int32("k");
+  p.radius = a.number("radius");
+  p.radius_in_spacings = a.number("radius_in_spacings");
+  p.max_offset_in_spacings = a.number("max_offset_in_spacings");
+  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
+  p.min_angle_deg = a.number("min_angle_deg");
+  p.max_angle_deg = a.number("max_angle_deg");
+  p.max_dihedral_deg = a.number("max_dihedral_deg");
+  p.max_front_angle_deg = a.number("max_front_angle_deg");
+  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
+  return p;
+}
+
+CrustParams crust_params(const StageArgs& a) {
+  CrustParams p;
+  p.cocone_angle_deg = a.number("cocone_angle_deg");
+  p.normal_filter_angle_deg = a.number("normal_filter_angle_deg");
+  p.sharp_edge_angle_deg = a.number("sharp_edge_angle_deg");
+  const std::string& b = a.text("boundary");
+  p.boundary = b == "closed" ? CrustBoundary::Closed : b == "open" ? CrustBoundary::Open : CrustBoundary::Auto;
+  p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
+  p.max_hole_edges = a.int32("max_hole_edges");
+  return p;
+}
+
+BallPivotParams ball_params(const StageArgs& a) {
+  BallPivotParams p;
+  p.radii = a.numbers("radii");
+  p.radii_in_spacings = a.numbers("radii_in_spacings");
+  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
+  p.max_mean_normal_angle_deg = a.number("max_mean_normal_angle_deg");
+  p.close_small_holes = a.boolean("close_small_holes");
+  return p;
+}
+
+void run_reconstruct(StageRun& run) {
+  const StageArgs& a = run.args;
+  const std::string& method = a.method();
+  DataItem& item = run.context.item(run.output);
+  if (item.cloud.size() < 3) throw InputError(fmt::format("{}; a surface needs at least 3", plural(item.cloud.size(), "point")));
+  if (!item.triangles.empty()) drop_faces(item, run.record);
+  const double spacing = run.context.mean_spacing(run.output);
+  if (!(spacing > 0.0)) throw InputError(fmt::format("all {} coincide; no surface can be built", plural(item.cloud.size(), "point")));
+  StageRecord& rec = run.record;
+  const bool estimated = method != "crust" && !item.cloud.has_normals();
+  if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.2));
+  const PointCloud& cloud = item.cloud;
+  const KdTree& tree = run.context.tree(run.output);
+  const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
+  ReconstructionResult result;
+  if (method == "triangulate") {
+    const TriangulateParams p = triangulate_params(a);
+    TriangulateResult r = reconstruct_region_growing(cloud, p, &tree, progress);
+    rec.count("candidate_triangles", as_count(r.candidate_triangles));
+    rec.count("selected_triangles", as_count(r.selected_triangles));
+    rec.count("holes_filled", as_count(r.holes_filled));
+    rec.count("fill_triangles", as_count(r.fill_triangles));
+    rec.count("duplicate_points", as_count(r.duplicate_points));
+    rec.metric("local_spacing_mean", r.local_spacing_mean);
+    result = std::move(r);
+  } else if (method == "crust") {
+    const CrustParams p = crust_params(a);
+    CrustStats stats;
+    result = reconstruct_crust(cloud, p, progress, &stats);
+    rec.count("duplicate_points", as_count(stats.duplicate_points));
+    rec.count("delaunay_cells", as_count(stats.delaunay_cells));
+    rec.count("cocone_triangles", as_count(stats.cocone_triangles));
+    rec.count("normal_filtered", as_count(stats.normal_filtered));
+    rec.count("pruned", as_count(stats.pruned));
+    rec.count("holes_filled", as_count(stats.holes_filled));
+  } else {
+    const BallPivotParams p = ball_params(a);
+    result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
+    std::vector<double> radii = p.radii;
+    if (radii.empty())
+      for (const double f : p.radii_in_spacings) radii.push_back(f * result.mean_spacing);
+    std::sort(radii.begin(), radii.end());
+    radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
+    rec.set_used("radii", radii);
+  }
+  const MeshTopology& t = result.topology;
+  rec.count("points", as_count(cloud.size()));
+  rec.count("triangles", as_count(t.triangles));
+  rec.count("unused_points", as_count(result.unused_points));
+  rec.count("boundary_edges", as_count(t.boundary_edges));
+  rec.count("holes", as_count(t.boundary_loops.size()));
+  rec.count("non_manifold_edges", as_count(t.non_manifold_edges));
+  rec.count("non_manifold_vertices", as_count(t.non_manifold_vertices));
+  rec.count("inconsistent_edges", as_count(t.inconsistent_edges));
+  rec.count("components", as_count(t.components));
+  rec.metric("holes_total_perimeter", total_hole_perimeter(t));
+  rec.metric("largest_hole_perimeter", t.boundary_loops.empty() ? 0.0 : t.boundary_loops.front().length);
+  rec.metric("euler_characteristic", static_cast<std::int64_t>(t.euler_characteristic));
+  // MeshTopology::genus() is -1 where no genus is defined (several components, non-manifold):
+  // the report says null rather than a number that reads like a value.
+  if (t.genus() >= 0) rec.metric("genus", static_cast<std::int64_t>(t.genus()));
+  else rec.metric("genus", std::numeric_limits<double>::quiet_NaN());
+  rec.metric("watertight", t.watertight());
+  rec.metric("mean_spacing", spacing);
+  rec.metric("normals_estimated", estimated);
+  rec.metric("built_from", run.record.inputs.front());  // the tag of the cloud the mesh comes from
+  if (t.triangles == 0)
+    throw ComputeError(fmt::format("no triangle could be formed from {} (collinear, too sparse, or no usable normals?)",
+                                   plural(cloud.size(), "point")));
+  if (!t.boundary_loops.empty())
+    rec.warnings.push_back(fmt::format("{} remain{} (total perimeter {:.4g}, largest {:.4g})", plural(t.boundary_loops.size(), "hole"),
+                                       t.boundary_loops.size() == 1 ? "s" : "", total_hole_perimeter(t), t.boundary_loops.front().length));
+  if (t.non_manifold_edges > 0) rec.warnings.push_back(plural(t.non_manifold_edges, "non-manifold edge"));
+  if (t.non_manifold_vertices > 0) rec.warnings.push_back(plural(t.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices"));
+  const long genus = t.genus();
+  rec.summary = fmt::format("reconstruct: {} {} from {}{}; {} (perimeter {:.4g}), non-manifold {} edges / {} vertices, {}, genus {}", method,
+                            plural(t.triangles, "triangle"), plural(cloud.size(), "point"), estimated ? " (normals estimated)" : "",
+                            plural(t.boundary_loops.size(), "hole"), total_hole_perimeter(t), t.non_manifold_edges, t.non_manifold_vertices,
+                            plural(t.components, "component"), genus >= 0 ? std::to_string(genus) : std::string("-"));
+  // The mesh's vertices are the cloud's points in order: the item keeps its positions (and so
+  // its cached tree) and gains the faces.
+  TriangleMesh& mesh = result.mesh;
+  if (mesh.vertex_normals.empty() && cloud.has_normals() && mesh.vertices.size() == cloud.size()) mesh.vertex_normals = cloud.normals;
+  item.cloud.positions = std::move(mesh.vertices);
+  item.cloud.normals = std::move(mesh.vertex_normals);
+  item.cloud.colors = std::move(mesh.vertex_colors);
+  item.cloud.fields = std::move(mesh.vertex_fields);
+  item.triangles = std::move(mesh.triangles);
+  item.is_mesh = true;
+  item.source = run.record.inputs.front();  // the mesh records the cloud it came from
+}
+
+}  // namespace
+
+StageSpec reconstruct_stage() {
+  const TriangulateParams tp;
+  const CrustParams cp;
+  const BallPivotParams bp;
+  StageSpec s;
+  s.name = "reconstruct";
+  s.summary = "Triangle mesh through the points: region-growing triangulation (default), Crust or ball pivoting";
+  s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (crust needs none). Holes, "
+                  "manifoldness, components and genus are reported.";
+  s.order = 120;
+  s.consumes = {Slot{"cloud", DataKind::Cloud}};
+  s.produces = Slot{"mesh", DataKind::Mesh};
+  s.methods = {"triangulate", "crust", "ball-pivot"};
+  s.default_method = "triangulate";
+  const std::vector<std::string> tri = {"triangulate"}, crust = {"crust"}, ball = {"ball-pivot"};
+  s.params = {
+      P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot"}),
+      P::integer("k", tp.k, "At most k neighbours per point").at_least(3).only(tri),
+      P::number("radius", tp.radius, "Search radius and longest edge; 0: radius_in_spacings x local spacing").unit("cloud units").non_negative().meta("R").only(tri),
+      P::number("radius_in_spacings", tp.radius_in_spacings, "Radius when radius is 0").unit("local spacings").positive().only(tri),
+      P::number("max_offset_in_spacings", tp.max_offset_in_spacings, "Ignore neighbours farther from the tangent plane").unit("local spacings").positive().only(tri),
+      P::number("max_normal_angle_deg", tp.max_normal_angle_deg, "Ignore neighbours whose normal deviates more").unit("degrees").range(0, 180, true, false).only(tri),
+      P::number("min_angle_deg", tp.min_angle_deg, "Smallest inner angle of a triangle").unit("degrees").range(0, 60, false, true).only(tri),
+      P::number("max_angle_deg", tp.max_angle_deg, "Largest inner angle of a triangle").unit("degrees").range(60, 180, true, false).only(tri),
+      P::number("max_dihedral_deg", tp.max_dihedral_deg, "Largest angle between neighbouring triangle normals").unit("degrees").range(0, 180, true, false).only(tri),
+      P::number("max_front_angle_deg", tp.max_front_angle_deg, "Close boundary corners opening less than this after growing; 0: off")
+          .unit("degrees")
+          .range(0, 180, false, true)
+          .only(tri),
+      P::number("max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings, "Close holes up to this perimeter; 0: none")
+          .unit("local spacings")
+          .non_negative()
+          .only(tri),
+      P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(crust),
+      P::number("normal_filter_angle_deg", cp.normal_filter_angle_deg, "Drop triangles deviating more from the pole vectors; 90: off")
+          .unit("degrees")
+          .range(0, 90, true, false)
+          .only(crust),
+      P::number("sharp_edge_angle_deg", cp.sharp_edge_angle_deg, "Sharp-edge pruning gap; 360: off").unit("degrees").range(180, 360).only(crust),
+      P::choice("boundary", cp.boundary == CrustBoundary::Auto ? "auto" : cp.boundary == CrustBoundary::Closed ? "closed" : "open",
+                {"auto", "closed", "open"}, "Surface kind: auto (per piece), closed or open")
+          .only(crust),
+      P::number("max_boundary_edge_in_spacings", cp.max_boundary_edge_in_spacings, "Peel rim triangles with a longer boundary edge; 0: off")
+          .unit("mean spacings")
+          .non_negative()
+          .only(crust),
+      P::integer("max_hole_edges", cp.max_hole_edges, "Close holes of at most this many edges; 0: off").at_least(0).only(crust),
+      P::numbers("radii", bp.radii, "Ball radii (default: radii_in_spacings x mean spacing)").unit("cloud units").positive().meta("R1,R2,...").only(ball),
+      P::numbers("radii_in_spacings", bp.radii_in_spacings, "Ball radii when radii are not given").unit("mean spacings").positive().only(ball),
+      P::number("max_normal_angle_deg", bp.max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
+          .unit("degrees")
+          .range(0, 180, true, false)
+          .only(ball),
+      P::number("max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg, "Largest angle between a triangle and its mean vertex normal")
+          .unit("degrees")
+          .range(0, 180, true, false)
+          .only(ball),
+      P::boolean("close_small_holes", bp.close_small_holes, "Final pass closing holes of up to 6 edges within the largest ball").only(ball),
+  };
+  s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4"};
+  s.run = run_reconstruct;
+  s.check = [](const StageArgs& a) {
+    if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
+    if (a.method() == "triangulate") triangulate_params(a).validate();
+    else if (a.method() == "crust") crust_params(a).validate();
+    else ball_params(a).validate();
+  };
+  return s;
+}
+
+}  // namespace pointsurf::detail

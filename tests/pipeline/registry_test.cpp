@@ -1,0 +1,279 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The registry: every stage declared once, its --help showing the library's defaults, its
+// ranges and choices enforced, "did you mean" on typos.
+#include "pointsurf/pipeline/registry.h"
+
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "cli_run.h"
+#include "pointsurf/clean/remove_duplicates.h"
+#include "pointsurf/clean/remove_outliers.h"
+#include "pointsurf/clean/smooth_points.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/features/feature_points.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/reconstruct/crust.h"
+#include "pointsurf/reconstruct/triangulate.h"
+#include "pointsurf/shape/curvature.h"
+#include "pointsurf/simplify/simplify.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+std::string dashed(const std::string& key) {
+  std::string out = "--" + key;
+  for (char& c : out)
+    if (c == '_') c = '-';
+  return out;
+}
+
+TEST(Registry, StagesAreUniqueAndEveryParameterIsDocumented) {
+  std::set<std::string> names;
+  for (const StageSpec& s : registered_stages()) {
+    EXPECT_TRUE(names.insert(s.name).second) << s.name;
+    EXPECT_FALSE(s.summary.empty()) << s.name;
+    EXPECT_TRUE(s.run) << s.name;
+    if (!s.methods.empty()) {
+      EXPECT_NE(std::find(s.methods.begin(), s.methods.end(), s.default_method), s.methods.end()) << s.name;
+    }
+    std::set<std::pair<std::string, std::string>> keys;  // (key, method): one declaration each
+    for (const ParamSpec& p : s.params) {
+      EXPECT_FALSE(p.doc.empty()) << s.name << "." << p.name;
+      for (const std::string& m : p.methods) {
+        EXPECT_NE(std::find(s.methods.begin(), s.methods.end(), m), s.methods.end()) << s.name << "." << p.name << ": " << m;
+        EXPECT_TRUE(keys.insert({p.name, m}).second) << s.name << "." << p.name << " declared twice for " << m;
+      }
+      if (p.methods.empty()) {
+        EXPECT_TRUE(keys.insert({p.name, ""}).second) << s.name << "." << p.name;
+      }
+      if (p.type == ParamType::Choice && !format_value(p.default_value).empty()) {
+        EXPECT_NE(std::find(p.choices.begin(), p.choices.end(), format_value(p.default_value)), p.choices.end()) << s.name << "." << p.name;
+      }
+    }
+  }
+  for (const char* stage : {"read", "write", "crop", "range", "merge", "transform", "clean", "simplify", "normals", "curvature", "features",
+                            "reconstruct"})
+    EXPECT_NE(find_stage(stage), nullptr) << stage;
+}
+
+// The library's defaults, read from default-constructed Params structs: the registry must
+// show exactly these in --help (a default typed a second time would drift).
+struct Expected {
+  std::string stage, method, key;
+  ParamValue value;
+};
+
+std::vector<Expected> library_defaults() {
+  const NormalParams n;
+  const OrientParams o;
+  const CurvatureParams c;
+  const FeatureParams f;
+  const StatisticalOutlierParams sor;
+  const RadiusOutlierParams rad;
+  const RansacOutlierParams ran;
+  const DuplicateParams dup;
+  const BilateralParams bil;
+  const TrilateralParams tri;
+  const SimplifyTarget target;
+  const CurvatureSimplifyParams cs;
+  const RegionalParams reg;
+  const CurvatureDistanceParams cd;
+  const LfsParams lfs;
+  const RandomParams rnd;
+  const TriangulateParams tp;
+  const CrustParams cp;
+  const BallPivotParams bp;
+  using I = std::int64_t;
+  return {
+      {"normals", "", "k", I{n.k}},
+      {"normals", "", "radius", n.radius},
+      {"normals", "", "radius_in_spacings", n.radius_in_spacings},
+      {"normals", "", "orient_k", I{o.k}},
+      {"normals", "", "direction", std::vector<double>{o.direction.x(), o.direction.y(), o.direction.z()}},
+      {"curvature", "", "k", I{c.k}},
+      {"curvature", "", "degree", I{c.degree}},
+      {"curvature", "", "radius_in_spacings", c.radius_in_spacings},
+      {"curvature", "", "zero_in_noise", c.zero_in_noise},
+      {"curvature", "", "normals_k", I{n.k}},
+      {"features", "", "k", I{f.k}},
+      {"features", "", "dn_deg", f.dn_deg},
+      {"features", "", "dd_in_spacings", f.dd_in_spacings},
+      {"features", "", "min_cluster_points", I{f.min_cluster_points}},
+      {"clean", "sor", "k", I{sor.k}},
+      {"clean", "sor", "std_ratio", sor.std_ratio},
+      {"clean", "radius", "min_neighbours", I{rad.min_neighbours}},
+      {"clean", "radius", "radius_in_spacings", rad.radius_in_spacings},
+      {"clean", "ransac", "k", I{ran.k}},
+      {"clean", "ransac", "iterations", I{ran.iterations}},
+      {"clean", "ransac", "min_support", ran.min_support},
+      {"clean", "ransac", "min_relative_support", ran.min_relative_support},
+      {"clean", "ransac", "seed", static_cast<I>(ran.seed)},
+      {"clean", "ransac", "distance_in_spacings", ran.distance_in_spacings},
+      {"clean", "duplicates", "distance_in_spacings", dup.distance_in_spacings},
+      {"clean", "bilateral", "iterations", I{bil.iterations}},
+      {"clean", "bilateral", "max_neighbours", I{bil.max_neighbours}},
+      {"clean", "trilateral", "sharpness_angle_deg", tri.sharpness_angle_deg},
+      {"clean", "trilateral", "normal_iterations", I{tri.normal_iterations}},
+      {"simplify", "grid", "ratio", target.ratio},
+      {"simplify", "random", "seed", static_cast<I>(rnd.seed)},
+      {"simplify", "curvature", "k", I{cs.k}},
+      {"simplify", "curvature", "flat_weight", cs.flat_weight},
+      {"simplify", "regional", "k", I{reg.k}},
+      {"simplify", "regional", "region_in_spacings", reg.region_in_spacings},
+      {"simplify", "regional", "region_angle_deg", reg.region_angle_deg},
+      {"simplify", "regional", "feature_threshold", reg.feature_threshold},
+      {"simplify", "regional", "max_feature_share", reg.max_feature_share},
+      {"simplify", "curvature-distance", "split_quantile", cd.split_quantile},
+      {"simplify", "curvature-distance", "high_to_low_distance", cd.high_to_low_distance},
+      {"simplify", "lfs", "adaptivity", lfs.adaptivity},
+      {"simplify", "lfs", "fill_neighbours", I{lfs.fill_neighbours}},
+      {"reconstruct", "triangulate", "k", I{tp.k}},
+      {"reconstruct", "triangulate", "max_normal_angle_deg", tp.max_normal_angle_deg},
+      {"reconstruct", "triangulate", "min_angle_deg", tp.min_angle_deg},
+      {"reconstruct", "triangulate", "max_angle_deg", tp.max_angle_deg},
+      {"reconstruct", "triangulate", "max_dihedral_deg", tp.max_dihedral_deg},
+      {"reconstruct", "triangulate", "max_front_angle_deg", tp.max_front_angle_deg},
+      {"reconstruct", "triangulate", "max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings},
+      {"reconstruct", "crust", "cocone_angle_deg", cp.cocone_angle_deg},
+      {"reconstruct", "crust", "sharp_edge_angle_deg", cp.sharp_edge_angle_deg},
+      {"reconstruct", "crust", "max_hole_edges", I{cp.max_hole_edges}},
+      {"reconstruct", "ball-pivot", "radii_in_spacings", bp.radii_in_spacings},
+      {"reconstruct", "ball-pivot", "max_normal_angle_deg", bp.max_normal_angle_deg},
+      {"reconstruct", "ball-pivot", "max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg},
+      {"reconstruct", "ball-pivot", "close_small_holes", bp.close_small_holes},
+  };
+}
+
+TEST(Registry, HelpShowsEveryDefaultAndTheyAreTheLibrarys) {
+  const std::filesystem::path dir = test::temp_dir("registry_help");
+  // Walk the registry: every parameter's line in --help carries its default.
+  for (const StageSpec& s : registered_stages()) {
+    if (s.name == "read" || s.name == "write") continue;
+    test::CliResult r = test::run_cli(s.name + " --help", dir);
+    ASSERT_EQ(r.exit_code, 0) << s.name << ": " << r.err;
+    // Each option's text is wrapped under its column: join the continuation lines.
+    for (std::size_t at; (at = r.out.find("\n" + std::string(33, ' '))) != std::string::npos;) r.out.replace(at, 34, " ");
+    for (const ParamSpec& p : s.params) {
+      const std::string def = format_value(p.default_value);
+      if (def.empty()) continue;
+      bool found = false;
+      std::size_t at = 0;
+      while (!found && (at = r.out.find("  " + dashed(p.name) + " ", at)) != std::string::npos) {
+        const std::string line = r.out.substr(at, r.out.find('\n', at) - at);
+        found = test::contains(line, p.doc) && test::contains(line, "default " + def);
+        ++at;
+      }
+      EXPECT_TRUE(found) << s.name << " --help has no line for " << dashed(p.name) << " with its doc and \"default " << def << "\"";
+    }
+  }
+  // And the registry's defaults are the library's.
+  for (const Expected& e : library_defaults()) {
+    const StageSpec* s = find_stage(e.stage);
+    ASSERT_NE(s, nullptr);
+    const ParamSpec* found = nullptr;
+    for (const ParamSpec* p : s->params_named(e.key))
+      if (p->applies_to(e.method)) found = p;
+    ASSERT_NE(found, nullptr) << e.stage << "." << e.key << " (" << e.method << ")";
+    EXPECT_EQ(format_value(found->default_value), format_value(e.value)) << e.stage << "." << e.key << " (" << e.method << ")";
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Registry, RangesAndChoicesAreEnforcedAtTheirBounds) {
+  for (const StageSpec& s : registered_stages())
+    for (const ParamSpec& p : s.params) {
+      if (p.type != ParamType::Int && p.type != ParamType::Double) continue;
+      const std::string where = s.name + "." + p.name;
+      if (std::isfinite(p.min)) {
+        const double outside = p.type == ParamType::Int ? p.min - 1 : p.min_open ? p.min : p.min - 1e-9 * std::max(1.0, std::abs(p.min));
+        EXPECT_THROW(parse_param_text(p, format_value(p.type == ParamType::Int ? ParamValue(std::int64_t(outside)) : ParamValue(outside))),
+                     UsageError)
+            << where;
+        if (!p.min_open) {
+          EXPECT_NO_THROW(parse_param_text(p, format_value(p.type == ParamType::Int ? ParamValue(std::int64_t(p.min)) : ParamValue(p.min))))
+              << where;
+        }
+      }
+      if (std::isfinite(p.max)) {
+        const double outside = p.type == ParamType::Int ? p.max + 1 : p.max_open ? p.max : p.max + 1e-9 * std::max(1.0, std::abs(p.max));
+        EXPECT_THROW(parse_param_text(p, format_value(p.type == ParamType::Int ? ParamValue(std::int64_t(outside)) : ParamValue(outside))),
+                     UsageError)
+            << where;
+      }
+    }
+  const ParamSpec& orient = *find_stage("normals")->find_param("orient");
+  test::expect_error<UsageError>([&] { parse_param_text(orient, "msst"); }, "orient: \"msst\" is not one of mst, viewpoint, direction or none; did you mean \"mst\"?");
+  const ParamSpec& k = *find_stage("normals")->find_param("k");
+  test::expect_error<UsageError>([&] { parse_param_text(k, "3.5"); }, "k: \"3.5\" is not an integer");
+  test::expect_error<UsageError>([&] { parse_param_text(k, "abc"); }, "k: \"abc\" is not an integer");
+  EXPECT_EQ(std::get<std::int64_t>(parse_param_text(k, "12")), 12);
+  const ParamSpec& viewpoint = *find_stage("normals")->find_param("viewpoint");
+  test::expect_error<UsageError>([&] { parse_param_text(viewpoint, "1,2"); }, "viewpoint: \"1,2\": expected 3 numbers X,Y,Z, got 2");
+}
+
+TEST(Registry, ClosestNameCatchesTyposOnly) {
+  const std::vector<std::string> commands = {"info", "convert", "normals", "curvature", "features", "reconstruct"};
+  EXPECT_EQ(closest_name("nromals", commands), "normals");   // a transposition
+  EXPECT_EQ(closest_name("normal", commands), "normals");
+  EXPECT_EQ(closest_name("reconstrct", commands), "reconstruct");
+  EXPECT_EQ(closest_name("kk", {"k", "radius"}), "k");
+  EXPECT_EQ(closest_name("poisson", commands), "");
+  EXPECT_EQ(closest_name("xyz", {"k"}), "");
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+// The library's validate() is the one place a value is checked; the registry's declared range
+// is what --help shows. Both must agree: a value just outside a declared bound, handed to the
+// stage's check (which builds the library's Params and calls validate()), is refused.
+TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
+  const std::map<std::string, std::vector<std::string>> validated = {
+      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "crust", "ball-pivot"}},
+      {"clean", {"sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"}},
+      {"simplify", {"curvature", "regional", "curvature-distance", "lfs"}}};
+  std::size_t checked = 0;
+  for (const auto& [stage, methods] : validated) {
+    const StageSpec& s = *find_stage(stage);
+    for (const std::string& method : methods) {
+      auto defaults = [&] {
+        std::map<std::string, ParamValue> values;
+        for (const ParamSpec& p : s.params)
+          if (p.applies_to(method) && !values.count(p.name)) values[p.name] = p.default_value;
+        if (!method.empty()) values["method"] = method;
+        return values;
+      };
+      ASSERT_NO_THROW(s.check(StageArgs(defaults(), {}, method))) << stage << " " << method;
+      for (const ParamSpec& p : s.params) {
+        // normals_k feeds normal estimation, not this stage's Params; a seed is unsigned by its type.
+        // ratio, count and cell are checked against the cloud when the stage runs.
+        if (p.name == "ratio" || p.name == "count" || p.name == "cell") continue;
+        if (!p.applies_to(method) || p.name == "normals_k" || p.name == "seed" || (p.type != ParamType::Int && p.type != ParamType::Double)) continue;
+        for (const bool low : {true, false}) {
+          const double bound = low ? p.min : p.max;
+          if (!std::isfinite(bound)) continue;
+          const bool open = low ? p.min_open : p.max_open;
+          const double step = p.type == ParamType::Int ? 1.0 : open ? 0.0 : 1e-6 * std::max(1.0, std::abs(bound));
+          const double outside = low ? bound - step : bound + step;
+          std::map<std::string, ParamValue> values = defaults();
+          values[p.name] = p.type == ParamType::Int ? ParamValue(static_cast<std::int64_t>(outside)) : ParamValue(outside);
+          EXPECT_THROW(s.check(StageArgs(values, {{p.name, true}}, method)), UsageError)
+              << stage << " " << method << ": " << p.name << " = " << outside << " passes validate() but is outside " << p.range_text();
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 40u);
+}
+
+}  // namespace
+}  // namespace pointsurf

@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// `pointsurf run`: a corpus of malformed pipelines, each failing before any work with its named
+// error and no output; and every registered stage giving the same bytes as a CLI command and
+// as a one-stage pipeline (and whatever the thread count).
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_run.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/pipeline/registry.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+class RunCli : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = test::temp_dir(std::string("run_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    PointCloud sphere = test::sample_sphere(3000, 1.0, Vector3d(2, 0, 1));
+    write_point_cloud(path("in.ply"), sphere);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write_pipeline(const std::string& name, const std::string& text) const {
+    test::write_bytes(dir_ / name, text);
+    return path(name);
+  }
+  std::filesystem::path dir_;
+};
+
+struct Malformed {
+  std::string name, json, sets, message;
+  int exit_code = 1;
+};
+
+TEST_F(RunCli, MalformedPipelinesFailBeforeAnyWorkNamingStageAndKey) {
+  const std::string in = "\"" + path("in.ply") + "\"", out = "\"" + path("out.ply") + "\"";
+  const std::vector<Malformed> corpus = {
+      {"not_json", "[" + in + ", {\"type\": \"normals\",}]", "", "not_json.json: not valid JSON at line 1"},
+      {"not_a_list", "{\"type\": \"normals\"}", "", "not_a_list.json: a pipeline is a JSON list of stages"},
+      {"empty", "[]", "", "empty.json: the pipeline is empty"},
+      {"unknown_stage", "[" + in + ", {\"type\": \"nromals\"}, " + out + "]", "",
+       "unknown_stage.json: stage 2 (nromals): unknown stage type \"nromals\"; did you mean \"normals\"?"},
+      {"unknown_key", "[" + in + ", {\"type\": \"clean\"}, {\"type\": \"normals\", \"kk\": 3}, " + out + "]", "",
+       "unknown_key.json: stage 3 (normals): unknown key \"kk\"; did you mean \"k\"?"},
+      {"wrong_type", "[" + in + ", {\"type\": \"normals\", \"k\": \"thirty\"}, " + out + "]", "",
+       "wrong_type.json: stage 2 (normals): k: expected an integer, got a string"},
+      {"fraction_for_integer", "[" + in + ", {\"type\": \"normals\", \"k\": 2.5}, " + out + "]", "",
+       "stage 2 (normals): k: expected an integer, got a number"},
+      {"out_of_range", "[" + in + ", {\"type\": \"normals\", \"k\": 2}, " + out + "]", "", "stage 2 (normals): k: 2 is out of range [3, inf)"},
+      {"bad_choice", "[" + in + ", {\"type\": \"normals\", \"orient\": \"sideways\"}, " + out + "]", "",
+       "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction or none"},
+      {"other_method", "[" + in + ", {\"type\": \"simplify\", \"method\": \"grid\", \"region_angle_deg\": 20}, " + out + "]", "",
+       "stage 2 (simplify): key \"region_angle_deg\" belongs to method regional, not to method grid"},
+      {"ignored_option", "[" + in + ", {\"type\": \"normals\", \"viewpoint\": [0, 0, 5]}, " + out + "]", "",
+       "stage 2 (normals): viewpoint: ignored unless orient is viewpoint"},
+      {"missing_input", "[" + in + ", {\"type\": \"normals\", \"inputs\": \"scan\"}, " + out + "]", "",
+       "stage 2 (normals): input \"scan\" is not the tag of an earlier stage"},
+      {"writer_first", "[{\"type\": \"write\", \"filename\": " + out + "}, " + in + "]", "", "stage 1 (write): a writer before any data"},
+      {"stage_first", "[{\"type\": \"normals\"}, " + out + "]", "", "stage 1 (normals): a stage before any data"},
+      {"no_output", "[" + in + ", {\"type\": \"normals\"}]", "", "no_output.json: no output: end the pipeline with a file name to write"},
+      {"missing_type", "[" + in + ", {\"k\": 3}, " + out + "]", "", "stage 2: missing \"type\""},
+      {"tag_twice", "[" + in + ", {\"type\": \"normals\", \"tag\": \"a\"}, {\"type\": \"clean\", \"tag\": \"a\"}, " + out + "]", "",
+       "stage 3 (clean): tag \"a\" is used twice"},
+      {"bad_extension", "[" + in + ", {\"type\": \"normals\"}, \"" + path("out.xyzw") + "\"]", "", "unknown output format"},
+      {"missing_directory", "[" + in + ", {\"type\": \"normals\"}, \"" + path("nowhere/out.ply") + "\"]", "", "does not exist"},
+      {"not_rigid", "[" + in + ", {\"type\": \"transform\", \"matrix\": [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}, " + out + "]", "",
+       "stage 2 (transform): matrix: the upper-left 3x3 block is not a rotation"},
+      {"set_unknown_stage", "[" + in + ", {\"type\": \"normals\"}, " + out + "]", "--set nromals.k=12",
+       "--set \"nromals.k=12\": no stage tagged or typed \"nromals\"; did you mean \"normals\"?"},
+      {"set_type_error", "[" + in + ", {\"type\": \"normals\"}, " + out + "]", "--set normals.k=abc", "stage 2 (normals): k: \"abc\" is not an integer"},
+      {"reader_with_inputs", "[" + in + ", {\"type\": \"read\", \"filename\": " + in + ", \"inputs\": \"read1\"}, " + out + "]", "",
+       "stage 2 (read): takes no \"inputs\""},
+      {"written_twice", "[" + in + ", {\"type\": \"normals\"}, " + out + ", {\"type\": \"clean\"}, " + out + "]", "", "out.ply is written twice"},
+      {"missing_file", "[\"" + path("no_such.ply") + "\", {\"type\": \"normals\"}, " + out + "]", "", "no_such.ply: no such file", 2},
+  };
+  ASSERT_GE(corpus.size(), 15u);
+  for (const Malformed& m : corpus) {
+    const std::string file = write_pipeline(m.name + ".json", m.json);
+    const test::CliResult r = test::run_cli("run " + file + " " + m.sets + " --report " + path("r.json"), dir_);
+    EXPECT_EQ(r.exit_code, m.exit_code) << m.name << ": " << r.err;
+    EXPECT_TRUE(test::contains(r.err, m.message)) << m.name << ": " << r.err << "\nexpected: " << m.message;
+    EXPECT_FALSE(std::filesystem::exists(path("out.ply"))) << m.name;
+    EXPECT_FALSE(std::filesystem::exists(path("out.xyzw"))) << m.name;
+  }
+}
+
+TEST_F(RunCli, RunWritesOneReportWithASummaryLinePerStage) {
+  const std::string file = write_pipeline("p.json", "[\"" + path("in.ply") + "\", {\"type\": \"clean\", \"method\": \"sor,duplicates\"}, " +
+                                                        "{\"type\": \"normals\", \"k\": 20}, {\"type\": \"reconstruct\"}, \"" + path("m.ply") + "\"]");
+  const test::CliResult r = test::run_cli("run " + file + " --set normals.k=16 --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* line : {"[1/5] read 3000 points", "[2/5] clean: 3000 points ->", "[3/5] normals:", "[4/5] reconstruct: triangulate",
+                           "[5/5] wrote "})
+    EXPECT_TRUE(test::contains(r.err, line)) << line << "\n" << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["command"], "run");
+  ASSERT_EQ(report["stages"].size(), 5u);
+  EXPECT_EQ(report["stages"][2]["parameters"]["k"], 16);  // the --set value is the one used
+  EXPECT_EQ(report["stages"][1]["parameters"]["sor.k"], 20);
+  EXPECT_EQ(report["stages"][1]["parameters"]["method"], "sor,duplicates");
+}
+
+// Extra options a stage needs on the test sphere (the others run with their defaults).
+std::string options_for(const std::string& stage, bool json) {
+  if (stage == "crop") return json ? "\"min\": [1.5, -2, 0], \"max\": [3, 2, 3]" : "--min 1.5,-2,0 --max 3,2,3";
+  if (stage == "range") return json ? "\"field\": \"x\", \"min\": 2, \"max\": 5" : "--field x --min 2 --max 5";
+  if (stage == "transform")
+    return json ? "\"matrix\": [0, -1, 0, 1, 1, 0, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1]" : "--matrix 0,-1,0,1,1,0,0,2,0,0,1,3,0,0,0,1";
+  if (stage == "simplify") return json ? "\"method\": \"regional\", \"ratio\": 0.3" : "--method regional --ratio 0.3";
+  if (stage == "clean") return json ? "\"method\": \"sor,duplicates\"" : "--method sor,duplicates";
+  return "";
+}
+
+TEST_F(RunCli, EveryStageGivesTheSameBytesAsCommandAndAsPipelineWhateverTheThreads) {
+  write_point_cloud(path("in2.ply"), test::sample_sphere(1000, 0.5, Vector3d(-1, 0, 0), 7));
+  std::size_t checked = 0;
+  for (const StageSpec& s : registered_stages()) {
+    if (s.name == "read" || s.name == "write") continue;
+    const bool multi = s.consumes.front().name == "clouds";
+    const std::string inputs = multi ? path("in.ply") + " " + path("in2.ply") : path("in.ply");
+    const test::CliResult cli = test::run_cli(s.name + " " + inputs + " " + path("cli.ply") + " " + options_for(s.name, false) + " --threads 1", dir_);
+    ASSERT_EQ(cli.exit_code, 0) << s.name << ": " << cli.err;
+    std::string json = "[\"" + path("in.ply") + "\", " + (multi ? "\"" + path("in2.ply") + "\", " : std::string()) + "{\"type\": \"" + s.name +
+                       "\"" + (options_for(s.name, true).empty() ? "" : ", " + options_for(s.name, true)) + "}, \"" + path("pipe.ply") + "\"]";
+    const test::CliResult run = test::run_cli("run " + write_pipeline(s.name + ".json", json), dir_);
+    ASSERT_EQ(run.exit_code, 0) << s.name << ": " << run.err;
+    const std::string a = test::read_bytes(path("cli.ply")), b = test::read_bytes(path("pipe.ply"));
+    EXPECT_FALSE(a.empty()) << s.name;
+    EXPECT_TRUE(a == b) << s.name << ": the command (1 thread) and the pipeline (all threads) differ";
+    std::filesystem::remove(path("cli.ply"));
+    std::filesystem::remove(path("pipe.ply"));
+    ++checked;
+  }
+  EXPECT_EQ(checked, registered_stages().size() - 2);
+}
+
+TEST_F(RunCli, CommandLineFindsOutputProblemsBeforeTheWorkAndRefusesIgnoredOptions) {
+  const std::string in = path("in.ply");
+  test::CliResult r = test::run_cli("reconstruct " + in + " " + path("nowhere/m.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "directory " + path("nowhere") + " does not exist")) << r.err;
+  r = test::run_cli("reconstruct " + in + " " + path("m.ply") + " --report " + path("nowhere/r.json"), dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(path("m.ply")));
+  test::write_bytes(dir_ / "exists.ply", "keep");
+  r = test::run_cli("normals " + in + " " + path("exists.ply") + " --no-clobber", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "exists (--no-clobber)")) << r.err;
+  EXPECT_EQ(test::read_bytes(dir_ / "exists.ply"), "keep");
+  r = test::run_cli("normals " + in + " " + path("o.ply") + " --viewpoint 0,0,5", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--viewpoint: ignored unless orient is viewpoint")) << r.err;
+  r = test::run_cli("normals " + in + " " + path("o.ply") + " --ascii --big-endian", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "ascii and big_endian: give only one")) << r.err;
+  r = test::run_cli("normals " + in + " " + path("o.ply") + " --threads 100000", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--threads: 100000 exceeds the")) << r.err;
+  r = test::run_cli("convert " + in + " " + path("o.las") + " --las-scale 0", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "las_scale: 0 is out of range (0, inf)")) << r.err;
+  r = test::run_cli("nromals " + in + " " + path("o.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "unknown command \"nromals\"; did you mean \"normals\"?")) << r.err;
+  r = test::run_cli("normals " + in + " " + path("o.ply") + " --kk 30", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "unknown option --kk; did you mean --k?")) << r.err;
+  r = test::run_cli("normals " + in + " " + path("o.ply") + " --k abc", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--k: \"abc\" is not an integer")) << r.err;
+  test::write_bytes(dir_ / "words.txt", "the quick brown fox\njumps over\n");
+  r = test::run_cli("info " + path("words.txt"), dir_);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+  r = test::run_cli("clean " + in + " " + path("o.ply") + " --std-ratio 3 --quiet", dir_);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;
+}
+
+TEST_F(RunCli, StageHelpShowsItsOwnExamplesAndDefaults) {
+  const test::CliResult normals = test::run_cli("normals --help", dir_);
+  const test::CliResult clean = test::run_cli("clean --help", dir_);
+  ASSERT_EQ(normals.exit_code, 0);
+  EXPECT_TRUE(test::contains(normals.out, "--k N")) << normals.out;
+  EXPECT_TRUE(test::contains(normals.out, "default 30")) << normals.out;
+  EXPECT_TRUE(test::contains(clean.out, "--std-ratio X")) << clean.out;
+  EXPECT_TRUE(test::contains(clean.out, "pointsurf clean scan.ply")) << clean.out;
+  EXPECT_FALSE(test::contains(normals.out, "pointsurf clean scan.ply")) << normals.out;
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST_F(RunCli, StagesOnAMeshKeepOrDropItsFacesAndSaySo) {
+  const std::string in = path("in.ply");
+  ASSERT_EQ(test::run_cli("reconstruct " + in + " " + path("mesh.ply") + " --quiet", dir_).exit_code, 0);
+  const std::size_t faces = read_mesh(path("mesh.ply")).mesh.triangle_count();
+  ASSERT_GT(faces, 0u);
+  // normals keeps the points, and so the faces
+  test::CliResult r = test::run_cli("normals " + path("mesh.ply") + " " + path("n.ply"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_mesh(path("n.ply")).mesh.triangle_count(), faces);
+  // simplify changes them: the faces go, with a warning
+  r = test::run_cli("simplify " + path("mesh.ply") + " " + path("s.ply") + " --ratio 0.5", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "warning: the input is a mesh: its " + std::to_string(faces) + " faces are dropped (simplify works on points)"))
+      << r.err;
+  EXPECT_EQ(read_mesh(path("s.ply")).mesh.triangle_count(), 0u);
+  // the report says which cloud the mesh came from
+  ASSERT_EQ(test::run_cli("reconstruct " + in + " " + path("m2.ply") + " --quiet --report " + path("r.json"), dir_).exit_code, 0);
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["stages"][1]["metrics"]["built_from"], "in1");
+  EXPECT_EQ(report["stages"][2]["metrics"]["mesh_built_from"], "in1");
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST_F(RunCli, AFailedRunStillWritesItsReport) {
+  const std::string file = write_pipeline("f.json", "[\"" + path("in.ply") + "\", {\"type\": \"crop\", \"min\": [9, 9, 9]}, \"" + path("o.ply") + "\"]");
+  const test::CliResult r = test::run_cli("run " + file + " --report " + path("r.json"), dir_);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "stage 2 (crop): no point is left")) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["status"], "failed");
+  EXPECT_EQ(report["error"]["exit_code"], 2);
+  ASSERT_EQ(report["stages"].size(), 2u);  // the read, and the stage that failed
+  EXPECT_EQ(report["stages"][1]["type"], "crop");
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+}
+
+}  // namespace
+}  // namespace pointsurf
