@@ -34,15 +34,19 @@ void Context::set_cloud(const std::string& tag, PointCloud cloud, std::string so
   set(tag, std::move(item));
 }
 
+void DataItem::assign_mesh(TriangleMesh mesh, std::string mesh_source) {
+  cloud.positions = std::move(mesh.vertices);
+  cloud.normals = std::move(mesh.vertex_normals);
+  cloud.colors = std::move(mesh.vertex_colors);
+  cloud.fields = std::move(mesh.vertex_fields);
+  triangles = std::move(mesh.triangles);
+  is_mesh = true;
+  source = std::move(mesh_source);
+}
+
 void Context::set_mesh(const std::string& tag, TriangleMesh mesh, std::string source) {
   DataItem item;
-  item.cloud.positions = std::move(mesh.vertices);
-  item.cloud.normals = std::move(mesh.vertex_normals);
-  item.cloud.colors = std::move(mesh.vertex_colors);
-  item.cloud.fields = std::move(mesh.vertex_fields);
-  item.triangles = std::move(mesh.triangles);
-  item.is_mesh = true;
-  item.source = std::move(source);
+  item.assign_mesh(std::move(mesh), std::move(source));
   set(tag, std::move(item));
 }
 

@@ -142,13 +142,7 @@ void run_reconstruct(StageRun& run) {
   // its cached tree) and gains the faces.
   TriangleMesh& mesh = result.mesh;
   if (mesh.vertex_normals.empty() && cloud.has_normals() && mesh.vertices.size() == cloud.size()) mesh.vertex_normals = cloud.normals;
-  item.cloud.positions = std::move(mesh.vertices);
-  item.cloud.normals = std::move(mesh.vertex_normals);
-  item.cloud.colors = std::move(mesh.vertex_colors);
-  item.cloud.fields = std::move(mesh.vertex_fields);
-  item.triangles = std::move(mesh.triangles);
-  item.is_mesh = true;
-  item.source = run.record.inputs.front();  // the mesh records the cloud it came from
+  item.assign_mesh(std::move(mesh), run.record.inputs.front());  // the mesh records the cloud it came from
 }
 
 }  // namespace

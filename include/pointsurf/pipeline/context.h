@@ -22,6 +22,9 @@ struct DataItem {
   std::vector<Triangle> triangles;
   bool is_mesh = false;
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
+
+  /// Becomes `mesh`: its vertices and their attributes as the cloud, its faces as triangles.
+  void assign_mesh(TriangleMesh mesh, std::string mesh_source);
 };
 
 class Context {
