@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The reconstruct stage: a triangle mesh through the points (region-growing triangulation,
-// Crust or ball pivoting), with its topology reported.
+// cocone, Crust or ball pivoting), with its topology reported.
 #include <algorithm>
 #include <limits>
 
@@ -10,6 +10,7 @@
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/pipeline/context.h"
 #include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/reconstruct/cocone.h"
 #include "pointsurf/reconstruct/crust.h"
 #include "pointsurf/reconstruct/triangulate.h"
 
@@ -37,16 +38,37 @@ TriangulateParams triangulate_params(const StageArgs& a) {
   return p;
 }
 
-CrustParams crust_params(const StageArgs& a) {
-  CrustParams p;
-  p.cocone_angle_deg = a.number("cocone_angle_deg");
+// The manifold-extraction parameters the cocone and the Crust share.
+void read_delaunay_params(const StageArgs& a, DelaunaySurfaceParams& p) {
   p.normal_filter_angle_deg = a.number("normal_filter_angle_deg");
   p.sharp_edge_angle_deg = a.number("sharp_edge_angle_deg");
   const std::string& b = a.text("boundary");
-  p.boundary = b == "closed" ? CrustBoundary::Closed : b == "open" ? CrustBoundary::Open : CrustBoundary::Auto;
+  p.boundary = b == "closed" ? DelaunayBoundary::Closed : b == "open" ? DelaunayBoundary::Open : DelaunayBoundary::Auto;
   p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
   p.max_hole_edges = a.int32("max_hole_edges");
+}
+
+CoconeParams cocone_params(const StageArgs& a) {
+  CoconeParams p;
+  p.cocone_angle_deg = a.number("cocone_angle_deg");
+  read_delaunay_params(a, p);
   return p;
+}
+
+CrustParams crust_params(const StageArgs& a) {
+  CrustParams p;
+  read_delaunay_params(a, p);
+  return p;
+}
+
+// Counts both Delaunay methods report.
+void record_delaunay_stats(const DelaunaySurfaceStats& stats, StageRecord& rec) {
+  rec.count("duplicate_points", as_count(stats.duplicate_points));
+  rec.count("delaunay_cells", as_count(stats.delaunay_cells));
+  rec.count("candidate_triangles", as_count(stats.candidate_triangles));
+  rec.count("normal_filtered", as_count(stats.normal_filtered));
+  rec.count("pruned", as_count(stats.pruned));
+  rec.count("holes_filled", as_count(stats.holes_filled));
 }
 
 BallPivotParams ball_params(const StageArgs& a) {
@@ -68,7 +90,7 @@ void run_reconstruct(StageRun& run) {
   const double spacing = run.context.mean_spacing(run.output);
   if (!(spacing > 0.0)) throw InputError(fmt::format("all {} coincide; no surface can be built", plural(item.cloud.size(), "point")));
   StageRecord& rec = run.record;
-  const bool estimated = method != "crust" && !item.cloud.has_normals();
+  const bool estimated = method != "cocone" && method != "crust" && !item.cloud.has_normals();
   if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.2));
   const PointCloud& cloud = item.cloud;
   const KdTree& tree = run.context.tree(run.output);
@@ -84,16 +106,17 @@ void run_reconstruct(StageRun& run) {
     rec.count("duplicate_points", as_count(r.duplicate_points));
     rec.metric("local_spacing_mean", r.local_spacing_mean);
     result = std::move(r);
+  } else if (method == "cocone") {
+    CoconeStats stats;
+    result = reconstruct_cocone(cloud, cocone_params(a), progress, &stats);
+    record_delaunay_stats(stats, rec);
   } else if (method == "crust") {
-    const CrustParams p = crust_params(a);
     CrustStats stats;
-    result = reconstruct_crust(cloud, p, progress, &stats);
-    rec.count("duplicate_points", as_count(stats.duplicate_points));
-    rec.count("delaunay_cells", as_count(stats.delaunay_cells));
-    rec.count("cocone_triangles", as_count(stats.cocone_triangles));
-    rec.count("normal_filtered", as_count(stats.normal_filtered));
-    rec.count("pruned", as_count(stats.pruned));
-    rec.count("holes_filled", as_count(stats.holes_filled));
+    result = reconstruct_crust(cloud, crust_params(a), progress, &stats);
+    record_delaunay_stats(stats, rec);
+    rec.count("poles", as_count(stats.poles));
+    rec.count("second_delaunay_vertices", as_count(stats.second_delaunay_vertices));
+    rec.count("second_delaunay_cells", as_count(stats.second_delaunay_cells));
   } else {
     const BallPivotParams p = ball_params(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
@@ -149,19 +172,19 @@ void run_reconstruct(StageRun& run) {
 
 StageSpec reconstruct_stage() {
   const TriangulateParams tp;
-  const CrustParams cp;
+  const CoconeParams cp;  // the extraction defaults are the Crust's too (DelaunaySurfaceParams)
   const BallPivotParams bp;
   StageSpec s;
   s.name = "reconstruct";
-  s.summary = "Triangle mesh through the points: region-growing triangulation (default), Crust or ball pivoting";
-  s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (crust needs none). Holes, "
+  s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust or ball pivoting";
+  s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (cocone and crust need none). Holes, "
                   "manifoldness, components and genus are reported.";
   s.order = 120;
   s.consumes = {Slot{"cloud", DataKind::Cloud}};
   s.produces = Slot{"mesh", DataKind::Mesh};
-  s.methods = {"triangulate", "crust", "ball-pivot"};
+  s.methods = {"triangulate", "cocone", "crust", "ball-pivot"};
   s.default_method = "triangulate";
-  const std::vector<std::string> tri = {"triangulate"}, crust = {"crust"}, ball = {"ball-pivot"};
+  const std::vector<std::string> tri = {"triangulate"}, cocone = {"cocone"}, delaunay = {"cocone", "crust"}, ball = {"ball-pivot"};
   s.params = {
       P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot"}),
       P::integer("k", tp.k, "At most k neighbours per point").at_least(3).only(tri),
@@ -180,20 +203,20 @@ StageSpec reconstruct_stage() {
           .unit("local spacings")
           .non_negative()
           .only(tri),
-      P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(crust),
+      P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(cocone),
       P::number("normal_filter_angle_deg", cp.normal_filter_angle_deg, "Drop triangles deviating more from the pole vectors; 90: off")
           .unit("degrees")
           .range(0, 90, true, false)
-          .only(crust),
-      P::number("sharp_edge_angle_deg", cp.sharp_edge_angle_deg, "Sharp-edge pruning gap; 360: off").unit("degrees").range(180, 360).only(crust),
-      P::choice("boundary", cp.boundary == CrustBoundary::Auto ? "auto" : cp.boundary == CrustBoundary::Closed ? "closed" : "open",
+          .only(delaunay),
+      P::number("sharp_edge_angle_deg", cp.sharp_edge_angle_deg, "Sharp-edge pruning gap; 360: off").unit("degrees").range(180, 360).only(delaunay),
+      P::choice("boundary", cp.boundary == DelaunayBoundary::Auto ? "auto" : cp.boundary == DelaunayBoundary::Closed ? "closed" : "open",
                 {"auto", "closed", "open"}, "Surface kind: auto (per piece), closed or open")
-          .only(crust),
+          .only(delaunay),
       P::number("max_boundary_edge_in_spacings", cp.max_boundary_edge_in_spacings, "Peel rim triangles with a longer boundary edge; 0: off")
           .unit("mean spacings")
           .non_negative()
-          .only(crust),
-      P::integer("max_hole_edges", cp.max_hole_edges, "Close holes of at most this many edges; 0: off").at_least(0).only(crust),
+          .only(delaunay),
+      P::integer("max_hole_edges", cp.max_hole_edges, "Close holes of at most this many edges; 0: off").at_least(0).only(delaunay),
       P::numbers("radii", bp.radii, "Ball radii (default: radii_in_spacings x mean spacing)").unit("cloud units").positive().meta("R1,R2,...").only(ball),
       P::numbers("radii_in_spacings", bp.radii_in_spacings, "Ball radii when radii are not given").unit("mean spacings").positive().only(ball),
       P::number("max_normal_angle_deg", bp.max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
@@ -211,6 +234,7 @@ StageSpec reconstruct_stage() {
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
     if (a.method() == "triangulate") triangulate_params(a).validate();
+    else if (a.method() == "cocone") cocone_params(a).validate();
     else if (a.method() == "crust") crust_params(a).validate();
     else ball_params(a).validate();
   };

@@ -16,7 +16,7 @@
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/reconstruct/ball_pivot.h"
-#include "pointsurf/reconstruct/crust.h"
+#include "pointsurf/reconstruct/cocone.h"
 #include "pointsurf/reconstruct/triangulate.h"
 #include "pointsurf/shape/curvature.h"
 #include "pointsurf/simplify/simplify.h"
@@ -86,7 +86,7 @@ std::vector<Expected> library_defaults() {
   const LfsParams lfs;
   const RandomParams rnd;
   const TriangulateParams tp;
-  const CrustParams cp;
+  const CoconeParams cp;
   const BallPivotParams bp;
   using I = std::int64_t;
   return {
@@ -139,9 +139,9 @@ std::vector<Expected> library_defaults() {
       {"reconstruct", "triangulate", "max_dihedral_deg", tp.max_dihedral_deg},
       {"reconstruct", "triangulate", "max_front_angle_deg", tp.max_front_angle_deg},
       {"reconstruct", "triangulate", "max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings},
-      {"reconstruct", "crust", "cocone_angle_deg", cp.cocone_angle_deg},
-      {"reconstruct", "crust", "sharp_edge_angle_deg", cp.sharp_edge_angle_deg},
-      {"reconstruct", "crust", "max_hole_edges", I{cp.max_hole_edges}},
+      {"reconstruct", "cocone", "cocone_angle_deg", cp.cocone_angle_deg},
+      {"reconstruct", "cocone", "sharp_edge_angle_deg", cp.sharp_edge_angle_deg},
+      {"reconstruct", "cocone", "max_hole_edges", I{cp.max_hole_edges}},
       {"reconstruct", "ball-pivot", "radii_in_spacings", bp.radii_in_spacings},
       {"reconstruct", "ball-pivot", "max_normal_angle_deg", bp.max_normal_angle_deg},
       {"reconstruct", "ball-pivot", "max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg},
@@ -237,7 +237,7 @@ namespace {
 // stage's check (which builds the library's Params and calls validate()), is refused.
 TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
   const std::map<std::string, std::vector<std::string>> validated = {
-      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "crust", "ball-pivot"}},
+      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "cocone", "crust", "ball-pivot"}},
       {"clean", {"sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"}},
       {"simplify", {"curvature", "regional", "curvature-distance", "lfs"}}};
   std::size_t checked = 0;

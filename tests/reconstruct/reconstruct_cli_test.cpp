@@ -122,7 +122,7 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
 TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommand) {
   const PointCloud sphere = test::sample_sphere(2000, 1.0);
   write_point_cloud(path("sphere.ply"), sphere);
-  for (const std::string method : {"triangulate", "crust", "ball-pivot"}) {
+  for (const std::string method : {"triangulate", "cocone", "crust", "ball-pivot"}) {
     const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path(method + ".ply") + " --method " + method, dir_);
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
     EXPECT_TRUE(test::contains(r.err, method + " ")) << r.err;
@@ -149,7 +149,7 @@ TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
   write_point_cloud(path("sphere.ply"), test::sample_sphere(500, 1.0));
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method poisson", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--method: \"poisson\" is not one of triangulate, crust or ball-pivot")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--method: \"poisson\" is not one of triangulate, cocone, crust or ball-pivot")) << r.err;
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --radii 0.1,abc", dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--radii: \"0.1,abc\": \"abc\" is not a number")) << r.err;

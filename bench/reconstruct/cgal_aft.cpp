@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Peer for bench/reconstruct/run_crust_bench.sh: CGAL 5.5's advancing front surface
+// Peer for bench/reconstruct/run_cocone_bench.sh: CGAL 5.5's advancing front surface
 // reconstruction (Cohen-Steiner and Da 2004) with its default parameters, on an ASCII XYZ file
 // (x y z per line). Writes the mesh as OFF and prints one JSON line: seconds (reconstruction
 // only, reading excluded), peak_rss_mb (getrusage, reading included), points, triangles.
-// Built by the script: g++ -O2 -std=c++17 -I/usr/include/eigen3 crust_cgal_aft.cpp -lgmp -lmpfr
+// Built by the script: g++ -O2 -std=c++17 -I/usr/include/eigen3 cgal_aft.cpp -lgmp -lmpfr
 #include <sys/resource.h>
 
 #include <array>
@@ -21,7 +21,7 @@ using Point = K::Point_3;
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::cerr << "usage: crust_cgal_aft CLOUD.xyz OUT.off\n";
+    std::cerr << "usage: cgal_aft CLOUD.xyz OUT.off\n";
     return 1;
   }
   std::ifstream in(argv[1]);
@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   double x, y, z;
   while (in >> x >> y >> z) points.emplace_back(x, y, z);
   if (points.size() < 4) {
-    std::cerr << "crust_cgal_aft: fewer than 4 points in " << argv[1] << "\n";
+    std::cerr << "cgal_aft: fewer than 4 points in " << argv[1] << "\n";
     return 2;
   }
   std::vector<std::array<std::size_t, 3>> facets;

@@ -1,0 +1,672 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// What the cocone reconstruction and the Crust share (reconstruct/detail/delaunay_surface.h): the
+// input checks, the first Delaunay triangulation with its poles, and the manifold extraction of
+// the candidate triangles (Amenta, Bern, Kamvysselis 1998, section 4.2), on plain arrays, in
+// parallel where a pass is per point or per triangle.
+#include "reconstruct/detail/delaunay_surface.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/spatial/kd_tree.h"
+
+namespace pointsurf {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
+
+/// Candidate triangles with their edge incidences (CSR: edge e has triangles
+/// edge_tris[edge_start[e] .. edge_start[e+1])).
+struct Complex {
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::array<int, 3>> tri_edges;  // edge id of (tris[t][k], tris[t][k + 1])
+  std::vector<std::array<int, 2>> edge_verts;
+  std::vector<std::size_t> edge_start;
+  std::vector<int> edge_tris;
+};
+
+Complex build_complex(std::vector<std::array<int, 3>> tris) {
+  Complex cx;
+  cx.tris = std::move(tris);
+  const std::size_t nt = cx.tris.size();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> entries(3 * nt);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t)
+      for (int k = 0; k < 3; ++k)
+        entries[3 * t + k] = {edge_key(cx.tris[t][k], cx.tris[t][(k + 1) % 3]), std::uint32_t(3 * t + k)};
+  });
+  tbb::parallel_sort(entries.begin(), entries.end());
+  cx.tri_edges.resize(nt);
+  cx.edge_tris.resize(3 * nt);
+  cx.edge_start.reserve(3 * nt / 2 + 2);
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (i == 0 || entries[i].first != entries[i - 1].first) {
+      cx.edge_start.push_back(i);
+      cx.edge_verts.push_back({int(entries[i].first >> 32), int(entries[i].first & 0xffffffffu)});
+    }
+    const std::uint32_t slot = entries[i].second;
+    cx.edge_tris[i] = int(slot / 3);
+    cx.tri_edges[slot / 3][slot % 3] = int(cx.edge_verts.size() - 1);
+  }
+  cx.edge_start.push_back(entries.size());
+  return cx;
+}
+
+int third_vertex(const std::array<int, 3>& t, int a, int b) {
+  for (int v : t)
+    if (v != a && v != b) return v;
+  return t[0];
+}
+
+/// Angles (radians, [0, 2 pi)) of the half-planes of `tris` around the edge a -> b, measured from
+/// `reference` (a direction perpendicular-ish to the edge) towards axis x reference.
+void edge_angles(const std::vector<Vector3d>& p, int a, int b, const Vector3d& reference, const int* tris,
+                 std::size_t count, const Complex& cx, double* out) {
+  const Vector3d axis = (p[b] - p[a]).normalized();
+  Vector3d e1 = reference - reference.dot(axis) * axis;
+  e1.normalize();
+  const Vector3d e2 = axis.cross(e1);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vector3d w = p[third_vertex(cx.tris[tris[i]], a, b)] - p[a];
+    double ang = std::atan2(w.dot(e2), w.dot(e1));
+    if (ang < 0) ang += 2 * kPi;
+    out[i] = ang;
+  }
+}
+
+/// Repeatedly removes the triangles at sharp edges (see CoconeParams::sharp_edge_angle_deg); when
+/// `rim_is_sharp`, an edge with a single triangle is sharp too. Returns the number removed.
+std::size_t prune_sharp(const Complex& cx, const std::vector<Vector3d>& p, std::vector<char>& alive,
+                        double max_gap_rad, bool rim_is_sharp) {
+  const std::size_t ne = cx.edge_verts.size();
+  std::vector<int> queue(ne);
+  std::iota(queue.begin(), queue.end(), 0);
+  std::vector<char> queued(ne, 1);
+  std::vector<int> live;
+  std::vector<double> ang;
+  std::size_t removed = 0;
+  // FIFO over a growing vector: deterministic, each edge re-queued only when a triangle of it dies.
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int e = queue[head];
+    queued[e] = 0;
+    live.clear();
+    for (std::size_t i = cx.edge_start[e]; i < cx.edge_start[e + 1]; ++i)
+      if (alive[cx.edge_tris[i]]) live.push_back(cx.edge_tris[i]);
+    if (live.empty()) continue;
+    bool sharp = false;
+    if (live.size() == 1) {
+      sharp = rim_is_sharp;
+    } else if (max_gap_rad < 2 * kPi) {
+      const int a = cx.edge_verts[e][0], b = cx.edge_verts[e][1];
+      const Vector3d ref = p[third_vertex(cx.tris[live[0]], a, b)] - p[a];
+      ang.resize(live.size());
+      edge_angles(p, a, b, ref, live.data(), live.size(), cx, ang.data());
+      std::sort(ang.begin(), ang.end());
+      double gap = 2 * kPi - (ang.back() - ang.front());
+      for (std::size_t i = 1; i < ang.size(); ++i) gap = std::max(gap, ang[i] - ang[i - 1]);
+      sharp = gap > max_gap_rad;
+    }
+    if (!sharp) continue;
+    for (int t : live) {
+      alive[t] = 0;
+      ++removed;
+      for (int k = 0; k < 3; ++k) {
+        const int f = cx.tri_edges[t][k];
+        if (!queued[f]) {
+          queued[f] = 1;
+          queue.push_back(f);
+        }
+      }
+    }
+  }
+  return removed;
+}
+
+/// Connected components of the alive triangles (sharing an edge); -1 for dead triangles.
+/// Components are numbered in the order of their smallest triangle index.
+std::vector<int> components(const Complex& cx, const std::vector<char>& alive, int& count) {
+  const std::size_t nt = cx.tris.size();
+  std::vector<int> comp(nt, -1);
+  std::vector<int> stack;
+  count = 0;
+  for (std::size_t s = 0; s < nt; ++s) {
+    if (!alive[s] || comp[s] >= 0) continue;
+    comp[s] = count;
+    stack.push_back(int(s));
+    while (!stack.empty()) {
+      const int t = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const int e = cx.tri_edges[t][k];
+        for (std::size_t i = cx.edge_start[e]; i < cx.edge_start[e + 1]; ++i) {
+          const int u = cx.edge_tris[i];
+          if (alive[u] && comp[u] < 0) {
+            comp[u] = count;
+            stack.push_back(u);
+          }
+        }
+      }
+    }
+    ++count;
+  }
+  return comp;
+}
+
+}  // namespace
+
+void DelaunaySurfaceParams::validate(const char* method) const {
+  const DelaunaySurfaceParams& params = *this;
+  if (!(params.normal_filter_angle_deg > 0.0 && params.normal_filter_angle_deg <= 90.0))
+    throw UsageError(fmt::format("{}: normal_filter_angle_deg = {}, expected a value in (0, 90]",
+                                 method, params.normal_filter_angle_deg));
+  if (!(params.sharp_edge_angle_deg >= 180.0 && params.sharp_edge_angle_deg <= 360.0))
+    throw UsageError(fmt::format("{}: sharp_edge_angle_deg = {}, expected a value in [180, 360]", method,
+                                 params.sharp_edge_angle_deg));
+  if (!(params.max_boundary_edge_in_spacings >= 0.0) || !std::isfinite(params.max_boundary_edge_in_spacings))
+    throw UsageError(fmt::format("{}: max_boundary_edge_in_spacings = {}, expected a finite value >= 0 (0: off)", method,
+                                 params.max_boundary_edge_in_spacings));
+  if (params.max_hole_edges < 0)
+    throw UsageError(fmt::format("{}: max_hole_edges = {}, expected a value >= 0 (0: off)", method, params.max_hole_edges));
+}
+
+namespace detail {
+
+DelaunaySetup prepare_delaunay(const PointCloud& cloud, const char* method, DelaunaySurfaceStats& stats,
+                               ProgressReporter& reporter) {
+  cloud.validate();
+  const std::size_t n = cloud.size();
+  if (n < 4) throw UsageError(fmt::format("{}: the cloud has {} points, expected at least 4", method, n));
+  if (n > std::size_t(std::numeric_limits<int>::max() / 4))
+    throw UsageError(fmt::format("{}: the cloud has {} points, expected at most {}", method, n,
+                                 std::numeric_limits<int>::max() / 4));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite())
+      throw InputError(fmt::format("{}: point {} has a non-finite coordinate, expected finite x, y, z", method, i));
+  stats.input_points = n;
+  reporter.report(0.0);
+  reporter.throw_if_cancelled();
+
+  DelaunaySetup setup;
+  // Local origin: the bounding-box centre, so that georeferenced coordinates keep their precision.
+  setup.origin = bounding_box(cloud.positions).center();
+  std::vector<Vector3d>& p = setup.p;
+  p.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) p[i] = cloud.positions[i] - setup.origin;
+  });
+  const KdTree tree(p);
+  setup.spacing = mean_spacing(tree);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  setup.cells = delaunay_cells(p);
+  stats.seconds_delaunay = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  reporter.report(0.45);
+  reporter.throw_if_cancelled();
+  const int dim = setup.cells.dimension;
+  if (dim < 3) {
+    const char* what = dim == 2 ? "coplanar" : dim == 1 ? "collinear" : "identical";
+    throw ComputeError(fmt::format(
+        "{}: all {} points are {} (Delaunay dimension {}), expected points spread in 3D; use ball pivoting "
+        "for a planar patch",
+        method, n, what, dim));
+  }
+  stats.duplicate_points = setup.cells.duplicates;
+  stats.delaunay_cells = setup.cells.finite_cells;
+  setup.poles = voronoi_poles(setup.cells, p, tree);
+  stats.hull_points = setup.poles.hull_points;
+  reporter.report(0.55);
+  reporter.throw_if_cancelled();
+  return setup;
+}
+
+ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const DelaunaySetup& setup,
+                                              std::vector<std::array<int, 3>> candidates,
+                                              const DelaunaySurfaceParams& params, DelaunaySurfaceStats& stats,
+                                              ProgressReporter& reporter) {
+  const std::vector<Vector3d>& p = setup.p;
+  const std::size_t n = p.size();
+  const double spacing = setup.spacing;
+  const std::vector<int>& rep = setup.cells.representative;
+  const std::vector<Vector3d>& pole = setup.poles.axis;
+  const std::vector<Vector3d>& hull_normal = setup.poles.hull_normal;
+  const std::vector<char>& on_hull = setup.poles.on_hull;
+  const std::vector<char>& finite_pole = setup.poles.finite_pole;
+
+  // 4. Normal filter: drop triangles whose normal strays from the pole vector of a vertex (and
+  // degenerate ones). The survivors keep their order.
+  stats.candidate_triangles = candidates.size();
+  {
+    const double cos_filter = std::cos(params.normal_filter_angle_deg * kPi / 180.0);
+    std::vector<char> drop(candidates.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+        const auto [a, b, d] = candidates[t];
+        Vector3d normal = (p[b] - p[a]).cross(p[d] - p[a]);
+        const double len = normal.norm();
+        bool filtered = !(len > 0.0);
+        if (!filtered && cos_filter > 0.0) {
+          normal /= len;
+          for (int q : {a, b, d})
+            if (pole[q] != Vector3d::Zero() && std::abs(normal.dot(pole[q])) < cos_filter) filtered = true;
+        }
+        drop[t] = filtered ? 1 : 0;
+      }
+    });
+    std::size_t w = 0;
+    for (std::size_t t = 0; t < candidates.size(); ++t)
+      if (!drop[t]) candidates[w++] = candidates[t];
+    stats.normal_filtered = candidates.size() - w;
+    candidates.resize(w);
+  }
+  reporter.report(0.7);
+  reporter.throw_if_cancelled();
+
+  // 4a. Sharp-edge pruning.
+  const Complex cx = build_complex(std::move(candidates));
+  const std::size_t nt = cx.tris.size();
+  const double max_gap = params.sharp_edge_angle_deg * kPi / 180.0;
+  std::vector<char> alive(nt, 1);
+  if (params.boundary == DelaunayBoundary::Closed) {
+    stats.pruned = prune_sharp(cx, p, alive, max_gap, true);
+  } else {
+    stats.pruned = prune_sharp(cx, p, alive, max_gap, false);
+    if (params.boundary == DelaunayBoundary::Auto) {
+      std::vector<char> closed = alive;
+      prune_sharp(cx, p, closed, max_gap, true);
+      int count = 0;
+      const std::vector<int> comp = components(cx, alive, count);
+      std::vector<std::size_t> open_count(count, 0), closed_count(count, 0);
+      for (std::size_t t = 0; t < nt; ++t)
+        if (alive[t]) {
+          ++open_count[comp[t]];
+          if (closed[t]) ++closed_count[comp[t]];
+        }
+      std::vector<char> use_closed(count, 0);
+      for (int k = 0; k < count; ++k) {
+        use_closed[k] = 2 * closed_count[k] >= open_count[k] ? 1 : 0;
+        ++(use_closed[k] ? stats.closed_pieces : stats.open_pieces);
+      }
+      for (std::size_t t = 0; t < nt; ++t)
+        if (alive[t] && use_closed[comp[t]] && !closed[t]) {
+          alive[t] = 0;
+          ++stats.pruned;
+        }
+    }
+  }
+  reporter.report(0.8);
+  reporter.throw_if_cancelled();
+
+  // 4b. Manifold walk over each connected piece, from a seed on its outer side.
+  int piece_count = 0;
+  const std::vector<int> piece = components(cx, alive, piece_count);
+  if (params.boundary == DelaunayBoundary::Closed) stats.closed_pieces = std::size_t(piece_count);
+  if (params.boundary == DelaunayBoundary::Open) stats.open_pieces = std::size_t(piece_count);
+  std::vector<std::size_t> piece_start(std::size_t(piece_count) + 1, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    if (piece[t] >= 0) ++piece_start[piece[t] + 1];
+  for (int k = 0; k < piece_count; ++k) piece_start[k + 1] += piece_start[k];
+  std::vector<int> piece_tris(piece_start[piece_count]);
+  {
+    std::vector<std::size_t> fill(piece_start.begin(), piece_start.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (piece[t] >= 0) piece_tris[fill[piece[t]]++] = int(t);
+  }
+
+  const std::size_t ne = cx.edge_verts.size();
+  std::vector<std::array<int, 2>> edge_used(ne, {-1, -1});  // accepted triangles per edge
+  std::vector<std::array<int, 3>> oriented(nt);
+  std::vector<std::int8_t> state(nt, 0);  // 0 untried, 1 accepted, -1 rejected
+  std::vector<int> bfs;
+  std::vector<double> ang;
+  std::vector<int> live;
+  std::vector<std::size_t> rank;
+  std::vector<Triangle> out_tris;
+  std::vector<int> out_piece;
+  std::vector<int> out_src;  // candidate triangle of each output triangle
+
+  // Accepts `tri` (oriented) if each of its edges has a free slot and, when already used once, is
+  // traversed the other way by that triangle.
+  auto directed = [&](int t, int a, int b) {
+    const auto& o = oriented[t];
+    for (int k = 0; k < 3; ++k)
+      if (o[k] == a && o[(k + 1) % 3] == b) return true;
+    return false;
+  };
+  auto try_accept = [&](int t, const std::array<int, 3>& o) {
+    oriented[t] = o;
+    for (int k = 0; k < 3; ++k) {
+      const int a = o[k], b = o[(k + 1) % 3];
+      int e = -1;
+      for (int j = 0; j < 3; ++j)
+        if (cx.edge_verts[cx.tri_edges[t][j]] == std::array<int, 2>{std::min(a, b), std::max(a, b)}) e = cx.tri_edges[t][j];
+      const auto& used = edge_used[e];
+      if (used[1] >= 0) return false;
+      if (used[0] >= 0 && directed(used[0], a, b)) return false;
+    }
+    for (int j = 0; j < 3; ++j) {
+      auto& used = edge_used[cx.tri_edges[t][j]];
+      (used[0] < 0 ? used[0] : used[1]) = t;
+    }
+    state[t] = 1;
+    return true;
+  };
+
+  for (int k = 0; k < piece_count; ++k) {
+    // Seed: at the piece's vertex of largest x, its triangle most facing +x, turned towards +x.
+    int top = -1;
+    for (std::size_t j = piece_start[k]; j < piece_start[k + 1]; ++j)
+      for (int v : cx.tris[piece_tris[j]])
+        if (top < 0 || p[v].x() > p[top].x() || (p[v].x() == p[top].x() && v < top)) top = v;
+    int seed = -1;
+    double best = -1.0;
+    for (std::size_t j = piece_start[k]; j < piece_start[k + 1]; ++j) {
+      const auto& t = cx.tris[piece_tris[j]];
+      if (t[0] != top && t[1] != top && t[2] != top) continue;
+      const Vector3d nrm = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+      const double score = std::abs(nrm.x()) / std::max(nrm.norm(), 1e-300);
+      if (score > best) best = score, seed = piece_tris[j];
+    }
+    std::array<int, 3> o = cx.tris[seed];
+    if ((p[o[1]] - p[o[0]]).cross(p[o[2]] - p[o[0]]).x() < 0) std::swap(o[1], o[2]);
+    if (!try_accept(seed, o)) continue;
+    bfs.assign(1, seed);
+    for (std::size_t head = 0; head < bfs.size(); ++head) {
+      const int t = bfs[head];
+      const std::array<int, 3> ot = oriented[t];
+      out_tris.emplace_back(ot[0], ot[1], ot[2]);
+      out_piece.push_back(k);
+      out_src.push_back(t);
+      for (int j = 0; j < 3; ++j) {
+        const int a = ot[j], b = ot[(j + 1) % 3];
+        int e = -1;
+        for (int m = 0; m < 3; ++m)
+          if (cx.edge_verts[cx.tri_edges[t][m]] == std::array<int, 2>{std::min(a, b), std::max(a, b)})
+            e = cx.tri_edges[t][m];
+        if (edge_used[e][1] >= 0) continue;
+        live.clear();
+        for (std::size_t i = cx.edge_start[e]; i < cx.edge_start[e + 1]; ++i) {
+          const int u = cx.edge_tris[i];
+          if (u != t && alive[u]) live.push_back(u);
+        }
+        if (live.empty()) continue;
+        // The first triangle met turning around a -> b from t towards t's outer (normal) side:
+        // with e1 along t's half-plane and e2 = axis x e1 = the normal side, the smallest angle.
+        ang.resize(live.size());
+        edge_angles(p, a, b, p[ot[(j + 2) % 3]] - p[a], live.data(), live.size(), cx, ang.data());
+        // edge_angles measures towards axis x e1; t's normal is along (b - a) x (c - a), the
+        // same side, so the smallest angle is the outer neighbour.
+        // If the outer neighbour cannot join (one of its other edges is taken, or it would be
+        // traversed the wrong way), the next ones in angular order are tried, so that a conflict
+        // far away does not leave a hole here; try_accept keeps the result edge-manifold and
+        // oriented whichever one joins.
+        rank.resize(live.size());
+        std::iota(rank.begin(), rank.end(), std::size_t{0});
+        std::sort(rank.begin(), rank.end(), [&](std::size_t x, std::size_t y) {
+          return ang[x] < ang[y] || (ang[x] == ang[y] && live[x] < live[y]);
+        });
+        for (std::size_t i : rank) {
+          const int s = live[i];
+          if (state[s] == 1) break;
+          if (state[s] == -1) continue;
+          const int d = third_vertex(cx.tris[s], a, b);
+          if (try_accept(s, {b, a, d})) {
+            bfs.push_back(s);
+            break;
+          }
+          state[s] = -1;
+        }
+      }
+    }
+  }
+  stats.walk_dropped = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    if (alive[t] && state[t] != 1) ++stats.walk_dropped;
+
+  // 4c. Rim peeling. Where an open surface's rim is concave, the Delaunay triangulation fills it
+  // with long thin triangles that pass the cocone test (they lie in the surface); they are peeled
+  // from the boundary inward while their boundary edge is too long. Closed pieces have no boundary
+  // edge and are untouched.
+  if (params.max_boundary_edge_in_spacings > 0.0 && !out_tris.empty()) {
+    const double max_len2 = std::pow(params.max_boundary_edge_in_spacings * spacing, 2);
+    std::vector<int> out_of(nt, -1);  // candidate -> output triangle
+    for (std::size_t j = 0; j < out_src.size(); ++j) out_of[out_src[j]] = int(j);
+    std::vector<char> keep(out_tris.size(), 1);
+    auto edge_len2 = [&](int e) { return (p[cx.edge_verts[e][0]] - p[cx.edge_verts[e][1]]).squaredNorm(); };
+    auto other_on = [&](int e, int t) { return edge_used[e][0] == t ? edge_used[e][1] : edge_used[e][0]; };
+    std::vector<int> peel;
+    for (std::size_t j = 0; j < out_src.size(); ++j)
+      for (int e : cx.tri_edges[out_src[j]])
+        if (edge_used[e][1] < 0 && edge_len2(e) > max_len2) {
+          peel.push_back(int(j));
+          break;
+        }
+    while (!peel.empty()) {
+      const int j = peel.back();
+      peel.pop_back();
+      if (!keep[j]) continue;
+      keep[j] = 0;
+      ++stats.rim_peeled;
+      const int t = out_src[j];
+      for (int e : cx.tri_edges[t]) {
+        const int u = other_on(e, t);
+        edge_used[e] = {u, -1};
+        if (u >= 0 && keep[out_of[u]] && edge_len2(e) > max_len2) peel.push_back(out_of[u]);
+      }
+    }
+    std::size_t w = 0;
+    for (std::size_t j = 0; j < out_tris.size(); ++j)
+      if (keep[j]) {
+        out_tris[w] = out_tris[j];
+        out_piece[w] = out_piece[j];
+        out_src[w] = out_src[j];
+        ++w;
+      }
+    out_tris.resize(w);
+    out_piece.resize(w);
+    out_src.resize(w);
+  }
+  reporter.report(0.9);
+  reporter.throw_if_cancelled();
+
+  // 5. Orientation of each piece, then vertex normals.
+  const bool has_normals = cloud.has_normals();
+  std::vector<std::size_t> start(std::size_t(piece_count) + 1, 0);
+  for (int k : out_piece) ++start[k + 1];
+  for (int k = 0; k < piece_count; ++k) start[k + 1] += start[k];
+  // out_tris is grouped by piece (pieces are walked one after another).
+  std::vector<char> flip(std::size_t(piece_count), 0);
+  tbb::parallel_for(0, piece_count, [&](int k) {
+    if (start[k] == start[k + 1]) return;
+    double score = 0.0;
+    if (has_normals) {
+      for (std::size_t j = start[k]; j < start[k + 1]; ++j) {
+        const Triangle& t = out_tris[j];
+        const Vector3d nrm = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+        score += nrm.dot(cloud.normals[t[0]] + cloud.normals[t[1]] + cloud.normals[t[2]]);
+      }
+    } else {
+      // Closed: signed volume. Open: agreement with the hull pole vectors (outward by
+      // construction) when they decide, else facing away from the piece's centroid.
+      bool closed = true;
+      Vector3d centroid = Vector3d::Zero();
+      for (std::size_t j = start[k]; j < start[k + 1]; ++j) {
+        const Triangle& t = out_tris[j];
+        centroid += (p[t[0]] + p[t[1]] + p[t[2]]) / 3.0;
+        for (int e : cx.tri_edges[out_src[j]])
+          if (edge_used[e][1] < 0) closed = false;
+      }
+      centroid /= double(start[k + 1] - start[k]);
+      double volume = 0.0, hull_score = 0.0, hull_abs = 0.0, centroid_score = 0.0;
+      for (std::size_t j = start[k]; j < start[k + 1]; ++j) {
+        const Triangle& t = out_tris[j];
+        const Vector3d a = p[t[0]] - centroid, b = p[t[1]] - centroid, c = p[t[2]] - centroid;
+        const Vector3d nrm = (b - a).cross(c - a);
+        volume += a.dot(b.cross(c));
+        centroid_score += nrm.dot(a + b + c);
+        for (int m = 0; m < 3; ++m)
+          if (on_hull[t[m]]) {
+            hull_score += nrm.dot(hull_normal[t[m]]);
+            hull_abs += std::abs(nrm.dot(hull_normal[t[m]]));
+          }
+      }
+      if (closed)
+        score = volume;
+      else if (std::abs(hull_score) > 0.2 * hull_abs)
+        score = hull_score;
+      else
+        score = centroid_score;
+    }
+    flip[k] = score < 0.0 ? 1 : 0;
+  });
+  for (std::size_t j = 0; j < out_tris.size(); ++j)
+    if (flip[out_piece[j]]) std::swap(out_tris[j][1], out_tris[j][2]);
+  stats.flipped_pieces = std::size_t(std::count(flip.begin(), flip.end(), char(1)));
+
+  // 6. Small holes. Undersampled spots (random samples, thin parts) leave holes of a few edges
+  // where the cocone test missed a triangle or the walk met a conflict; each boundary loop of at
+  // most `max_hole_edges` edges is closed by ear clipping (shortest new edge first) with triangles
+  // of existing samples, as long as no new edge already exists in the mesh. Loops through a
+  // vertex with several boundary edges, and loops of small pieces (which would fold shut), are
+  // left open.
+  if (params.max_hole_edges >= 3 && !out_tris.empty()) {
+    auto directed_key = [](int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); };
+    std::vector<std::uint64_t> half(3 * out_tris.size());
+    for (std::size_t j = 0; j < out_tris.size(); ++j)
+      for (int k = 0; k < 3; ++k) half[3 * j + k] = directed_key(out_tris[j][k], out_tris[j][(k + 1) % 3]);
+    tbb::parallel_sort(half.begin(), half.end());
+    std::vector<std::uint64_t> added;  // directed edges of fill triangles (few), kept sorted
+    auto has_half = [&](int a, int b) {
+      const std::uint64_t key = directed_key(a, b);
+      return std::binary_search(half.begin(), half.end(), key) || std::binary_search(added.begin(), added.end(), key);
+    };
+    auto has_edge = [&](int a, int b) { return has_half(a, b) || has_half(b, a); };
+    // Boundary half-edges a -> b (no b -> a), and the number leaving each vertex.
+    std::vector<std::pair<int, int>> rim;
+    for (std::uint64_t key : half) {
+      const int a = int(key >> 32), b = int(key & 0xffffffffu);
+      if (!std::binary_search(half.begin(), half.end(), directed_key(b, a))) rim.emplace_back(a, b);
+    }
+    std::sort(rim.begin(), rim.end());
+    std::vector<std::size_t> piece_size(std::size_t(piece_count), 0);
+    std::vector<int> piece_of_vertex(n, -1);
+    for (std::size_t j = 0; j < out_tris.size(); ++j) {
+      ++piece_size[out_piece[j]];
+      for (int k = 0; k < 3; ++k) piece_of_vertex[out_tris[j][k]] = out_piece[j];
+    }
+    const std::size_t min_piece = 8 * std::size_t(params.max_hole_edges);
+    std::vector<char> rim_done(rim.size(), 0);
+    std::vector<int> loop, poly;
+    auto next_rim = [&](int a) -> long {  // the one boundary half-edge leaving a, or -1
+      const auto lo = std::lower_bound(rim.begin(), rim.end(), std::make_pair(a, std::numeric_limits<int>::min()));
+      if (lo == rim.end() || lo->first != a) return -1;
+      if (lo + 1 != rim.end() && (lo + 1)->first == a) return -1;
+      return long(lo - rim.begin());
+    };
+    for (std::size_t start = 0; start < rim.size(); ++start) {
+      if (rim_done[start]) continue;
+      loop.clear();
+      bool ok = true;
+      long h = long(start);
+      while (true) {
+        if (rim_done[h]) {
+          ok = h == long(start) && loop.size() >= 3;
+          break;
+        }
+        rim_done[h] = 1;
+        loop.push_back(rim[h].first);
+        h = next_rim(rim[h].second);
+        if (h < 0 || loop.size() > std::size_t(params.max_hole_edges)) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) continue;
+      const int owner = piece_of_vertex[loop[0]];
+      if (owner < 0 || piece_size[owner] < min_piece) continue;
+      // The fill runs against the loop: polygon = loop reversed, clipped ear by ear.
+      poly.assign(loop.rbegin(), loop.rend());
+      std::vector<Triangle> fill_tris;
+      while (poly.size() > 3) {
+        std::size_t best = poly.size();
+        double best_len = std::numeric_limits<double>::infinity();
+        for (std::size_t j = 0; j < poly.size(); ++j) {
+          const int a = poly[(j + poly.size() - 1) % poly.size()], c = poly[(j + 1) % poly.size()];
+          if (has_edge(a, c)) continue;
+          const double len = (p[a] - p[c]).squaredNorm();
+          if (len < best_len) best_len = len, best = j;
+        }
+        if (best == poly.size()) break;
+        const std::size_t m = poly.size();
+        const int a = poly[(best + m - 1) % m], b = poly[best], c = poly[(best + 1) % m];
+        fill_tris.emplace_back(a, b, c);
+        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(c, a)), directed_key(c, a));
+        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(a, c)), directed_key(a, c));
+        poly.erase(poly.begin() + std::ptrdiff_t(best));
+      }
+      if (poly.size() != 3) continue;  // (the diagonals added above only block later fills)
+      fill_tris.emplace_back(poly[0], poly[1], poly[2]);
+      ++stats.holes_filled;
+      for (const Triangle& t : fill_tris) {
+        out_tris.push_back(t);
+        out_piece.push_back(owner);
+      }
+    }
+  }
+
+  ReconstructionResult result;
+  result.mean_spacing = spacing;
+  if (!has_normals) {
+    // Area-weighted face normals per vertex decide the sign of each pole vector; samples without
+    // a finite pole (hull samples) take the face normal itself when they have triangles.
+    std::vector<Vector3d> face_sum(n, Vector3d::Zero());
+    for (const Triangle& t : out_tris) {
+      const Vector3d nrm = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+      for (int m = 0; m < 3; ++m) face_sum[t[m]] += nrm;
+    }
+    std::vector<Vector3d> normals(n, Vector3d::Zero());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const int v = rep[i];
+        Vector3d nrm = pole[v];
+        const double f = face_sum[v].norm();
+        if (!finite_pole[v] && f > 0.0)
+          nrm = face_sum[v] / f;
+        else if (f > 0.0 && nrm.dot(face_sum[v]) < 0.0)
+          nrm = -nrm;
+        normals[i] = nrm;
+      }
+    });
+    PointCloud copy = cloud;
+    copy.normals = std::move(normals);
+    result.mesh = TriangleMesh::from_cloud(std::move(copy), std::move(out_tris));
+  } else {
+    result.mesh = TriangleMesh::from_cloud(cloud, std::move(out_tris));
+  }
+  result.topology = analyze_topology(result.mesh);
+  result.unused_points = result.topology.isolated_vertices;
+  return result;
+}
+
+
+}  // namespace detail
+}  // namespace pointsurf

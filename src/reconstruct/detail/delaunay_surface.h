@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The steps that the cocone reconstruction and the Crust share (src/reconstruct/
+// delaunay_surface.cpp): the input checks and the first Delaunay triangulation with its Voronoi
+// poles, then the manifold extraction of their candidate triangles.
+#include <array>
+#include <vector>
+
+#include "core/detail/progress_reporter.h"
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/reconstruct/delaunay_surface.h"
+#include "pointsurf/reconstruct/reconstruction.h"
+#include "spatial/detail/delaunay_3.h"
+
+namespace pointsurf::detail {
+
+/// The samples about a local origin, their Delaunay triangulation and poles.
+struct DelaunaySetup {
+  Vector3d origin = Vector3d::Zero();  // bounding-box centre of the input
+  std::vector<Vector3d> p;             // input positions minus origin
+  double spacing = 0.0;                // mean spacing
+  DelaunayCells cells;
+  PoleSet poles;
+};
+
+/// Checks `cloud` (UsageError below 4 points or above 2^29, InputError for a non-finite
+/// coordinate, ComputeError when coplanar or collinear; `method` names the caller in each
+/// message), shifts it to a local origin, triangulates it and computes the poles. Fills the
+/// input, duplicate, cell and hull counts and seconds_delaunay of `stats`.
+DelaunaySetup prepare_delaunay(const PointCloud& cloud, const char* method, DelaunaySurfaceStats& stats,
+                               ProgressReporter& reporter);
+
+/// Manifold extraction of the candidate triangles (each a sorted triple of sample indices, no
+/// duplicates): normal filter, sharp-edge pruning, the walk over the outer side of each piece,
+/// rim peeling, orientation, small-hole filling; then the mesh through the input points with
+/// the input's attributes (vertex normals from the signed pole vectors when the cloud has none).
+ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const DelaunaySetup& setup,
+                                              std::vector<std::array<int, 3>> candidates,
+                                              const DelaunaySurfaceParams& params, DelaunaySurfaceStats& stats,
+                                              ProgressReporter& reporter);
+
+}  // namespace pointsurf::detail
