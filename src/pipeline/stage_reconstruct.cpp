@@ -45,7 +45,7 @@ void read_delaunay_params(const StageArgs& a, DelaunaySurfaceParams& p) {
   const std::string& b = a.text("boundary");
   p.boundary = b == "closed" ? DelaunayBoundary::Closed : b == "open" ? DelaunayBoundary::Open : DelaunayBoundary::Auto;
   p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
-  p.max_hole_edges = a.int32("max_hole_edges");
+  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
 }
 
 CoconeParams cocone_params(const StageArgs& a) {
@@ -77,7 +77,7 @@ BallPivotParams ball_params(const StageArgs& a) {
   p.radii_in_spacings = a.numbers("radii_in_spacings");
   p.max_normal_angle_deg = a.number("max_normal_angle_deg");
   p.max_mean_normal_angle_deg = a.number("max_mean_normal_angle_deg");
-  p.close_small_holes = a.boolean("close_small_holes");
+  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
   return p;
 }
 
@@ -199,10 +199,10 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, false, true)
           .only(tri),
-      P::number("max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings, "Close holes up to this perimeter; 0: none")
+      P::number("max_hole_perimeter_in_spacings", HoleFillParams{}.max_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every method); 0: none")
           .unit("local spacings")
           .non_negative()
-          .only(tri),
+          ,
       P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(cocone),
       P::number("normal_filter_angle_deg", cp.normal_filter_angle_deg, "Drop triangles deviating more from the pole vectors; 90: off")
           .unit("degrees")
@@ -216,7 +216,6 @@ StageSpec reconstruct_stage() {
           .unit("mean spacings")
           .non_negative()
           .only(delaunay),
-      P::integer("max_hole_edges", cp.max_hole_edges, "Close holes of at most this many edges; 0: off").at_least(0).only(delaunay),
       P::numbers("radii", bp.radii, "Ball radii (default: radii_in_spacings x mean spacing)").unit("cloud units").positive().meta("R1,R2,...").only(ball),
       P::numbers("radii_in_spacings", bp.radii_in_spacings, "Ball radii when radii are not given").unit("mean spacings").positive().only(ball),
       P::number("max_normal_angle_deg", bp.max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
@@ -227,7 +226,6 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, true, false)
           .only(ball),
-      P::boolean("close_small_holes", bp.close_small_holes, "Final pass closing holes of up to 6 edges within the largest ball").only(ball),
   };
   s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4"};
   s.run = run_reconstruct;

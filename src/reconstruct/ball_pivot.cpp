@@ -5,6 +5,7 @@
 // per point: edges live in one array with intrusive per-vertex lists, and neighbour queries
 // reuse one buffer.
 #include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@
 #include <limits>
 #include <optional>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -74,7 +74,6 @@ constexpr double kSheetOffsetInSpacings = 1.0;
 // Two vertex normals more than this apart point to opposite sides, degrees.
 constexpr double kOppositeNormalsDeg = 120.0;
 // The final pass closes boundary loops of at most this many edges that fit in the largest ball.
-constexpr std::size_t kMaxClosedLoop = 6;
 // Neighbour lists are precomputed (in parallel) when the first radius is at most this many mean
 // spacings.
 constexpr double kPrecomputeInSpacings = 3.0;
@@ -148,165 +147,9 @@ public:
     }
   }
 
-  // Final pass: closes the holes bounded by at most kMaxClosedLoop boundary edges whose corners
-  // fit in the largest ball, as a still larger ball resting on them would: a ball that could not
-  // rest on their corners (it touched a point of the finished surface first, typically at a
-  // sharp edge) leaves such holes although their corners are joined in a cycle. A hole that has
-  // no acceptable triangulation (the surface around it folds, as where the ball rolled over a
-  // sharp edge from two sides) is widened once by the triangles along it and tried again; if
-  // that fails too, they are put back. Works on the triangle list with a map of directed edges
-  // (the pivoting structures are done with). Returns the holes closed.
-  std::size_t close_small_loops(double largest_radius) {
-    half_.clear();
-    half_.reserve(triangles_.size() * 3);
-    alive_.assign(triangles_.size(), 1);
-    for (std::size_t t = 0; t < triangles_.size(); ++t)
-      for (int k = 0; k < 3; ++k) half_[key(triangles_[t][k], triangles_[t][(k + 1) % 3])] = int(t);
-    std::vector<std::uint64_t> holes;  // hole half-edges b -> a of boundary edges a -> b
-    for (const auto& [k, t] : half_)
-      if (!half_.contains(key(int(k & 0xffffffffu), int(k >> 32)))) holes.push_back(key(int(k & 0xffffffffu), int(k >> 32)));
-    std::sort(holes.begin(), holes.end());  // deterministic order
-    std::size_t closed = 0;
-    std::vector<int> loop, removed;
-    for (const std::uint64_t h : holes) {
-      const int from = int(h >> 32), to = int(h & 0xffffffffu);
-      if (half_.contains(h) || !half_.contains(key(to, from))) continue;  // closed meanwhile
-      if (!walk_hole(from, kMaxClosedLoop, loop) || !fits_ball(loop, largest_radius)) continue;
-      if (fill_loop(loop)) {
-        ++closed;
-        continue;
-      }
-      // Widen: drop the triangles along the hole and try the larger hole once.
-      removed.clear();
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        const auto it = half_.find(key(loop[(i + 1) % loop.size()], loop[i]));
-        if (it != half_.end() && std::find(removed.begin(), removed.end(), it->second) == removed.end()) removed.push_back(it->second);
-      }
-      for (const int t : removed) set_triangle(t, false);
-      const int start = loop.front();
-      if (walk_hole(start, 2 * kMaxClosedLoop, loop) && fits_ball(loop, largest_radius) && fill_loop(loop)) {
-        ++closed;
-        continue;
-      }
-      for (const int t : removed) set_triangle(t, true);
-    }
-    std::size_t out = 0;
-    for (std::size_t t = 0; t < triangles_.size(); ++t)
-      if (alive_[t]) triangles_[out++] = triangles_[t];
-    triangles_.resize(out);
-    return closed;
-  }
-
   std::vector<Triangle> take_triangles() { return std::move(triangles_); }
-  const std::vector<std::uint8_t>& used() const { return used_; }
 
 private:
-  static std::uint64_t key(int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); }
-
-  void set_triangle(int t, bool alive) {
-    alive_[t] = alive ? 1 : 0;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint64_t e = key(triangles_[t][k], triangles_[t][(k + 1) % 3]);
-      if (alive) half_[e] = t;
-      else half_.erase(e);
-    }
-  }
-
-  void push_triangle(int a, int b, int c) {
-    triangles_.emplace_back(a, b, c);
-    alive_.push_back(1);
-    set_triangle(int(triangles_.size()) - 1, true);
-  }
-
-  // A hole through vertex `start` of at most `max_size` vertices: loop[i] -> loop[i + 1] are
-  // hole half-edges (reverse of boundary edges), the direction the closing triangles take. At a
-  // pinched vertex (two holes meet) each way on is tried; no vertex appears twice.
-  bool walk_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
-    loop.assign(1, start);
-    return extend_hole(start, max_size, loop);
-  }
-
-  bool extend_hole(int start, std::size_t max_size, std::vector<int>& loop) const {
-    const int at = loop.back();
-    for (int f = head_[at]; f >= 0;) {  // the pivoting edges hold every edge of the mesh
-      const Edge& edge = edges_[f];
-      f = edge.v0 == at ? edge.next0 : edge.next1;
-      const int next = edge.v0 == at ? edge.v1 : edge.v0;
-      if (half_.contains(key(at, next)) || !half_.contains(key(next, at))) continue;
-      if (next == start) {
-        if (loop.size() >= 3) return true;
-        continue;
-      }
-      if (loop.size() >= max_size || std::find(loop.begin(), loop.end(), next) != loop.end()) continue;
-      loop.push_back(next);
-      if (extend_hole(start, max_size, loop)) return true;
-      loop.pop_back();
-    }
-    return false;
-  }
-
-  bool fits_ball(const std::vector<int>& loop, double radius) const {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const int v : loop) centroid += local_[v];
-    centroid /= double(loop.size());
-    for (const int v : loop)
-      if ((local_[v] - centroid).norm() > radius) return false;
-    return true;
-  }
-
-  // Triangulates one hole, loop[i] -> loop[i + 1] being the direction the new triangles take:
-  // of all its triangulations, the one whose worst triangle agrees best with its corners'
-  // normals, every triangle obeying closes_hole() and no diagonal duplicating an existing edge
-  // (dynamic programme over the sub-polygons, O(k^3)). Returns false (and adds nothing) when
-  // none does.
-  bool fill_loop(const std::vector<int>& loop) {
-    const int k = int(loop.size());
-    constexpr double kInvalid = -3.0;
-    constexpr int kMax = 2 * int(kMaxClosedLoop);
-    // best[i][j]: the best worst-score of the polygon loop[i..j] closed by the chord (i, j);
-    // split[i][j]: its apex.
-    double best[kMax][kMax];
-    int split[kMax][kMax];
-    for (int len = 2; len < k; ++len)
-      for (int i = 0; i + len < k; ++i) {
-        const int j = i + len;
-        best[i][j] = kInvalid;
-        split[i][j] = -1;
-        if (!(i == 0 && j == k - 1) && (half_.contains(key(loop[i], loop[j])) || half_.contains(key(loop[j], loop[i]))))
-          continue;
-        for (int m = i + 1; m < j; ++m) {
-          const double left = m - i >= 2 ? best[i][m] : 1.0, right = j - m >= 2 ? best[m][j] : 1.0;
-          if (left == kInvalid || right == kInvalid) continue;
-          const int a = loop[i], b = loop[m], c = loop[j];
-          const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
-          if (!n || !closes_hole(*n, a, b, c)) continue;
-          const double score = std::min({left, right, n->dot((normals_[a] + normals_[b] + normals_[c]).normalized())});
-          if (score > best[i][j]) {
-            best[i][j] = score;
-            split[i][j] = m;
-          }
-        }
-      }
-    if (split[0][k - 1] < 0) return false;
-    int stack[kMax][2];
-    int top = 0;
-    stack[top][0] = 0;
-    stack[top++][1] = k - 1;
-    while (top > 0) {
-      --top;
-      const int i = stack[top][0], j = stack[top][1], m = split[i][j];
-      push_triangle(loop[i], loop[m], loop[j]);
-      if (m - i >= 2) {
-        stack[top][0] = i;
-        stack[top++][1] = m;
-      }
-      if (j - m >= 2) {
-        stack[top][0] = m;
-        stack[top++][1] = j;
-      }
-    }
-    return true;
-  }
 
   void tick() {
     reporter_.report(pass_begin_ + pass_span_ * double(used_count_) / double(local_.size()));
@@ -403,18 +246,6 @@ private:
     const Eigen::Vector3d m = (normals_[p] + normals_[q]).normalized();
     const double offset = std::abs(m.dot(d));
     return offset > rules_.sheet_offset && offset > sin_chord * d.norm();
-  }
-
-  // The looser rule for the triangles that close a small hole, which the surrounding surface
-  // already bounds: on the side the normals point to (mean angle below 90 degrees), no two
-  // opposite normals, no two sheets. Where the samples across a sharp edge are nearly in line,
-  // the one triangle that closes the hole is almost perpendicular to both faces.
-  bool closes_hole(const Eigen::Vector3d& n, int a, int b, int c) const {
-    if (!(n.dot(normals_[a] + normals_[b] + normals_[c]) > 0.0)) return false;
-    if (normals_[a].dot(normals_[b]) < rules_.cos_opposite || normals_[b].dot(normals_[c]) < rules_.cos_opposite ||
-        normals_[c].dot(normals_[a]) < rules_.cos_opposite)
-      return false;
-    return !other_sheet(a, b) && !other_sheet(b, c) && !other_sheet(c, a);
   }
 
   // The triangle's normal agrees with the normals of its three vertices: within the vertex
@@ -593,8 +424,6 @@ private:
   std::vector<int> front_;
   std::size_t front_head_ = 0;
   std::vector<Triangle> triangles_;
-  std::unordered_map<std::uint64_t, int> half_;  // small-hole pass: directed edge -> triangle
-  std::vector<std::uint8_t> alive_;               // small-hole pass: triangle kept
   std::vector<Neighbor> neighbors_;
   std::vector<Candidate> candidates_;
   std::vector<int> seed_candidates_;
@@ -620,6 +449,9 @@ void BallPivotParams::validate() const {
   if (!(params.max_mean_normal_angle_deg > 0.0 && params.max_mean_normal_angle_deg <= 180.0))
     throw UsageError(fmt::format("reconstruct_ball_pivoting: max_mean_normal_angle_deg must be in (0, 180], got {}",
                                  params.max_mean_normal_angle_deg));
+  if (!(params.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(params.max_hole_perimeter_in_spacings))
+    throw UsageError(fmt::format("reconstruct_ball_pivoting: max_hole_perimeter_in_spacings must be finite and >= 0 (0: off), got {}",
+                                 params.max_hole_perimeter_in_spacings));
 }
 
 ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
@@ -693,14 +525,15 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   // answers instead.
   if (radii.front() <= kPrecomputeInSpacings * result.mean_spacing) pivoter.precompute_neighbours(radii.front());
   for (std::size_t pass = 0; pass < radii.size(); ++pass) pivoter.run_pass(radii[pass], pass, radii.size());
-  if (params.close_small_holes) pivoter.close_small_loops(radii.back());
   reporter.report(1.0);
   reporter.throw_if_cancelled();
 
-  const std::vector<std::uint8_t>& used = pivoter.used();
-  result.unused_points = std::size_t(std::count(used.begin(), used.end(), std::uint8_t(0)));
   result.mesh = TriangleMesh::from_cloud(cloud, pivoter.take_triangles());
+  // Small holes (where the ball could not rest on a hole's corners, typically at a sharp edge):
+  // the hole filler every reconstruction shares.
+  fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
   result.topology = analyze_topology(result.mesh);
+  result.unused_points = result.topology.isolated_vertices;
   return result;
 }
 

@@ -23,6 +23,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -185,8 +186,9 @@ void DelaunaySurfaceParams::validate(const char* method) const {
   if (!(params.max_boundary_edge_in_spacings >= 0.0) || !std::isfinite(params.max_boundary_edge_in_spacings))
     throw UsageError(fmt::format("{}: max_boundary_edge_in_spacings = {}, expected a finite value >= 0 (0: off)", method,
                                  params.max_boundary_edge_in_spacings));
-  if (params.max_hole_edges < 0)
-    throw UsageError(fmt::format("{}: max_hole_edges = {}, expected a value >= 0 (0: off)", method, params.max_hole_edges));
+  if (!(params.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(params.max_hole_perimeter_in_spacings))
+    throw UsageError(fmt::format("{}: max_hole_perimeter_in_spacings = {}, expected a finite value >= 0 (0: off)", method,
+                                 params.max_hole_perimeter_in_spacings));
 }
 
 namespace detail {
@@ -542,97 +544,6 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
     if (flip[out_piece[j]]) std::swap(out_tris[j][1], out_tris[j][2]);
   stats.flipped_pieces = std::size_t(std::count(flip.begin(), flip.end(), char(1)));
 
-  // 6. Small holes. Undersampled spots (random samples, thin parts) leave holes of a few edges
-  // where the cocone test missed a triangle or the walk met a conflict; each boundary loop of at
-  // most `max_hole_edges` edges is closed by ear clipping (shortest new edge first) with triangles
-  // of existing samples, as long as no new edge already exists in the mesh. Loops through a
-  // vertex with several boundary edges, and loops of small pieces (which would fold shut), are
-  // left open.
-  if (params.max_hole_edges >= 3 && !out_tris.empty()) {
-    auto directed_key = [](int a, int b) { return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b); };
-    std::vector<std::uint64_t> half(3 * out_tris.size());
-    for (std::size_t j = 0; j < out_tris.size(); ++j)
-      for (int k = 0; k < 3; ++k) half[3 * j + k] = directed_key(out_tris[j][k], out_tris[j][(k + 1) % 3]);
-    tbb::parallel_sort(half.begin(), half.end());
-    std::vector<std::uint64_t> added;  // directed edges of fill triangles (few), kept sorted
-    auto has_half = [&](int a, int b) {
-      const std::uint64_t key = directed_key(a, b);
-      return std::binary_search(half.begin(), half.end(), key) || std::binary_search(added.begin(), added.end(), key);
-    };
-    auto has_edge = [&](int a, int b) { return has_half(a, b) || has_half(b, a); };
-    // Boundary half-edges a -> b (no b -> a), and the number leaving each vertex.
-    std::vector<std::pair<int, int>> rim;
-    for (std::uint64_t key : half) {
-      const int a = int(key >> 32), b = int(key & 0xffffffffu);
-      if (!std::binary_search(half.begin(), half.end(), directed_key(b, a))) rim.emplace_back(a, b);
-    }
-    std::sort(rim.begin(), rim.end());
-    std::vector<std::size_t> piece_size(std::size_t(piece_count), 0);
-    std::vector<int> piece_of_vertex(n, -1);
-    for (std::size_t j = 0; j < out_tris.size(); ++j) {
-      ++piece_size[out_piece[j]];
-      for (int k = 0; k < 3; ++k) piece_of_vertex[out_tris[j][k]] = out_piece[j];
-    }
-    const std::size_t min_piece = 8 * std::size_t(params.max_hole_edges);
-    std::vector<char> rim_done(rim.size(), 0);
-    std::vector<int> loop, poly;
-    auto next_rim = [&](int a) -> long {  // the one boundary half-edge leaving a, or -1
-      const auto lo = std::lower_bound(rim.begin(), rim.end(), std::make_pair(a, std::numeric_limits<int>::min()));
-      if (lo == rim.end() || lo->first != a) return -1;
-      if (lo + 1 != rim.end() && (lo + 1)->first == a) return -1;
-      return long(lo - rim.begin());
-    };
-    for (std::size_t start = 0; start < rim.size(); ++start) {
-      if (rim_done[start]) continue;
-      loop.clear();
-      bool ok = true;
-      long h = long(start);
-      while (true) {
-        if (rim_done[h]) {
-          ok = h == long(start) && loop.size() >= 3;
-          break;
-        }
-        rim_done[h] = 1;
-        loop.push_back(rim[h].first);
-        h = next_rim(rim[h].second);
-        if (h < 0 || loop.size() > std::size_t(params.max_hole_edges)) {
-          ok = false;
-          break;
-        }
-      }
-      if (!ok) continue;
-      const int owner = piece_of_vertex[loop[0]];
-      if (owner < 0 || piece_size[owner] < min_piece) continue;
-      // The fill runs against the loop: polygon = loop reversed, clipped ear by ear.
-      poly.assign(loop.rbegin(), loop.rend());
-      std::vector<Triangle> fill_tris;
-      while (poly.size() > 3) {
-        std::size_t best = poly.size();
-        double best_len = std::numeric_limits<double>::infinity();
-        for (std::size_t j = 0; j < poly.size(); ++j) {
-          const int a = poly[(j + poly.size() - 1) % poly.size()], c = poly[(j + 1) % poly.size()];
-          if (has_edge(a, c)) continue;
-          const double len = (p[a] - p[c]).squaredNorm();
-          if (len < best_len) best_len = len, best = j;
-        }
-        if (best == poly.size()) break;
-        const std::size_t m = poly.size();
-        const int a = poly[(best + m - 1) % m], b = poly[best], c = poly[(best + 1) % m];
-        fill_tris.emplace_back(a, b, c);
-        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(c, a)), directed_key(c, a));
-        added.insert(std::upper_bound(added.begin(), added.end(), directed_key(a, c)), directed_key(a, c));
-        poly.erase(poly.begin() + std::ptrdiff_t(best));
-      }
-      if (poly.size() != 3) continue;  // (the diagonals added above only block later fills)
-      fill_tris.emplace_back(poly[0], poly[1], poly[2]);
-      ++stats.holes_filled;
-      for (const Triangle& t : fill_tris) {
-        out_tris.push_back(t);
-        out_piece.push_back(owner);
-      }
-    }
-  }
-
   ReconstructionResult result;
   result.mean_spacing = spacing;
   if (!has_normals) {
@@ -662,6 +573,13 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
   } else {
     result.mesh = TriangleMesh::from_cloud(cloud, std::move(out_tris));
   }
+  // 6. Small holes. Undersampled spots (random samples, thin parts) leave holes where the
+  // candidates missed a triangle or the walk met a conflict: the hole filler every
+  // reconstruction shares closes those up to the perimeter limit, by the vertex normals above.
+  const HoleFillStats filled = fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
+  stats.holes_filled = filled.holes_filled;
+  stats.fill_triangles = filled.triangles_added;
+  stats.fill_triangles_removed = filled.triangles_removed;
   result.topology = analyze_topology(result.mesh);
   result.unused_points = result.topology.isolated_vertices;
   return result;

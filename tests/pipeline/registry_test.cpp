@@ -141,11 +141,11 @@ std::vector<Expected> library_defaults() {
       {"reconstruct", "triangulate", "max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings},
       {"reconstruct", "cocone", "cocone_angle_deg", cp.cocone_angle_deg},
       {"reconstruct", "cocone", "sharp_edge_angle_deg", cp.sharp_edge_angle_deg},
-      {"reconstruct", "cocone", "max_hole_edges", I{cp.max_hole_edges}},
+      {"reconstruct", "cocone", "max_hole_perimeter_in_spacings", cp.max_hole_perimeter_in_spacings},
       {"reconstruct", "ball-pivot", "radii_in_spacings", bp.radii_in_spacings},
       {"reconstruct", "ball-pivot", "max_normal_angle_deg", bp.max_normal_angle_deg},
       {"reconstruct", "ball-pivot", "max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg},
-      {"reconstruct", "ball-pivot", "close_small_holes", bp.close_small_holes},
+      {"reconstruct", "ball-pivot", "max_hole_perimeter_in_spacings", bp.max_hole_perimeter_in_spacings},
   };
 }
 

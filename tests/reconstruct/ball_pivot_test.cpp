@@ -107,7 +107,7 @@ TEST(BallPivot, CubeIsClosedAcrossSharpEdges) {
 TEST(BallPivot, SmallHolePassClosesTheHolesLeftAlongSharpEdges) {
   const PointCloud cloud = test::sample_cube(6000, 1.0);
   BallPivotParams open;
-  open.close_small_holes = false;
+  open.max_hole_perimeter_in_spacings = 0.0;
   const ReconstructionResult pivoted = reconstruct_ball_pivoting(cloud, open);
   EXPECT_GT(pivoted.topology.boundary_edges, 0u);
   EXPECT_TRUE(pivoted.topology.edge_manifold());

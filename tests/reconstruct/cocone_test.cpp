@@ -115,7 +115,7 @@ TEST(Cocone, CubeIsEdgeManifoldOrientedAndCloseDespiteSharpEdges) {
   EXPECT_LE(from_truth, 1.0 * r.mean_spacing);
   // Small holes at the edges are closed (measured: 83 boundary edges without the fill, 18 with).
   CoconeParams no_fill;
-  no_fill.max_hole_edges = 0;
+  no_fill.max_hole_perimeter_in_spacings = 0.0;
   const ReconstructionResult holes = reconstruct_cocone(cloud, no_fill);
   EXPECT_TRUE(holes.topology.edge_manifold());
   EXPECT_TRUE(holes.topology.oriented());
@@ -331,8 +331,8 @@ TEST(Cocone, RejectsBadParametersAndDegenerateInput) {
   p.max_boundary_edge_in_spacings = -1.0;
   expect_error_message([&] { reconstruct_cocone(cloud, p); }, "max_boundary_edge_in_spacings = -1");
   p = {};
-  p.max_hole_edges = -2;
-  expect_error_message([&] { reconstruct_cocone(cloud, p); }, "max_hole_edges = -2");
+  p.max_hole_perimeter_in_spacings = -2.0;
+  expect_error_message([&] { reconstruct_cocone(cloud, p); }, "max_hole_perimeter_in_spacings = -2");
 
   PointCloud few;
   few.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};

@@ -6,6 +6,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 #include "pointsurf/reconstruct/reconstruction.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -26,11 +27,9 @@ struct BallPivotParams {
   // across a 90-degree edge are within 63.4; a triangle joining two parallel sheets edge-on,
   // whose vertex normals agree with each other but not with it, is near 90.
   double max_mean_normal_angle_deg = 65.0;
-  // Final pass: close holes of at most 6 boundary edges whose corners fit in the largest ball
-  // (what a still larger ball would do), on the side the normals point to; a hole the folded
-  // surface around it leaves no such triangulation for is widened once by the triangles along
-  // it (up to 12 edges) and tried again. Default true.
-  bool close_small_holes = true;
+  // Final pass: holes up to this perimeter (local spacings) are closed by fill_holes() (where
+  // the ball could not rest on a hole's corners, typically at a sharp edge); 0: off.
+  double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;

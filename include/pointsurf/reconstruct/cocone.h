@@ -39,8 +39,8 @@ struct CoconeStats : DelaunaySurfaceStats {};
 ///     (Amenta et al. 1998), then a walk over the outer side of each connected piece that keeps
 ///     the mesh edge-manifold and consistently oriented; then triangles with a boundary edge
 ///     longer than `max_boundary_edge_in_spacings` are peeled (rim slivers of open surfaces);
-///  5. boundary loops of at most `max_hole_edges` edges (holes left by undersampling) are closed
-///     by ear clipping with triangles of the samples, never reusing an existing edge.
+///  5. holes up to `max_hole_perimeter_in_spacings` local spacings (left by undersampling) are
+///     closed by fill_holes() (reconstruct/fill_holes.h) with triangles of the samples.
 /// Output: `mesh.vertices` are the input points in input order with their colours and fields.
 /// If the cloud has normals they are kept and each piece is oriented to agree with them;
 /// otherwise each closed piece faces outward (positive volume), each open piece by the hull

@@ -5,6 +5,8 @@
 // its counts.
 #include <cstddef>
 
+#include "pointsurf/reconstruct/fill_holes.h"
+
 namespace pointsurf {
 
 /// How the manifold extraction treats edges that only one candidate triangle uses.
@@ -31,9 +33,9 @@ struct DelaunaySurfaceParams {
                                         // (the long thin triangles Delaunay puts along the concave
                                         // parts of an open rim); a mesh without boundary edges is
                                         // untouched; 0: off
-  int max_hole_edges = 16;              // >= 0: boundary loops of at most this many edges are closed
-                                        // with triangles of the samples (ear clipping, no new
-                                        // vertex); 0 (or 1, 2): off
+  double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;  // >= 0:
+                                        // holes up to this perimeter (local spacings) are closed by
+                                        // fill_holes() with triangles of the samples; 0: off
   /// Throws UsageError naming the first value out of range (`method` prefixes the message).
   void validate(const char* method) const;
 };
@@ -52,7 +54,9 @@ struct DelaunaySurfaceStats {
   std::size_t closed_pieces = 0;       // connected pieces treated as closed
   std::size_t walk_dropped = 0;        // candidates the manifold walk left out
   std::size_t rim_peeled = 0;          // walked triangles then peeled at the boundary
-  std::size_t holes_filled = 0;        // small boundary loops closed (max_hole_edges)
+  std::size_t holes_filled = 0;        // small holes closed (fill_holes, max_hole_perimeter_in_spacings)
+  std::size_t fill_triangles = 0;      // triangles fill_holes added
+  std::size_t fill_triangles_removed = 0;  // triangles fill_holes removed at pinched vertices and folds
   std::size_t flipped_pieces = 0;      // pieces whose orientation the final outward test flipped
   double seconds_delaunay = 0.0;       // wall time of the 3D Delaunay triangulation(s)
   double seconds_total = 0.0;          // wall time of the whole reconstruction

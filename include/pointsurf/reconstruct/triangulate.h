@@ -7,6 +7,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 #include "pointsurf/reconstruct/reconstruction.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -32,7 +33,7 @@ struct TriangulateParams {
                                        // (hole side) are closed by a triangle, sharpest first,
                                        // when the new edge is at most twice the radius; 0: none,
                                        // [0, 180)
-  double max_hole_perimeter_in_spacings = 20.0;  // holes (at most 64 corners) whose perimeter is
+  double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;  // holes (at most 64 corners) whose perimeter is
                                        // at most this many local spacings are closed at the end;
                                        // 0: none closed (nor pinches repaired)
   /// Throws UsageError naming the first value outside the ranges above. The one place they

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The hole filler shared by the three reconstructions and fill_holes() (reconstruct/
+// fill_holes.h): small boundary loops closed by dynamic programming over the loop (Liepa 2003),
+// pinched vertices and folds opened and the larger holes they leave closed again.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/triangle_mesh.h"
+#include "reconstruct/detail/triangulate_half_edges.h"
+
+namespace pointsurf::detail {
+
+// The selected triangles and their unit normals, with the half-edge map they fill.
+struct Selection {
+  std::vector<Triangle> triangles;
+  std::vector<Vector3d> normals;
+  HalfEdgeMap edges;
+  explicit Selection(std::size_t expected) : edges(3 * expected) {}
+
+  bool free_edges(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    return !edges.contains(a, b) && !edges.contains(b, c) && !edges.contains(c, a);
+  }
+  void add(std::uint32_t a, std::uint32_t b, std::uint32_t c, const Vector3d& normal) {
+    const auto t = static_cast<std::uint32_t>(triangles.size());
+    triangles.emplace_back(int(a), int(b), int(c));
+    normals.push_back(normal);
+    edges.insert(a, b, t);
+    edges.insert(b, c, t);
+    edges.insert(c, a, t);
+  }
+};
+
+/// What close_holes did.
+struct HoleClosing {
+  std::size_t holes_filled = 0;     // loops closed (a loop reopened and closed again counts each time)
+  std::size_t fill_triangles = 0;   // triangles added
+  std::size_t pinch_triangles_removed = 0;  // triangles removed at pinched vertices and folds
+};
+
+/// Closes the holes of `sel` with at most 64 corners whose perimeter is at most
+/// `max_perimeter_in_spacings` times the mean `local_spacing` of their corners; then, up to 3
+/// times, opens the minor fans at pinched vertices and the folds along small holes that had no
+/// valid filling, and closes the holes this opens (up to 3x the limit). `normals`: one unit
+/// normal per vertex (the side the triangles face). Vertices flagged in `blocked` (may be empty)
+/// are never part of a filled loop. `on_round(r)` is called after each round (r = 0..3).
+void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                 const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
+                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round = {});
+
+}  // namespace pointsurf::detail

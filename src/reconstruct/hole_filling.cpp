@@ -1,0 +1,434 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The hole filler (reconstruct/detail/hole_filling.h) and its public form fill_holes()
+// (reconstruct/fill_holes.h).
+#include "reconstruct/detail/hole_filling.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <utility>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/reconstruct/fill_holes.h"
+
+namespace pointsurf {
+namespace detail {
+namespace {
+
+using Eigen::Vector2d;
+
+constexpr std::uint32_t kNone = HalfEdgeMap::kNone;
+// Holes with more corners than this are left open (the dynamic programme is cubic in the corner count).
+constexpr std::size_t kMaxHoleCorners = 64;
+// Rounds of opening pinched vertices and filling the holes again.
+constexpr int kRepairRounds = 3;
+// Holes that the repair opened around a small unfillable one are closed up to this many times
+// the perimeter limit.
+constexpr double kRepairedPerimeterFactor = 3.0;
+// A triangle closing a hole may deviate at most this far from each corner's normal.
+constexpr double kFillMaxDeviationDeg = 120.0;
+const double kFillMinCos = std::cos(kFillMaxDeviationDeg * std::numbers::pi / 180.0);
+
+// Fills one simple hole loop (hole half-edges loop[i] -> loop[i+1], the hole on their left
+// seen from the normals' side) by dynamic programming over its sub-chains (Barequet and Sharir
+// 1995; Liepa 2003): among the triangulations whose new edges are in the mesh in neither
+// direction and whose triangles face the way their corners' normals do, the one with
+// the smallest worst normal deviation, then the smallest area. O(m^3) for m corners; the
+// buffers are reused from loop to loop.
+class LoopFiller {
+public:
+  bool fill(const std::vector<std::uint32_t>& loop, const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+            Selection& sel) {
+    const std::size_t m = loop.size();
+    if (m < 3) return false;
+    const auto at = [m](std::size_t i, std::size_t j) { return i * m + j; };
+    diagonal_ok_.assign(m * m, 0);
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = i + 1; j < m; ++j) {
+        const bool side = j == i + 1 || (i == 0 && j == m - 1);
+        diagonal_ok_[at(i, j)] =
+            static_cast<std::uint8_t>(side || (!sel.edges.contains(loop[i], loop[j]) && !sel.edges.contains(loop[j], loop[i])));
+      }
+    cost_.assign(m * m, Cost{INFINITY, INFINITY});
+    split_.assign(m * m, 0);
+    for (std::size_t i = 0; i + 1 < m; ++i) cost_[at(i, i + 1)] = Cost{0.0, 0.0};
+    for (std::size_t length = 2; length < m; ++length)
+      for (std::size_t i = 0; i + length < m; ++i) {
+        const std::size_t j = i + length;
+        if (!diagonal_ok_[at(i, j)]) continue;
+        Cost best{INFINITY, INFINITY};
+        for (std::size_t k = i + 1; k < j; ++k) {
+          const Cost &left = cost_[at(i, k)], &right = cost_[at(k, j)];
+          if (!std::isfinite(left.worst) || !std::isfinite(right.worst)) continue;
+          const Cost tri = triangle_cost(positions, normals, loop[i], loop[k], loop[j]);
+          if (!std::isfinite(tri.worst)) continue;
+          const Cost total{std::max({left.worst, right.worst, tri.worst}), left.area + right.area + tri.area};
+          if (better(total, best)) {
+            best = total;
+            split_[at(i, j)] = static_cast<std::uint32_t>(k);
+          }
+        }
+        cost_[at(i, j)] = best;
+      }
+    if (!std::isfinite(cost_[at(0, m - 1)].worst)) return false;
+    stack_.assign(1, {0, static_cast<std::uint32_t>(m - 1)});
+    while (!stack_.empty()) {
+      const auto [i, j] = stack_.back();
+      stack_.pop_back();
+      if (j - i < 2) continue;
+      const std::uint32_t k = split_[at(i, j)];
+      const std::uint32_t a = loop[i], b = loop[k], c = loop[j];
+      sel.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+      stack_.push_back({i, k});
+      stack_.push_back({k, j});
+    }
+    return true;
+  }
+
+private:
+  struct Cost {
+    double worst;  // largest 1 - cos(angle) between a triangle's normal and a corner's normal
+    double area;
+  };
+  static bool better(const Cost& x, const Cost& y) {
+    // Deviations within 1e-3 (about 2.5 degrees near 0) count as equal: then the area decides.
+    if (std::abs(x.worst - y.worst) > 1e-3) return x.worst < y.worst;
+    return x.area < y.area;
+  }
+  static Cost triangle_cost(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals, std::uint32_t a,
+                            std::uint32_t b, std::uint32_t c) {
+    const Vector3d face = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+    const double twice_area = face.norm();
+    const double scale = (positions[b] - positions[a]).squaredNorm() + (positions[c] - positions[a]).squaredNorm();
+    if (!(twice_area > 1e-12 * scale)) return Cost{INFINITY, INFINITY};
+    const Vector3d unit = face / twice_area;
+    // Across a sharp edge a corner's normal may stand at up to 90 degrees from the triangle
+    // (more where the normals were estimated): the corners only have to agree with it on
+    // average, each within kFillMaxDeviationDeg.
+    double worst = 0.0;
+    if (!(unit.dot(normals[a] + normals[b] + normals[c]) > 0.0)) return Cost{INFINITY, INFINITY};
+    for (std::uint32_t v : {a, b, c}) {
+      const double cosine = unit.dot(normals[v]);
+      if (!(cosine > kFillMinCos)) return Cost{INFINITY, INFINITY};
+      worst = std::max(worst, 1.0 - cosine);
+    }
+    return Cost{worst, 0.5 * twice_area};
+  }
+
+  std::vector<Cost> cost_;
+  std::vector<std::uint32_t> split_;
+  std::vector<std::uint8_t> diagonal_ok_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> stack_;
+};
+
+// Closes the holes with at most kMaxHoleCorners corners whose perimeter is at most
+// `max_perimeter_in_spacings` local spacings (LoopFiller). Returns the number of holes closed
+// and adds the triangles it made to `added`; flags the corners of the small holes it could not
+// close in `reopen`.
+std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                             const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
+                             LoopFiller& filler, const std::vector<std::uint8_t>& repaired, const std::vector<std::uint8_t>& blocked,
+                             std::vector<std::uint8_t>& reopen,
+                             std::size_t& added) {
+  const std::size_t n = positions.size();
+  // Triangles per edge-connected piece (union-find), to tell the rim of a tiny isolated piece
+  // from a hole.
+  const std::size_t triangle_total = sel.triangles.size();
+  std::vector<std::uint32_t> parent(triangle_total), piece_size(triangle_total, 0);
+  for (std::size_t t = 0; t < triangle_total; ++t) parent[t] = static_cast<std::uint32_t>(t);
+  const auto root = [&](std::uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  for (std::size_t t = 0; t < triangle_total; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t twin = sel.edges.find(std::uint32_t(sel.triangles[t][(c + 1) % 3]), std::uint32_t(sel.triangles[t][c]));
+      if (twin != kNone) parent[root(twin)] = root(static_cast<std::uint32_t>(t));
+    }
+  for (std::size_t t = 0; t < triangle_total; ++t) ++piece_size[root(static_cast<std::uint32_t>(t))];
+  // Hole half-edges run opposite to the boundary edges of the mesh: y -> x for an edge x -> y
+  // without twin. The filling triangles use them in that direction. Up to three hole edges
+  // leave a vertex (more than one at a pinch, where fans touch); more are left alone.
+  constexpr std::size_t kSlots = 3;
+  std::vector<std::array<std::uint32_t, kSlots>> hole_out(n, {kNone, kNone, kNone});
+  const std::size_t triangle_count = sel.triangles.size();
+  for (std::size_t t = 0; t < triangle_count; ++t) {
+    for (int c = 0; c < 3; ++c) {
+      const auto x = static_cast<std::uint32_t>(sel.triangles[t][c]), y = static_cast<std::uint32_t>(sel.triangles[t][(c + 1) % 3]);
+      if (sel.edges.contains(y, x)) continue;
+      for (std::uint32_t& slot : hole_out[y])
+        if (slot == kNone) {
+          slot = x;
+          break;
+        }
+    }
+  }
+  // Interior angle of the hole at v between the edges p -> v and v -> w, in v's tangent plane:
+  // at a pinch the walk takes the tightest turn, which pairs each incoming hole edge with the
+  // outgoing one across the same gap between fans.
+  const auto turn = [&](std::uint32_t p, std::uint32_t v, std::uint32_t w) {
+    const Vector3d& nv = normals[v];
+    const Vector3d e1 = nv.unitOrthogonal(), e2 = nv.cross(e1);
+    const Vector3d a3 = positions[w] - positions[v], b3 = positions[p] - positions[v];
+    const Vector2d a(a3.dot(e1), a3.dot(e2)), b(b3.dot(e1), b3.dot(e2));
+    double angle = std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+    if (angle < 0.0) angle += 2.0 * std::numbers::pi;
+    return angle;
+  };
+  // The walk follows hole edges as a path; whenever it reaches a vertex already on the path,
+  // the part from there on is a simple closed loop, which is filled (when small) and cut off.
+  std::vector<std::uint32_t> position(n, kNone);
+  std::vector<std::uint32_t> path, cycle;
+  std::size_t filled = 0;
+  for (std::size_t start = 0; start < n; ++start) {
+    while (hole_out[start][0] != kNone) {
+      path.assign(1, static_cast<std::uint32_t>(start));
+      position[start] = 0;
+      while (!path.empty()) {
+        const std::uint32_t v = path.back();
+        const std::uint32_t from = path.size() >= 2 ? path[path.size() - 2] : kNone;
+        std::array<std::uint32_t, kSlots>& slots = hole_out[v];
+        std::size_t pick = kSlots;
+        double tightest = INFINITY;
+        for (std::size_t s = 0; s < kSlots; ++s) {
+          if (slots[s] == kNone) continue;
+          const double angle = from == kNone ? 0.0 : turn(from, v, slots[s]);
+          if (pick == kSlots || angle < tightest) {
+            pick = s;
+            tightest = angle;
+          }
+        }
+        if (pick == kSlots) break;  // dead end: the hole edges around it were left out
+        const std::uint32_t w = slots[pick];
+        for (std::size_t s = pick; s + 1 < kSlots; ++s) slots[s] = slots[s + 1];
+        slots[kSlots - 1] = kNone;
+        if (position[w] == kNone) {
+          position[w] = static_cast<std::uint32_t>(path.size());
+          path.push_back(w);
+          continue;
+        }
+        const std::size_t first = position[w];
+        cycle.assign(path.begin() + std::ptrdiff_t(first), path.end());
+        for (std::size_t i = first + 1; i < path.size(); ++i) position[path[i]] = kNone;
+        path.resize(first + 1);
+        if (first == 0 && hole_out[w][0] == kNone) path.clear();
+        if (cycle.size() < 3 || cycle.size() > kMaxHoleCorners) continue;
+        if (!blocked.empty() && std::any_of(cycle.begin(), cycle.end(), [&](std::uint32_t x) { return blocked[x] != 0; })) continue;
+        double perimeter = 0.0, spacing_sum = 0.0;
+        bool grown = false;
+        for (std::size_t i = 0; i < cycle.size(); ++i) {
+          perimeter += (positions[cycle[(i + 1) % cycle.size()]] - positions[cycle[i]]).norm();
+          spacing_sum += local_spacing[cycle[i]];
+          grown = grown || repaired[cycle[i]];
+        }
+        // A hole that the repair grew from a small one keeps being closed up to twice the limit.
+        const double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        if (perimeter > limit * spacing_sum / double(cycle.size())) continue;
+        const std::size_t before = sel.triangles.size();
+        if (filler.fill(cycle, positions, normals, sel)) ++filled;
+        else {
+          const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
+          const bool tiny_piece = beside < triangle_total && piece_size[root(beside)] <= 2 * cycle.size();
+          if (!tiny_piece)
+            for (std::uint32_t x : cycle) reopen[x] = 1;
+        }
+        added += sel.triangles.size() - before;
+      }
+      for (std::uint32_t x : path) position[x] = kNone;
+      position[start] = kNone;
+    }
+  }
+  return filled;
+}
+
+// Opens what the hole filling could not close: removes the triangles with two corners flagged
+// in `reopen` (those along a small hole that had no valid filling, e.g. at a fold), so that
+// the next pass sees one larger, simpler hole; at a vertex whose triangles form more than one fan
+// (fronts that met there only), keeps the fan with the largest angle at the vertex and removes
+// the others. Clears `reopen`; returns the number of triangles removed.
+std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std::uint8_t>& reopen, std::vector<std::uint8_t>& repaired,
+                         Selection& sel) {
+  const std::size_t n = positions.size(), f = sel.triangles.size();
+  std::vector<std::uint32_t> offset(n + 1, 0), around(3 * f);
+  for (const Triangle& t : sel.triangles)
+    for (int c = 0; c < 3; ++c) ++offset[std::size_t(t[c]) + 1];
+  for (std::size_t v = 0; v < n; ++v) offset[v + 1] += offset[v];
+  {
+    std::vector<std::uint32_t> cursor(offset.begin(), offset.end() - 1);
+    for (std::size_t t = 0; t < f; ++t)
+      for (int c = 0; c < 3; ++c) around[cursor[std::size_t(sel.triangles[t][c])]++] = static_cast<std::uint32_t>(t);
+  }
+  std::vector<std::uint8_t> removed(f, 0);
+  std::vector<std::uint32_t> local, fan_of;
+  std::vector<double> fan_angle;
+  std::size_t count = 0;
+  // The corner of triangle t at v: the next and previous vertices, counter-clockwise.
+  const auto corner = [&](std::uint32_t t, std::uint32_t v, std::uint32_t& next, std::uint32_t& prev) {
+    const Triangle& tri = sel.triangles[t];
+    const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
+    next = std::uint32_t(tri[(c + 1) % 3]);
+    prev = std::uint32_t(tri[(c + 2) % 3]);
+  };
+  const auto alive = [&](std::uint32_t t) { return t != kNone && !removed[t]; };
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = sel.triangles[t];
+    if (int(reopen[std::size_t(tri[0])]) + reopen[std::size_t(tri[1])] + reopen[std::size_t(tri[2])] >= 2) {
+      removed[t] = 1;
+      ++count;
+    }
+  }
+  std::fill(reopen.begin(), reopen.end(), std::uint8_t{0});
+  for (std::uint32_t v = 0; v < n; ++v) {
+    local.clear();
+    for (std::uint32_t i = offset[v]; i < offset[v + 1]; ++i)
+      if (!removed[around[i]]) local.push_back(around[i]);
+    if (local.size() < 2) continue;
+    fan_of.assign(local.size(), kNone);
+    fan_angle.clear();
+    const auto index_of = [&](std::uint32_t t) {
+      return std::size_t(std::find(local.begin(), local.end(), t) - local.begin());
+    };
+    // Label chains from their first triangle (none before it across an edge); what is left
+    // are closed fans.
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t s = 0; s < local.size(); ++s) {
+        if (fan_of[s] != kNone) continue;
+        std::uint32_t next = 0, prev = 0;
+        corner(local[s], v, next, prev);
+        if (pass == 0 && alive(sel.edges.find(v, prev))) continue;
+        const auto fan = static_cast<std::uint32_t>(fan_angle.size());
+        fan_angle.push_back(0.0);
+        for (std::size_t at = s; at < local.size() && fan_of[at] == kNone;) {
+          fan_of[at] = fan;
+          corner(local[at], v, next, prev);
+          const Vector3d a = positions[next] - positions[v], b = positions[prev] - positions[v];
+          fan_angle[fan] += std::atan2(a.cross(b).norm(), a.dot(b));
+          const std::uint32_t t = sel.edges.find(next, v);
+          at = alive(t) ? index_of(t) : local.size();
+        }
+      }
+    if (fan_angle.size() < 2) continue;
+    const auto keep = static_cast<std::uint32_t>(std::max_element(fan_angle.begin(), fan_angle.end()) - fan_angle.begin());
+    for (std::size_t s = 0; s < local.size(); ++s)
+      if (fan_of[s] != keep) {
+        removed[local[s]] = 1;
+        ++count;
+      }
+  }
+  if (count == 0) return 0;
+  Selection kept(f);
+  for (std::size_t t = 0; t < f; ++t) {
+    const Triangle& tri = sel.triangles[t];
+    if (!removed[t]) kept.add(std::uint32_t(tri[0]), std::uint32_t(tri[1]), std::uint32_t(tri[2]), sel.normals[t]);
+    else for (int c = 0; c < 3; ++c) repaired[std::size_t(tri[c])] = 1;
+  }
+  sel = std::move(kept);
+  return count;
+}
+
+}  // namespace
+
+void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
+                 const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
+                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round) {
+  if (!(max_perimeter_in_spacings > 0.0)) return;
+  const std::size_t n = positions.size();
+  LoopFiller filler;
+  std::vector<std::uint8_t> reopen(n, 0), repaired(n, 0);
+  for (int round = 0;; ++round) {
+    counts.holes_filled += fill_small_holes(positions, normals, local_spacing, max_perimeter_in_spacings, sel, filler, repaired,
+                                            blocked, reopen, counts.fill_triangles);
+    if (on_round) on_round(round);
+    if (round == kRepairRounds) break;
+    const std::size_t removed = open_pinches(positions, reopen, repaired, sel);
+    counts.pinch_triangles_removed += removed;
+    if (removed == 0) break;
+  }
+}
+
+}  // namespace detail
+
+void HoleFillParams::validate() const {
+  if (!(max_perimeter_in_spacings >= 0.0) || !std::isfinite(max_perimeter_in_spacings))
+    throw UsageError(fmt::format("fill_holes: max_perimeter_in_spacings = {}, expected a finite value >= 0 (0: none closed)",
+                                 max_perimeter_in_spacings));
+}
+
+HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
+  params.validate();
+  mesh.validate();
+  HoleFillStats stats;
+  const std::size_t n = mesh.vertices.size();
+  stats.holes_before = analyze_topology(mesh).boundary_loops.size();
+  stats.holes_after = stats.holes_before;
+  if (stats.holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) return stats;
+  const std::vector<Vector3d>& p = mesh.vertices;
+  // Degenerate triangles (a repeated index) stay as they are, outside the filler.
+  std::vector<Triangle> kept_aside, proper;
+  proper.reserve(mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles)
+    (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ? kept_aside : proper).push_back(t);
+  // Vertices on an edge with more than two triangles, or traversed twice the same way, are
+  // blocked: no loop through them is filled.
+  std::vector<std::uint8_t> blocked(n, 0);
+  {
+    std::vector<std::uint64_t> directed;
+    directed.reserve(3 * proper.size());
+    for (const Triangle& t : proper)
+      for (int c = 0; c < 3; ++c) directed.push_back((std::uint64_t(std::uint32_t(t[c])) << 32) | std::uint32_t(t[(c + 1) % 3]));
+    std::sort(directed.begin(), directed.end());
+    std::vector<std::uint64_t> undirected(directed.size());
+    for (std::size_t i = 0; i < directed.size(); ++i) {
+      const std::uint32_t a = std::uint32_t(directed[i] >> 32), b = std::uint32_t(directed[i]);
+      undirected[i] = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+      if (i > 0 && directed[i] == directed[i - 1]) blocked[a] = blocked[b] = 1;
+    }
+    std::sort(undirected.begin(), undirected.end());
+    for (std::size_t i = 2; i < undirected.size(); ++i)
+      if (undirected[i] == undirected[i - 2]) blocked[undirected[i] >> 32] = blocked[std::uint32_t(undirected[i])] = 1;
+  }
+  // Corner normals and local spacings (mean length of the edges at a vertex).
+  std::vector<Vector3d> normals(n, Vector3d::Zero()), face_sum(n, Vector3d::Zero());
+  std::vector<double> spacing(n, 0.0);
+  std::vector<std::uint32_t> degree(n, 0);
+  detail::Selection sel(proper.size() + 64);
+  for (const Triangle& t : proper) {
+    const Vector3d face = (p[std::size_t(t[1])] - p[std::size_t(t[0])]).cross(p[std::size_t(t[2])] - p[std::size_t(t[0])]);
+    const double len = face.norm();
+    sel.add(std::uint32_t(t[0]), std::uint32_t(t[1]), std::uint32_t(t[2]), len > 0.0 ? Vector3d(face / len) : Vector3d::Zero());
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t a = std::size_t(t[c]), b = std::size_t(t[(c + 1) % 3]);
+      face_sum[a] += face;
+      const double e = (p[a] - p[b]).norm();
+      spacing[a] += e;
+      spacing[b] += e;
+      degree[a] += 1;
+      degree[b] += 1;
+    }
+  }
+  const bool has_normals = mesh.vertex_normals.size() == n;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (degree[v] > 0) spacing[v] /= double(degree[v]);
+    Vector3d nrm = has_normals ? mesh.vertex_normals[v] : Vector3d::Zero();
+    if (!(nrm.norm() > 0.0) || !nrm.allFinite()) nrm = face_sum[v];
+    const double len = nrm.norm();
+    normals[v] = len > 0.0 ? Vector3d(nrm / len) : Vector3d::Zero();
+  }
+  detail::HoleClosing closing;
+  detail::close_holes(p, normals, spacing, params.max_perimeter_in_spacings, sel, blocked, closing);
+  stats.holes_filled = closing.holes_filled;
+  stats.triangles_added = closing.fill_triangles;
+  stats.triangles_removed = closing.pinch_triangles_removed;
+  if (closing.fill_triangles == 0 && closing.pinch_triangles_removed == 0) return stats;
+  mesh.triangles = std::move(sel.triangles);
+  mesh.triangles.insert(mesh.triangles.end(), kept_aside.begin(), kept_aside.end());
+  stats.holes_after = analyze_topology(mesh).boundary_loops.size();
+  return stats;
+}
+
+}  // namespace pointsurf
