@@ -61,8 +61,6 @@ BallPivotParams ball_params(const StageArgs& a) {
   return p;
 }
 
-// After any method: specks removed (min_component_share), then the flat regions labelled as
-// the face field "region" (issue 12). The topology is analysed again when faces went.
 SmallComponentParams component_params(const StageArgs& a) {
   SmallComponentParams p;
   p.min_share = a.number("min_component_share");
@@ -76,6 +74,8 @@ FlatRegionParams region_params(const StageArgs& a) {
   return p;
 }
 
+// After any method: specks removed (min_component_share), then the flat regions labelled as
+// the face field "region" (issue 12). The topology is analysed again when faces went.
 void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
   const SmallComponentsResult removed = remove_small_components(result.mesh, component_params(a));
   rec.count("components_removed", as_count(removed.components_removed));

@@ -90,30 +90,35 @@ double largest_angle(const TriangleMesh& m, const Triangle& t) {
   return *std::max_element(a.begin(), a.end());
 }
 
+// How many triangles of the mesh built with `loose`, and of the one built with `strict`, have
+// `breaks(mesh, triangle)`.
+template <typename Breaks>
+std::array<std::size_t, 2> breaking(const PointCloud& cloud, const TriangulateParams& loose, const TriangulateParams& strict, Breaks breaks) {
+  std::array<std::size_t, 2> out{};
+  for (int s = 0; s < 2; ++s) {
+    const TriangleMesh m = reconstruct_region_growing(cloud, s == 0 ? loose : strict).mesh;
+    EXPECT_GT(m.triangle_count(), 500u);  // both are meshes of the square, not empty
+    out[std::size_t(s)] = count_if_triangle(m, [&](const Triangle& t) { return breaks(m, t); });
+  }
+  return out;
+}
+
 TEST(TriangulateRules, MinimumInnerAngle) {
-  const PointCloud cloud = random_square(800, 21);
-  TriangulateParams loose = rules_only();
+  TriangulateParams loose = rules_only(), strict = rules_only();
   loose.min_angle_deg = 0.0;
-  TriangulateParams strict = rules_only();
   strict.min_angle_deg = 20.0;
-  const TriangleMesh a = reconstruct_region_growing(cloud, loose).mesh;
-  const TriangleMesh b = reconstruct_region_growing(cloud, strict).mesh;
-  const auto skinny = [](const TriangleMesh& m) { return count_if_triangle(m, [&](const Triangle& t) { return smallest_angle(m, t) < 20.0; }); };
-  EXPECT_GT(skinny(a), 20u);
-  EXPECT_EQ(skinny(b), 0u);
+  const auto [a, b] = breaking(random_square(800, 21), loose, strict, [](const TriangleMesh& m, const Triangle& t) { return smallest_angle(m, t) < 20.0; });
+  EXPECT_GT(a, 20u);  // measured: 354 of 1503 triangles
+  EXPECT_EQ(b, 0u);
 }
 
 TEST(TriangulateRules, MaximumInnerAngle) {
-  const PointCloud cloud = random_square(800, 22);
-  TriangulateParams loose = rules_only();
+  TriangulateParams loose = rules_only(), strict = rules_only();
   loose.max_angle_deg = 180.0;
-  TriangulateParams strict = rules_only();
   strict.max_angle_deg = 100.0;
-  const TriangleMesh a = reconstruct_region_growing(cloud, loose).mesh;
-  const TriangleMesh b = reconstruct_region_growing(cloud, strict).mesh;
-  const auto obtuse = [](const TriangleMesh& m) { return count_if_triangle(m, [&](const Triangle& t) { return largest_angle(m, t) > 100.0; }); };
-  EXPECT_GT(obtuse(a), 20u);
-  EXPECT_EQ(obtuse(b), 0u);
+  const auto [a, b] = breaking(random_square(800, 22), loose, strict, [](const TriangleMesh& m, const Triangle& t) { return largest_angle(m, t) > 100.0; });
+  EXPECT_GT(a, 20u);  // measured: 509 of 1489 triangles
+  EXPECT_EQ(b, 0u);
 }
 
 double longest_edge(const TriangleMesh& m) {
