@@ -68,16 +68,18 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
   // Neighbours across manifold edges only: a boundary edge has none, and on a non-manifold
   // edge no pair of its faces is the surface's continuation more than another.
   std::vector<std::array<int, 3>> neighbours(f, std::array<int, 3>{-1, -1, -1});
-  const std::vector<detail::FaceEdge> edges = detail::sorted_face_edges(mesh);
-  const auto add_neighbour = [&](int face, int other) {
-    for (int& slot : neighbours[std::size_t(face)])
-      if (slot < 0) { slot = other; return; }
-  };
-  detail::for_each_edge(edges, [&](std::size_t begin, std::size_t end) {
-    if (end - begin != 2 || edges[begin].face == edges[begin + 1].face) return;
-    add_neighbour(edges[begin].face, edges[begin + 1].face);
-    add_neighbour(edges[begin + 1].face, edges[begin].face);
-  });
+  {
+    const std::vector<detail::FaceEdge> edges = detail::sorted_face_edges(mesh);
+    const auto add_neighbour = [&](int face, int other) {
+      for (int& slot : neighbours[std::size_t(face)])
+        if (slot < 0) { slot = other; return; }
+    };
+    detail::for_each_edge(edges, [&](std::size_t begin, std::size_t end) {
+      if (end - begin != 2 || edges[begin].face == edges[begin + 1].face) return;
+      add_neighbour(edges[begin].face, edges[begin + 1].face);
+      add_neighbour(edges[begin + 1].face, edges[begin].face);
+    });
+  }
   const auto has_normal = [&](std::size_t t) { return geo[t].area > 0.0; };
 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
