@@ -55,6 +55,7 @@ int run_info(const std::vector<std::string>& args) {
   options.format = format;
 
   PointCloud cloud;
+  FieldSet face_fields;
   std::size_t faces = 0;
   nlohmann::json info;
   std::vector<std::string> warnings;
@@ -70,6 +71,7 @@ int run_info(const std::vector<std::string>& args) {
     cloud.normals = std::move(r.mesh.vertex_normals);
     cloud.colors = std::move(r.mesh.vertex_colors);
     cloud.fields = std::move(r.mesh.vertex_fields);
+    face_fields = std::move(r.mesh.face_fields);
   } else {
     CloudReadResult r = read_point_cloud(input, options);
     info["encoding"] = r.encoding;
@@ -90,14 +92,20 @@ int run_info(const std::vector<std::string>& args) {
   info["bbox_max"] = {box.max.x(), box.max.y(), box.max.z()};
   info["bbox_diagonal"] = box.diagonal();
   if (cloud.size() >= 2) info["mean_spacing"] = mean_spacing(cloud.positions);
-  nlohmann::json fields = nlohmann::json::array();
-  for (const ScalarField& f : cloud.fields) {
-    const auto [lo, hi] = f.values.empty() ? std::pair<double, double>{0.0, 0.0}
-                                            : std::pair<double, double>{*std::min_element(f.values.begin(), f.values.end()),
-                                                                        *std::max_element(f.values.begin(), f.values.end())};
-    fields.push_back({{"name", f.name}, {"type", std::string(scalar_type_ply_name(f.type))}, {"min", lo}, {"max", hi}});
-  }
+  // Name, type and range of each field (vertex or face).
+  auto describe = [](const FieldSet& set) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const ScalarField& f : set) {
+      const auto [lo, hi] = f.values.empty() ? std::pair<double, double>{0.0, 0.0}
+                                              : std::pair<double, double>{*std::min_element(f.values.begin(), f.values.end()),
+                                                                          *std::max_element(f.values.begin(), f.values.end())};
+      out.push_back({{"name", f.name}, {"type", std::string(scalar_type_ply_name(f.type))}, {"min", lo}, {"max", hi}});
+    }
+    return out;
+  };
+  const nlohmann::json fields = describe(cloud.fields);
   info["fields"] = fields;
+  if (mesh_format) info["face_fields"] = describe(face_fields);
 
   if (!common.report_path.empty()) {
     // The one report schema: a run with one stage "info" whose metrics are the description.
@@ -138,9 +146,13 @@ int run_info(const std::vector<std::string>& args) {
   fmt::print("bbox max     {:.6f} {:.6f} {:.6f}\n", box.max.x(), box.max.y(), box.max.z());
   fmt::print("extent       {:.6g} {:.6g} {:.6g} (diagonal {:.6g})\n", box.extent().x(), box.extent().y(), box.extent().z(), box.diagonal());
   if (info.contains("mean_spacing")) fmt::print("mean spacing {:.6g}\n", info["mean_spacing"].get<double>());
-  for (const auto& f : fields)
-    fmt::print("field        {} ({}) range [{:g}, {:g}]\n", f["name"].get<std::string>(), f["type"].get<std::string>(), f["min"].get<double>(),
-               f["max"].get<double>());
+  for (const char* kind : {"fields", "face_fields"}) {
+    if (!info.contains(kind)) continue;
+    const char* label = kind == std::string("fields") ? "field       " : "face field  ";
+    for (const auto& f : info[kind])
+      fmt::print("{} {} ({}) range [{:g}, {:g}]\n", label, f["name"].get<std::string>(), f["type"].get<std::string>(), f["min"].get<double>(),
+                 f["max"].get<double>());
+  }
   for (const std::string& w : warnings) fmt::print("warning      {}\n", w);
   return 0;
 }

@@ -16,6 +16,9 @@ void TriangleMesh::validate() const {
   for (const ScalarField& f : vertex_fields)
     if (f.values.size() != n)
       throw InputError(fmt::format("mesh: field '{}' has {} values for {} vertices", f.name, f.values.size(), n));
+  for (const ScalarField& f : face_fields)
+    if (f.values.size() != triangles.size())
+      throw InputError(fmt::format("mesh: face field '{}' has {} values for {} triangles", f.name, f.values.size(), triangles.size()));
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (int c = 0; c < 3; ++c)
       if (triangles[t][c] < 0 || static_cast<std::size_t>(triangles[t][c]) >= n)
@@ -31,13 +34,14 @@ PointCloud TriangleMesh::vertex_cloud() const {
   return cloud;
 }
 
-TriangleMesh TriangleMesh::from_cloud(PointCloud cloud, std::vector<Triangle> triangles) {
+TriangleMesh TriangleMesh::from_cloud(PointCloud cloud, std::vector<Triangle> triangles, FieldSet face_fields) {
   TriangleMesh mesh;
   mesh.vertices = std::move(cloud.positions);
   mesh.vertex_normals = std::move(cloud.normals);
   mesh.vertex_colors = std::move(cloud.colors);
   mesh.vertex_fields = std::move(cloud.fields);
   mesh.triangles = std::move(triangles);
+  mesh.face_fields = std::move(face_fields);
   return mesh;
 }
 

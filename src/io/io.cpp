@@ -235,10 +235,16 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
   const int n = static_cast<int>(raw.cloud.size());
   std::vector<Triangle> triangles;
   triangles.reserve(raw.triangles.size() + raw.polygons.size());
-  auto add = [&](int a, int b, int c) {
+  // Face fields follow the triangles: a polygon's value goes to each triangle of its fan, a
+  // dropped face takes its value with it.
+  std::vector<std::size_t> source_face;
+  const bool face_fields = !raw.face_fields.empty();
+  if (face_fields) source_face.reserve(raw.triangles.size() + raw.polygons.size());
+  auto add = [&](int a, int b, int c, std::size_t face) {
     if (!remap.empty()) { a = remap[a]; b = remap[b]; c = remap[c]; }
     if (a < 0 || b < 0 || c < 0 || a == b || b == c || a == c) { ++result.dropped_faces; return; }
     triangles.emplace_back(a, b, c);
+    if (face_fields) source_face.push_back(face);
   };
   const int n_in = static_cast<int>(remap.empty() ? n : remap.size());
   auto check = [&](int idx, std::size_t face) {
@@ -248,17 +254,22 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
   for (std::size_t f = 0; f < raw.triangles.size(); ++f) {
     const Triangle& t = raw.triangles[f];
     check(t[0], f); check(t[1], f); check(t[2], f);
-    add(t[0], t[1], t[2]);
+    add(t[0], t[1], t[2], f);
   }
   for (std::size_t f = 0; f < raw.polygons.size(); ++f) {
     const std::vector<int>& poly = raw.polygons[f];
     for (int idx : poly) check(idx, raw.triangles.size() + f);
     if (poly.size() < 3) { ++result.dropped_faces; continue; }
     if (poly.size() > 3) ++result.polygons_triangulated;
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) add(poly[0], poly[k], poly[k + 1]);
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) add(poly[0], poly[k], poly[k + 1], raw.triangles.size() + f);
   }
   raw.cloud.validate();
-  result.mesh = TriangleMesh::from_cloud(std::move(raw.cloud), std::move(triangles));
+  FieldSet fields;
+  for (const ScalarField& in : raw.face_fields) {
+    ScalarField& out = fields.add(in.name, source_face.size(), in.type);
+    for (std::size_t t = 0; t < source_face.size(); ++t) out.values[t] = in.values[source_face[t]];
+  }
+  result.mesh = TriangleMesh::from_cloud(std::move(raw.cloud), std::move(triangles), std::move(fields));
   return result;
 }
 
@@ -292,11 +303,11 @@ private:
 };
 
 void write_any(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
-               const WriteOptions& options) {
+               const FieldSet& face_fields, const WriteOptions& options) {
   cloud.validate();
   const std::string format = options.format.empty() ? format_from_extension(path) : lower(options.format);
   TemporaryOutput out(path);
-  if (format == "ply") io::detail::write_ply(out.path(), cloud, triangles, options);
+  if (format == "ply") io::detail::write_ply(out.path(), cloud, triangles, face_fields, options);
   else if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") {
     // The XYZ writer needs to know the family member (csv: header + commas, pts: count line).
     WriteOptions xyz_options = options;
@@ -318,14 +329,14 @@ void write_any(const std::filesystem::path& path, const PointCloud& cloud, const
 }  // namespace
 
 void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
-  write_any(path, cloud, {}, options);
+  write_any(path, cloud, {}, {}, options);
 }
 
 void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
   mesh.validate();
   // The vertex attributes travel as a cloud; this copies the vertices once, which is small
   // next to the file I/O.
-  write_any(path, mesh.vertex_cloud(), mesh.triangles, options);
+  write_any(path, mesh.vertex_cloud(), mesh.triangles, mesh.face_fields, options);
 }
 
 }  // namespace pointsurf

@@ -442,8 +442,17 @@ private:
       corners.push_back(static_cast<int>(v));
     };
     ListHandler handler{static_cast<std::size_t>(list), on_count, on_item};
-    if (ascii()) read_ascii_element(e, [](std::size_t, std::size_t, double) {}, &handler);
-    else read_binary_element(e, [](std::size_t, std::size_t, double) {}, &handler);
+    // Every scalar face property is a face field that keeps its type (other lists are skipped).
+    std::vector<double*> sinks(e.properties.size(), nullptr);
+    for (const Property& p : e.properties)
+      if (!p.is_list) raw_.face_fields.add(p.name, n, p.type);
+    for (std::size_t p = 0; p < e.properties.size(); ++p)
+      if (!e.properties[p].is_list) sinks[p] = raw_.face_fields.find(e.properties[p].name)->values.data();
+    auto on_scalar = [&](std::size_t i, std::size_t p, double v) {
+      if (sinks[p]) sinks[p][i] = v;
+    };
+    if (ascii()) read_ascii_element(e, on_scalar, &handler);
+    else read_binary_element(e, on_scalar, &handler);
     finish_face();
   }
 
@@ -691,6 +700,11 @@ void check_single_precision(const std::string& file, const PointCloud& cloud) {
                                  file, step, largest, diagonal));
 }
 
+void check_field_name(const std::string& file, const std::string& name, const char* what) {
+  if (name.empty() || name.find_first_of(" \t\r\n") != std::string::npos)
+    throw UsageError(fmt::format("{}: {} name '{}' cannot be written to PLY: names must be non-empty without spaces", file, what, name));
+}
+
 }  // namespace
 
 RawData read_ply(const std::filesystem::path& path, const ReadOptions&) {
@@ -702,7 +716,7 @@ RawData read_ply(const std::filesystem::path& path, const ReadOptions&) {
 }
 
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
-               const WriteOptions& options) {
+               const FieldSet& face_fields, const WriteOptions& options) {
   const std::string file = display_name(path);
   const Encoding encoding = options.ascii ? Encoding::Ascii
                             : options.ply_encoding == PlyEncoding::Ascii          ? Encoding::Ascii
@@ -725,33 +739,47 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud, const
     for (int a = 0; a < 3; ++a) columns.push_back(OutColumn{names[a], ScalarType::UInt8, nullptr, base + a, 3, 255.0});
   }
   for (const ScalarField& field : cloud.fields) {
-    if (field.name.empty() || field.name.find_first_of(" \t\r\n") != std::string::npos)
-      throw UsageError(fmt::format("{}: field name '{}' cannot be written to PLY: names must be non-empty without spaces", file, field.name));
+    check_field_name(file, field.name, "field");
     for (const OutColumn& c : columns)
       if (c.name == field.name)
         throw UsageError(fmt::format("{}: field '{}' clashes with the PLY property of the same name; rename the field", file, field.name));
     columns.push_back(OutColumn{field.name, ply_type(field.type), field.values.empty() ? nullptr : field.values.data(), nullptr, 1});
   }
+  // Face fields follow the corner list of each face (none without faces).
+  std::vector<OutColumn> face_columns;
+  if (!triangles.empty())
+    for (const ScalarField& field : face_fields) {
+      check_field_name(file, field.name, "face field");
+      if (field.name == "vertex_indices")
+        throw UsageError(fmt::format("{}: face field 'vertex_indices' clashes with the PLY corner list; rename the field", file));
+      if (field.values.size() != triangles.size())
+        throw UsageError(fmt::format("{}: face field '{}' has {} values for {} faces", file, field.name, field.values.size(), triangles.size()));
+      face_columns.push_back(OutColumn{field.name, ply_type(field.type), field.values.data(), nullptr, 1});
+    }
   const Encoder precise_text = options.precision < 17 ? text_encoder_with_precision(options.precision) : nullptr;
-  for (std::size_t c = 0; c < columns.size(); ++c) {
-    OutColumn& col = columns[c];
+  auto set_encoder = [&](OutColumn& col, bool position) {
     switch (encoding) {
-      case Encoding::Ascii: col.encode = (c < 3 && precise_text) ? precise_text : text_encoder(col.type); break;
+      case Encoding::Ascii: col.encode = (position && precise_text) ? precise_text : text_encoder(col.type); break;
       case Encoding::BinaryLittleEndian: col.encode = binary_encoder<false>(col.type); break;
       case Encoding::BinaryBigEndian: col.encode = binary_encoder<true>(col.type); break;
     }
-  }
+  };
+  for (std::size_t c = 0; c < columns.size(); ++c) set_encoder(columns[c], c < 3);
+  for (OutColumn& col : face_columns) set_encoder(col, false);
 
   FileWriter out(path);
   std::string header = fmt::format("ply\nformat {} 1.0\ncomment written by pointsurf\nelement vertex {}\n", encoding_name(encoding), n);
   for (const OutColumn& c : columns) header += fmt::format("property {} {}\n", scalar_type_ply_name(c.type), c.name);
-  if (!triangles.empty()) header += fmt::format("element face {}\nproperty list uchar int vertex_indices\n", triangles.size());
+  if (!triangles.empty()) {
+    header += fmt::format("element face {}\nproperty list uchar int vertex_indices\n", triangles.size());
+    for (const OutColumn& c : face_columns) header += fmt::format("property {} {}\n", scalar_type_ply_name(c.type), c.name);
+  }
   header += "end_header\n";
   out.write(header);
 
   // Records are assembled in a chunk buffer and handed to the writer in large pieces.
   const bool text = encoding == Encoding::Ascii;
-  const std::size_t max_record = columns.size() * (text ? 33 : 8) + 1;
+  const std::size_t max_record = (columns.size() + face_columns.size() + 4) * (text ? 33 : 8) + 1;
   std::vector<char> chunk(std::max<std::size_t>(1 << 16, 2 * max_record));
   char* p = chunk.data();
   char* const flush_at = chunk.data() + chunk.size() - max_record;
@@ -768,12 +796,17 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud, const
     if (p >= flush_at) { out.write(chunk.data(), static_cast<std::size_t>(p - chunk.data())); p = chunk.data(); }
   }
   const bool big = encoding == Encoding::BinaryBigEndian;
-  for (const Triangle& t : triangles) {
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    const Triangle& t = triangles[f];
     if (text) {
       *p++ = '3';
       for (int k = 0; k < 3; ++k) {
         *p++ = ' ';
         p = std::to_chars(p, p + 16, t[k]).ptr;
+      }
+      for (const OutColumn& c : face_columns) {
+        *p++ = ' ';
+        p = c.encode(c.value(f), p);
       }
       *p++ = '\n';
     } else {
@@ -784,6 +817,7 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud, const
         std::memcpy(p, &v, 4);
         p += 4;
       }
+      for (const OutColumn& c : face_columns) p = c.encode(c.value(f), p);
     }
     if (p >= flush_at) { out.write(chunk.data(), static_cast<std::size_t>(p - chunk.data())); p = chunk.data(); }
   }

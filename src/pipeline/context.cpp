@@ -40,6 +40,7 @@ void DataItem::assign_mesh(TriangleMesh mesh, std::string mesh_source) {
   cloud.colors = std::move(mesh.vertex_colors);
   cloud.fields = std::move(mesh.vertex_fields);
   triangles = std::move(mesh.triangles);
+  face_fields = std::move(mesh.face_fields);
   is_mesh = true;
   source = std::move(mesh_source);
 }

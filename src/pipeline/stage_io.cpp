@@ -47,6 +47,7 @@ void run_read(StageRun& run) {
     item.cloud.colors = std::move(r.mesh.vertex_colors);
     item.cloud.fields = std::move(r.mesh.vertex_fields);
     item.triangles = std::move(r.mesh.triangles);
+    item.face_fields = std::move(r.mesh.face_fields);
     item.is_mesh = !item.triangles.empty();
   } else {
     CloudReadResult r = read_point_cloud(file, options);
@@ -81,6 +82,10 @@ std::vector<std::string> lost_attributes(const std::string& path, const std::str
   std::vector<std::string> lost;
   const PointCloud& c = item.cloud;
   if (!item.triangles.empty() && !holds_faces(format)) lost.push_back(plural(item.triangles.size(), "face"));
+  // Only PLY has per-face properties; a format that holds faces but no face properties loses
+  // the face fields (a format without faces loses them with the faces, said above).
+  if (!item.triangles.empty() && holds_faces(format) && format != "ply")
+    for (const ScalarField& f : item.face_fields) lost.push_back(fmt::format("face field '{}'", f.name));
   if (format == "stl") {
     if (c.has_normals()) lost.push_back("normals");
     if (c.has_colors()) lost.push_back("colours");
@@ -125,7 +130,7 @@ void run_write(StageRun& run) {
   if (item.triangles.empty()) {
     write_point_cloud(file, item.cloud, w);
   } else {
-    TriangleMesh mesh = TriangleMesh::from_cloud(item.cloud, item.triangles);
+    TriangleMesh mesh = TriangleMesh::from_cloud(item.cloud, item.triangles, item.face_fields);
     write_mesh(file, mesh, w);
   }
   const std::size_t faces = holds_faces(format) ? item.triangles.size() : 0;

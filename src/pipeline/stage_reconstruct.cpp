@@ -12,6 +12,8 @@
 #include "pointsurf/reconstruct/ball_pivot.h"
 #include "pointsurf/reconstruct/cocone.h"
 #include "pointsurf/reconstruct/crust.h"
+#include "pointsurf/reconstruct/flat_regions.h"
+#include "pointsurf/reconstruct/mesh_cleanup.h"
 #include "pointsurf/reconstruct/triangulate.h"
 
 namespace pointsurf::detail {
@@ -81,6 +83,37 @@ BallPivotParams ball_params(const StageArgs& a) {
   return p;
 }
 
+SmallComponentParams component_params(const StageArgs& a) {
+  SmallComponentParams p;
+  p.min_share = a.number("min_component_share");
+  return p;
+}
+
+FlatRegionParams region_params(const StageArgs& a) {
+  FlatRegionParams p;
+  p.max_normal_angle_deg = a.number("region_normal_angle_deg");
+  p.max_seed_angle_deg = a.number("region_seed_angle_deg");
+  return p;
+}
+
+// After any method: specks removed (min_component_share), then the flat regions labelled as
+// the face field "region" (issue 12). The topology is analysed again when faces went.
+void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
+  const SmallComponentsResult removed = remove_small_components(result.mesh, component_params(a));
+  rec.count("components_removed", as_count(removed.components_removed));
+  rec.count("faces_removed", as_count(removed.faces_removed));
+  if (removed.faces_removed > 0) {
+    const std::size_t used_before = result.topology.vertices;
+    result.topology = analyze_topology(result.mesh);
+    result.unused_points += used_before - result.topology.vertices;
+  }
+  const FlatRegionResult regions = label_flat_regions(result.mesh, region_params(a));
+  ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
+  std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
+  rec.count("regions", as_count(regions.regions));
+  rec.count("largest_region_faces", as_count(regions.largest_region));
+}
+
 void run_reconstruct(StageRun& run) {
   const StageArgs& a = run.args;
   const std::string& method = a.method();
@@ -127,6 +160,7 @@ void run_reconstruct(StageRun& run) {
     radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
     rec.set_used("radii", radii);
   }
+  clean_and_label_faces(result, a, rec);
   const MeshTopology& t = result.topology;
   rec.count("points", as_count(cloud.size()));
   rec.count("triangles", as_count(t.triangles));
@@ -174,6 +208,8 @@ StageSpec reconstruct_stage() {
   const TriangulateParams tp;
   const CoconeParams cp;  // the extraction defaults are the Crust's too (DelaunaySurfaceParams)
   const BallPivotParams bp;
+  const SmallComponentParams scp;
+  const FlatRegionParams fp;
   StageSpec s;
   s.name = "reconstruct";
   s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust or ball pivoting";
@@ -226,11 +262,22 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, true, false)
           .only(ball),
+      P::number("min_component_share", scp.min_share, "Remove components with fewer faces than this share of all; 0: keep all")
+          .unit("share of faces")
+          .range(0, 1),
+      P::number("region_normal_angle_deg", fp.max_normal_angle_deg, "Flat regions: largest normal angle across an edge")
+          .unit("degrees")
+          .range(0, 180, true, false),
+      P::number("region_seed_angle_deg", fp.max_seed_angle_deg, "Flat regions: largest normal angle to the region's seed face; 180: off")
+          .unit("degrees")
+          .range(0, 180, true, false),
   };
   s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4"};
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
+    component_params(a).validate();
+    region_params(a).validate();
     if (a.method() == "triangulate") triangulate_params(a).validate();
     else if (a.method() == "cocone") cocone_params(a).validate();
     else if (a.method() == "crust") crust_params(a).validate();

@@ -367,7 +367,10 @@ HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
   stats.holes_before = analyze_topology(mesh).boundary_loops.size();
   stats.holes_after = stats.holes_before;
   if (stats.holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) return stats;
-  const std::vector<Vector3d>& p = mesh.vertices;
+  // Local origin: georeferenced coordinates keep their precision in the cross products.
+  const Vector3d origin = bounding_box(mesh.vertices).center();
+  std::vector<Vector3d> p(n);
+  for (std::size_t v = 0; v < n; ++v) p[v] = mesh.vertices[v] - origin;
   // Degenerate triangles (a repeated index) stay as they are, outside the filler.
   std::vector<Triangle> kept_aside, proper;
   proper.reserve(mesh.triangles.size());
@@ -427,6 +430,10 @@ HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
   if (closing.fill_triangles == 0 && closing.pinch_triangles_removed == 0) return stats;
   mesh.triangles = std::move(sel.triangles);
   mesh.triangles.insert(mesh.triangles.end(), kept_aside.begin(), kept_aside.end());
+  if (!mesh.face_fields.empty()) {
+    mesh.face_fields = FieldSet{};  // a new triangle has no value
+    stats.face_fields_dropped = true;
+  }
   stats.holes_after = analyze_topology(mesh).boundary_loops.size();
   return stats;
 }

@@ -156,6 +156,33 @@ TEST_F(Cli, ConvertCarriesFacesAndWarnsWhereTheFormatCannotHoldThem) {
   EXPECT_EQ(report["warnings"].size(), 1u);
 }
 
+TEST_F(Cli, FaceFieldsTravelThroughPlyAndAreNamedWhereAFormatDropsThem) {
+  TriangleMesh mesh;
+  mesh.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  mesh.triangles = {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)};
+  mesh.face_fields.add("region", 4, ScalarType::Int32).values = {0, 1, 1, 2};
+  write_mesh(path("tet.ply"), mesh);
+  RunResult r = run("convert " + path("tet.ply") + " " + path("copy.ply") + " --ascii", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("cannot hold"), std::string::npos) << r.err;
+  const TriangleMesh back = read_mesh(path("copy.ply")).mesh;
+  ASSERT_NE(back.face_fields.find("region"), nullptr);
+  EXPECT_EQ(back.face_fields.find("region")->values, (std::vector<double>{0, 1, 1, 2}));
+  r = run("info " + path("copy.ply") + " --json", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  ASSERT_EQ(info["face_fields"].size(), 1u);
+  EXPECT_EQ(info["face_fields"][0]["name"], "region");
+  EXPECT_EQ(info["face_fields"][0]["type"], "int");
+  EXPECT_EQ(info["face_fields"][0]["max"], 2.0);
+  for (const std::string ext : {"obj", "off", "stl"}) {
+    r = run("convert " + path("tet.ply") + " " + path("tet." + ext), dir_);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.err.find("the " + ext + " format cannot hold: face field 'region'"), std::string::npos) << r.err;
+    EXPECT_EQ(read_mesh(path("tet." + ext)).mesh.triangle_count(), 4u);
+  }
+}
+
 TEST_F(Cli, FloatOutputOfGeoreferencedCloudIsRefusedAndLeavesNothing) {
   const RunResult r = run("convert " + test::data_path("b9_training.ply").string() + " " + path("b9.ply") + " --float", dir_);
   EXPECT_EQ(r.exit_code, 1) << r.err;

@@ -59,6 +59,15 @@ TriangleMesh attributed_mesh() {
     id.values[i] = 4000000000.0 + static_cast<double>(i);
   }
   for (int i = 0; i + 2 < 50; i += 3) mesh.triangles.emplace_back(i, i + 1, i + 2);
+  const std::size_t faces = mesh.triangles.size();
+  ScalarField& region = mesh.face_fields.add("region", faces, ScalarType::Int32);
+  ScalarField& quality = mesh.face_fields.add("quality", faces, ScalarType::Float32);
+  ScalarField& flag = mesh.face_fields.add("flag", faces, ScalarType::UInt8);
+  for (std::size_t f = 0; f < faces; ++f) {
+    region.values[f] = 100000.0 * static_cast<double>(f % 3) - 7.0;
+    quality.values[f] = 0.125 * static_cast<double>(f);
+    flag.values[f] = static_cast<double>((37 * f) % 256);
+  }
   return mesh;
 }
 
@@ -89,6 +98,13 @@ TEST_P(PlyRoundTrip, KeepsEveryAttributeExactly) {
     ASSERT_NE(got, nullptr) << field.name;
     EXPECT_EQ(got->type, field.type) << field.name;
     EXPECT_EQ(got->values, field.values) << field.name;
+  }
+  ASSERT_EQ(back.face_fields.size(), mesh.face_fields.size());
+  for (std::size_t i = 0; i < mesh.face_fields.size(); ++i) {
+    const ScalarField& field = mesh.face_fields[i];
+    EXPECT_EQ(back.face_fields[i].name, field.name);  // in the order written
+    EXPECT_EQ(back.face_fields[i].type, field.type) << field.name;
+    EXPECT_EQ(back.face_fields[i].values, field.values) << field.name;
   }
   EXPECT_EQ(result.dropped_faces, 0u);
   EXPECT_EQ(result.polygons_triangulated, 0u);
@@ -189,6 +205,14 @@ TEST(Ply, AsciiWithOddOrderSpellingsAndExtraElements) {
   EXPECT_EQ(quality->type, ScalarType::Int16);
   EXPECT_EQ(quality->values, (std::vector<double>{-7, 12, 300, -1}));
   EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{Triangle(0, 1, 2), Triangle(1, 2, 3)}));
+  // The scalar face properties on either side of the lists become face fields of their type.
+  ASSERT_EQ(mesh.face_fields.size(), 2u);
+  EXPECT_EQ(mesh.face_fields[0].name, "flags");
+  EXPECT_EQ(mesh.face_fields[0].type, ScalarType::UInt8);
+  EXPECT_EQ(mesh.face_fields[0].values, (std::vector<double>{7, 0}));
+  EXPECT_EQ(mesh.face_fields[1].name, "area");
+  EXPECT_EQ(mesh.face_fields[1].type, ScalarType::Float32);
+  EXPECT_EQ(mesh.face_fields[1].values, (std::vector<double>{0.5, 0.25}));
 }
 
 // What pcl_pcd2ply / pcl::PLYWriter writes for a point cloud: an empty "element face 0" with
@@ -317,6 +341,63 @@ TEST(Ply, QuadsAreTriangulatedByReadMesh) {
   EXPECT_EQ(result.polygons_triangulated, 2u);
   EXPECT_EQ(result.mesh.triangles,
             (std::vector<Triangle>{Triangle(0, 1, 4), Triangle(0, 4, 3), Triangle(1, 2, 5), Triangle(1, 5, 4), Triangle(0, 4, 3)}));
+}
+
+TEST(Ply, FaceFieldsFollowPolygonFansAndDroppedFaces) {
+  const fs::path path = test::temp_dir("ply_face_fields") / "quads.ply";
+  // Binary, big endian: a quad (split in two), a degenerate triangle (dropped), a triangle.
+  std::string bytes =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face 3\nproperty short part\nproperty list uchar int vertex_indices\nproperty double weight\nend_header\n";
+  const double xy[5][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {2, 0}};
+  for (const auto& p : xy) {
+    put(bytes, p[0], true);
+    put(bytes, p[1], true);
+    put(bytes, 0.0, true);
+  }
+  auto face = [&](std::int16_t part, std::vector<std::int32_t> corners, double weight) {
+    put(bytes, part, true);
+    put(bytes, static_cast<std::uint8_t>(corners.size()), true);
+    for (const std::int32_t c : corners) put(bytes, c, true);
+    put(bytes, weight, true);
+  };
+  face(-3, {0, 1, 2, 3}, 0.5);
+  face(8, {1, 1, 4}, 2.0);
+  face(11, {1, 4, 2}, -1.25);
+  write_bytes(path, bytes);
+  const MeshReadResult result = read_mesh(path);
+  EXPECT_EQ(result.polygons_triangulated, 1u);
+  EXPECT_EQ(result.dropped_faces, 1u);
+  const TriangleMesh& mesh = result.mesh;
+  ASSERT_EQ(mesh.triangles, (std::vector<Triangle>{Triangle(0, 1, 2), Triangle(0, 2, 3), Triangle(1, 4, 2)}));
+  ASSERT_NE(mesh.face_fields.find("part"), nullptr);
+  EXPECT_EQ(mesh.face_fields.find("part")->type, ScalarType::Int16);
+  EXPECT_EQ(mesh.face_fields.find("part")->values, (std::vector<double>{-3, -3, 11}));
+  ASSERT_NE(mesh.face_fields.find("weight"), nullptr);
+  EXPECT_EQ(mesh.face_fields.find("weight")->values, (std::vector<double>{0.5, 0.5, -1.25}));
+  EXPECT_NO_THROW(mesh.validate());
+  // A cloud read of the same file has no faces and so no face fields to keep.
+  EXPECT_EQ(read_point_cloud(path).face_count, 3u);
+}
+
+TEST(Ply, FaceFieldsNeedFacesAndGoodNames) {
+  const fs::path dir = test::temp_dir("ply_face_field_errors");
+  TriangleMesh mesh = attributed_mesh();
+  // Without faces there is no face element, so nothing to write them into: no error.
+  TriangleMesh no_faces = mesh;
+  no_faces.triangles.clear();
+  for (ScalarField& f : no_faces.face_fields) f.values.clear();
+  write_mesh(dir / "points.ply", no_faces);
+  EXPECT_TRUE(read_mesh(dir / "points.ply").mesh.face_fields.empty());
+  mesh.face_fields.add("bad name", mesh.triangle_count(), ScalarType::Int32);
+  test::expect_error<UsageError>([&] { write_mesh(dir / "bad.ply", mesh); }, "face field name 'bad name' cannot be written to PLY");
+  TriangleMesh short_field = attributed_mesh();
+  short_field.face_fields.add("short", 2);
+  test::expect_error<InputError>([&] { write_mesh(dir / "short.ply", short_field); },
+                                 "mesh: face field 'short' has 2 values for 16 triangles");
+  TriangleMesh clash = attributed_mesh();
+  clash.face_fields.add("vertex_indices", clash.triangle_count());
+  test::expect_error<UsageError>([&] { write_mesh(dir / "clash.ply", clash); }, "clashes with the PLY corner list");
 }
 
 TEST(Ply, GeoreferencedCloudSurvivesDoubleRoundTrip) {

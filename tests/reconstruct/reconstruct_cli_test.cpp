@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -128,6 +129,55 @@ TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommand) {
     EXPECT_TRUE(test::contains(r.err, method + " ")) << r.err;
     EXPECT_GT(read_mesh(path(method + ".ply")).mesh.triangle_count(), 0u) << method;
   }
+}
+
+// A sphere and, far from it, a small flat patch: the patch is a separate component that
+// min_component_share removes, and each face of the mesh carries its flat region.
+TEST_F(ReconstructCli, RemovesSmallComponentsAndLabelsFlatRegions) {
+  PointCloud cloud = test::sample_sphere(3000, 1.0);
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      cloud.positions.emplace_back(5.0 + 0.03 * i + 0.004 * j, 5.0 + 0.03 * j, 5.0);
+      cloud.normals.emplace_back(0.0, 0.0, 1.0);
+    }
+  write_point_cloud(path("cloud.ply"), cloud);
+  const std::string base = "reconstruct " + path("cloud.ply") + " --method ball-pivot ";
+  RunResult r = run_cli(base + path("all.ply") + " --min-component-share 0 --report " + path("all.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json all = stage("all.json", "reconstruct")["figures"];
+  ASSERT_GE(all["components"].get<int>(), 2) << "the patch must be triangulated for this test";
+  EXPECT_EQ(all["components_removed"], 0);
+  EXPECT_EQ(all["faces_removed"], 0);
+
+  r = run_cli(base + path("mesh.ply") + " --min-component-share 0.01 --report " + path("run.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json rec = stage("run.json", "reconstruct");
+  const nlohmann::json& m = rec["figures"];
+  EXPECT_EQ(rec["parameters"]["min_component_share"], 0.01);
+  EXPECT_EQ(m["components"], 1);
+  EXPECT_EQ(m["components_removed"].get<int>(), all["components"].get<int>() - 1);
+  EXPECT_EQ(m["faces_removed"].get<int>(), all["triangles"].get<int>() - m["triangles"].get<int>());
+  EXPECT_EQ(m["unused_points"].get<int>(), all["unused_points"].get<int>() + 16);  // the patch's points
+  const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
+  EXPECT_EQ(mesh.vertex_count(), cloud.size());  // the points stay, as vertices
+  EXPECT_EQ(mesh.triangle_count(), m["triangles"].get<std::size_t>());
+  const ScalarField* region = mesh.face_fields.find("region");
+  ASSERT_NE(region, nullptr);
+  EXPECT_EQ(region->type, ScalarType::Int32);
+  std::set<double> labels(region->values.begin(), region->values.end());
+  EXPECT_EQ(labels.size(), m["regions"].get<std::size_t>());
+  EXPECT_EQ(*labels.begin(), 0.0);
+  EXPECT_EQ(*labels.rbegin(), static_cast<double>(labels.size() - 1));
+  EXPECT_GE(labels.size(), 15u);  // caps of at most 30 degrees (region_seed_angle_deg)
+  EXPECT_GT(m["largest_region_faces"].get<int>(), 0);
+
+  // OBJ has no face properties: the write says what it drops.
+  r = run_cli(base + path("mesh.obj"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "cannot hold: face field 'region'")) << r.err;
+  r = run_cli(base + path("bad.ply") + " --region-seed-angle-deg 0", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--region-seed-angle-deg: 0 is out of range (0, 180]")) << r.err;
 }
 
 TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {

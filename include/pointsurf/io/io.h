@@ -80,7 +80,9 @@ struct MeshReadResult {
 
 /// Reads any supported file as a point cloud (a mesh file gives its vertices).
 CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOptions& options = {});
-/// Reads a mesh (PLY, OFF, OBJ, STL); a file without faces gives an empty triangle list.
+/// Reads a mesh (PLY, OFF, OBJ, STL); a file without faces gives an empty triangle list. PLY
+/// face properties other than the corner list become face fields (a polygon's value goes to
+/// every triangle of its fan).
 MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
 
 enum class PlyEncoding { BinaryLittleEndian, BinaryBigEndian, Ascii };
@@ -102,7 +104,8 @@ struct WriteOptions {
 /// Writes a cloud; formats that hold faces get none. Throws UsageError for a format that
 /// cannot hold the data as asked and Error on an I/O failure.
 void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options = {});
-/// Writes a mesh (PLY, OFF, OBJ, STL; XYZ/PCD/LAS get its vertices only).
+/// Writes a mesh (PLY, OFF, OBJ, STL; XYZ/PCD/LAS get its vertices only). Face fields go to
+/// PLY only, as extra `element face` properties of their own type; other formats drop them.
 void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options = {});
 
 }  // namespace pointsurf

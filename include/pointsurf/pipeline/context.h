@@ -16,10 +16,11 @@
 namespace pointsurf {
 
 /// One named item: a cloud, or a mesh (its vertices with their attributes in `cloud`, its
-/// faces in `triangles`).
+/// faces in `triangles`, their per-face values in `face_fields`).
 struct DataItem {
   PointCloud cloud;
   std::vector<Triangle> triangles;
+  FieldSet face_fields;  // each holds one value per triangle; cleared with the triangles
   bool is_mesh = false;
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
 

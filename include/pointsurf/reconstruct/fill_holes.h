@@ -25,6 +25,7 @@ struct HoleFillStats {
                                      // removed so that the larger hole they open can be closed
   std::size_t holes_after = 0;       // boundary loops left (the larger ones, and those through a
                                      // non-manifold edge)
+  bool face_fields_dropped = false;  // the input's face fields were dropped (triangles changed)
 };
 
 /// Closes the small holes of `mesh` in place: each boundary loop whose perimeter is at most

@@ -20,6 +20,7 @@ struct RawData {
   PointCloud cloud;
   std::vector<std::vector<int>> polygons;  // only for mesh formats; indices into cloud
   std::vector<Triangle> triangles;         // readers may fill this directly instead of polygons
+  FieldSet face_fields;                    // one value per face as read (triangles or polygons)
   std::string encoding;                    // "ascii", "binary_little_endian", ...
   std::size_t dropped_nonfinite = 0;       // dropped by the reader itself (organized PCD)
   std::vector<std::string> warnings;
@@ -36,8 +37,10 @@ RawData read_obj(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_stl(const std::filesystem::path& path, const ReadOptions& options);
 
 // Writers: write `cloud` (the vertices, with attributes) and `triangles` (may be empty) to the
-// already-open temporary file path `tmp_path`; the dispatch renames it afterwards.
-void write_ply(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
+// already-open temporary file path `tmp_path`; the dispatch renames it afterwards. Only PLY
+// holds face fields (one value per triangle each).
+void write_ply(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
+               const FieldSet& face_fields, const WriteOptions& options);
 void write_xyz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);

@@ -23,6 +23,7 @@ inline void drop_faces(DataItem& item, StageRecord& record) {
     record.warnings.push_back(fmt::format("the input is a mesh: its {} are dropped ({} works on points)",
                                           plural(item.triangles.size(), "face"), record.type));
   item.triangles.clear();
+  item.face_fields = FieldSet{};
   item.is_mesh = false;
 }
 
