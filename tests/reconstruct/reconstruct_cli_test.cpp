@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 #include <set>
 #include <string>
 
@@ -178,6 +179,50 @@ TEST_F(ReconstructCli, RemovesSmallComponentsAndLabelsFlatRegions) {
   r = run_cli(base + path("bad.ply") + " --region-seed-angle-deg 0", dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--region-seed-angle-deg: 0 is out of range (0, 180]")) << r.err;
+}
+
+// An open patch whose middle (a disc) has points the region growing cannot use (zero normals):
+// the mesh has a wide hole there although the cloud has none. The outer rim is reported as a
+// border loop, the hole (wider than the hole filler's limit) as a hole, and only the hole is
+// warned about. (Where the cloud itself has a gap, its rim is a border of the scan.)
+TEST_F(ReconstructCli, TellsTheBorderOfTheScanFromAHole) {
+  PointCloud patch;
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 40; ++i) {
+      const Vector3d x(i + jitter(rng), j + jitter(rng), 0.0);
+      const bool in_disc = (x - Vector3d(20, 20, 0)).norm() < 6.0;  // perimeter ~38 spacings, above the default 20
+      patch.positions.push_back(x + Vector3d(6e5, 5e6, 30.0));
+      patch.normals.push_back(in_disc ? Vector3d::Zero() : Vector3d(0.0, 0.0, 1.0));
+    }
+  write_point_cloud(path("patch.ply"), patch);
+  const RunResult r = run_cli("reconstruct " + path("patch.ply") + " " + path("mesh.ply") + " --report " + path("run.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json f = stage("run.json", "reconstruct")["figures"];
+  EXPECT_EQ(f["holes"], 1) << f.dump();
+  EXPECT_EQ(f["border_loops"], 1) << f.dump();
+  EXPECT_NEAR(f["largest_hole_perimeter"].get<double>(), 2.0 * 3.14159265358979 * 6.0, 8.0);
+  EXPECT_GT(f["border_perimeter"].get<double>(), 4.0 * 39.0 - 8.0);  // the jittered rim zigzags: longer
+  EXPECT_LT(f["border_perimeter"].get<double>(), 1.5 * 4.0 * 39.0);
+  EXPECT_TRUE(test::contains(r.err, "1 hole remains")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "1 boundary loop along the border of the scan")) << r.err;
+  EXPECT_FALSE(test::contains(r.err, "noisy")) << r.err;
+}
+
+// Noise of about one spacing: the stage says so and what to do.
+TEST_F(ReconstructCli, WarnsWhenThePointsAreTooNoisyForAnInterpolatingSurface) {
+  PointCloud sphere = test::sample_sphere(6000, 1.0, Vector3d::Zero(), 8);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g(0.0, 0.04);  // 1.2 mean spacings of 0.032
+  for (Vector3d& x : sphere.positions) x *= 1.0 + g(rng);
+  sphere.normals.clear();
+  write_point_cloud(path("noisy.xyz"), sphere);
+  const RunResult r = run_cli("reconstruct " + path("noisy.xyz") + " " + path("mesh.ply") + " --method cocone --report " + path("run.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "the points are noisy")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "pointsurf clean --method bilateral")) << r.err;
+  EXPECT_GT(stage("run.json", "reconstruct")["figures"]["noise_in_spacings"].get<double>(), 0.4);
 }
 
 TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
