@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// A bounding-volume hierarchy over the triangles of a mesh: exact closest points (double
+// precision about a local origin, so 1e6 m coordinates lose nothing), the generalized winding
+// number (Barill, Dickson, Schmidt, Levin, Jacobson 2018, "Fast winding numbers for soups and
+// clouds") and box-overlap queries for the self-intersection pass.
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/triangle_mesh.h"
+
+namespace pointsurf {
+
+/// Which part of a triangle the closest point lies on.
+enum class TriangleFeature : unsigned char { Face, Edge, Vertex };
+
+/// The closest point of a mesh to a query.
+struct ClosestPoint {
+  double squared_distance = std::numeric_limits<double>::infinity();  // squared cloud units
+  Vector3d point = Vector3d::Zero();   // on the mesh, cloud units (absolute coordinates)
+  int triangle = -1;                   // index into the mesh's triangles; -1: none found
+  TriangleFeature feature = TriangleFeature::Face;
+  int local_index = 0;                 // Vertex: corner 0..2; Edge: edge i from corner i to i+1
+  bool found() const noexcept { return triangle >= 0; }
+};
+
+/// The hierarchy. Built once (parallel, O(F log F)); every query is const and thread-safe.
+/// The triangles' corners are held relative to the centre of the mesh's bounding box.
+/// Triangles with a vertex index out of range throw InputError at construction; degenerate
+/// triangles (repeated or collinear corners) are kept and answered as segments.
+class TriangleBvh {
+public:
+  TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
+  explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices, mesh.triangles) {}
+
+  std::size_t triangle_count() const noexcept { return corners_.size() / 3; }
+  const Vector3d& origin() const noexcept { return origin_; }
+
+  /// The closest point of the mesh to `query`, among points closer than `max_distance`
+  /// (cloud units); `found()` is false when none is, or the mesh has no triangle.
+  ClosestPoint closest(const Vector3d& query, double max_distance = std::numeric_limits<double>::infinity()) const;
+
+  /// Generalized winding number of the mesh at `query`: 1 inside and 0 outside a closed,
+  /// outward-oriented surface, a smooth value in between near cracks and holes, and a sum over
+  /// pieces where they overlap. Far clusters are replaced by their dipole (first-order)
+  /// expansion when farther than `accuracy` times their radius (Barill et al. use 2).
+  double winding_number(const Vector3d& query, double accuracy = 2.0) const;
+
+  /// Calls `visit(t)` for every triangle whose bounding box overlaps [lo, hi] (absolute
+  /// coordinates).
+  void overlapping(const Vector3d& lo, const Vector3d& hi, const std::function<void(int)>& visit) const;
+
+  /// Corner `c` (0..2) of triangle `t`, relative to origin().
+  const Vector3d& corner(std::size_t t, int c) const noexcept { return corners_[3 * t + static_cast<std::size_t>(c)]; }
+
+private:
+  struct Node {
+    Vector3d lo, hi;                 // box, relative to origin
+    Vector3d area_centroid;          // area-weighted centroid (winding number)
+    Vector3d area_normal;            // sum of area vectors (half the cross products)
+    double radius = 0.0;             // farthest box corner from area_centroid
+    int first = 0, count = 0;        // leaf: range in order_; inner: count == 0
+    int right = 0;                   // inner: right child index (left child is index + 1)
+  };
+  void build(int node, int begin, int end, std::vector<Vector3d>& centroids, int depth);
+  Vector3d origin_ = Vector3d::Zero();
+  std::vector<Vector3d> corners_;    // 3 per triangle, relative to origin
+  std::vector<int> order_;           // triangle indices, leaf order
+  std::vector<Node> nodes_;
+};
+
+/// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5), in
+/// the caller's frame. Degenerate triangles are answered through their edges.
+ClosestPoint closest_point_on_triangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c);
+
+}  // namespace pointsurf
