@@ -4,7 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <map>
+#include <cstdint>
 #include <mutex>
 #include <optional>
 #include <utility>
@@ -12,10 +12,12 @@
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/evaluate/mesh_quality.h"
 #include "pointsurf/evaluate/triangle_bvh.h"
+#include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
 
@@ -47,9 +49,12 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
   const std::size_t f = mesh.triangles.size();
   PseudoNormals n;
   n.vertex.assign(mesh.vertices.size(), Vector3d::Zero());
-  n.edge.assign(3 * f, Vector3d::Zero());
+  n.across.assign(3 * f, -1);
   n.face.assign(f, Vector3d::Zero());
-  std::map<std::pair<int, int>, std::vector<std::size_t>> edges;  // undirected edge -> (3t + i)
+  // Undirected edges as (smaller, larger) keys with their use 3t + i, sorted so that the uses of
+  // one edge lie together.
+  std::vector<std::pair<std::uint64_t, std::size_t>> edges;
+  edges.reserve(3 * f);
   for (std::size_t t = 0; t < f; ++t) {
     const Triangle& tri = mesh.triangles[t];
     const Vector3d& a = mesh.vertices[static_cast<std::size_t>(tri[0])];
@@ -58,7 +63,8 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
     if (len > 0.0) n.face[t] = cross / len;
     for (int i = 0; i < 3; ++i) {
       const int u = tri[i], v = tri[(i + 1) % 3];
-      edges[{std::min(u, v), std::max(u, v)}].push_back(3 * t + std::size_t(i));
+      const auto lo = static_cast<std::uint64_t>(std::min(u, v)), hi = static_cast<std::uint64_t>(std::max(u, v));
+      edges.emplace_back((lo << 32) | hi, 3 * t + std::size_t(i));
       // The angle of the corner at vertex tri[i].
       const Vector3d e1 = mesh.vertices[static_cast<std::size_t>(tri[(i + 1) % 3])] - mesh.vertices[static_cast<std::size_t>(tri[i])];
       const Vector3d e2 = mesh.vertices[static_cast<std::size_t>(tri[(i + 2) % 3])] - mesh.vertices[static_cast<std::size_t>(tri[i])];
@@ -66,10 +72,15 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
       n.vertex[static_cast<std::size_t>(tri[i])] += angle * n.face[t];
     }
   }
-  for (const auto& [edge, uses] : edges) {
-    Vector3d sum = Vector3d::Zero();
-    for (std::size_t u : uses) sum += n.face[u / 3];
-    for (std::size_t u : uses) n.edge[u] = sum;
+  tbb::parallel_sort(edges.begin(), edges.end());
+  for (std::size_t b = 0; b < edges.size();) {
+    std::size_t e = b;
+    while (e < edges.size() && edges[e].first == edges[b].first) ++e;
+    if (e - b == 2) {  // a manifold edge: each side sees the other
+      n.across[edges[b].second] = static_cast<int>(edges[b + 1].second / 3);
+      n.across[edges[b + 1].second] = static_cast<int>(edges[b].second / 3);
+    }
+    b = e;
   }
   return n;
 }
@@ -120,9 +131,12 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
   std::atomic<std::size_t> done{0};
   std::atomic<bool> cancelled{false};
   std::mutex progress_lock;
+  // Queries in Morton order: neighbours walk the same nodes, which stay in cache.
+  const std::vector<std::uint32_t> order = n > 10000 ? morton_order(points) : std::vector<std::uint32_t>{};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
     if (cancelled.load(std::memory_order_relaxed)) return;
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+    for (std::size_t k = range.begin(); k != range.end(); ++k) {
+      const std::size_t i = order.empty() ? k : order[k];
       const ClosestPoint c = bvh->closest(points[i], limit);
       if (!c.found()) {
         result.distances[i] = std::numeric_limits<double>::infinity();
@@ -133,9 +147,9 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
       double s = 1.0;
       if (sign == DistanceSign::PseudoNormal && d > 0.0) {
         const std::size_t t = static_cast<std::size_t>(c.triangle);
-        const Vector3d& pn = c.feature == TriangleFeature::Face   ? normals->face[t]
-                             : c.feature == TriangleFeature::Edge ? normals->edge[3 * t + std::size_t(c.local_index)]
-                                                                  : normals->vertex[static_cast<std::size_t>(mesh.triangles[t][c.local_index])];
+        const Vector3d pn = c.feature == TriangleFeature::Face   ? normals->face[t]
+                            : c.feature == TriangleFeature::Edge ? normals->edge(t, c.local_index)
+                                                                 : normals->vertex[static_cast<std::size_t>(mesh.triangles[t][c.local_index])];
         // Both vectors about the nearest point: p - c is computed from absolute coordinates
         // whose difference is exact to the rounding of the inputs.
         s = (points[i] - c.point).dot(pn) < 0.0 ? -1.0 : 1.0;

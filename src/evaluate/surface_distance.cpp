@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -49,12 +50,17 @@ std::vector<Vector3d> sample_mesh_surface(const TriangleMesh& mesh, std::size_t 
 }
 
 std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, const SurfaceView& to, bool exact, std::size_t samples,
-                                              std::uint64_t seed) {
+                                              std::uint64_t seed, const TriangleBvh* bvh) {
   std::vector<double> out(points.size(), 0.0);
+  const std::vector<std::uint32_t> order = points.size() > 10000 ? morton_order(points) : std::vector<std::uint32_t>{};
   if (to.is_mesh() && exact) {
-    const TriangleBvh bvh(to.points, to.triangles);
+    std::optional<TriangleBvh> own;
+    if (bvh == nullptr) bvh = &own.emplace(to.points, to.triangles);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = std::sqrt(bvh.closest(points[i]).squared_distance);
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        const std::size_t i = order.empty() ? k : order[k];
+        out[i] = std::sqrt(bvh->closest(points[i]).squared_distance);
+      }
     });
     return out;
   }

@@ -101,19 +101,47 @@ TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Tri
   const std::size_t f = triangles.size();
   if (f > static_cast<std::size_t>(std::numeric_limits<int>::max() / 3))
     throw InputError(fmt::format("{} triangles: more than a hierarchy can index", f));
-  corners_.resize(3 * f);
+  vertices_.resize(vertices.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertices.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t v = range.begin(); v != range.end(); ++v) vertices_[v] = vertices[v] - origin_;
+  });
+  faces_.assign(triangles.begin(), triangles.end());  // by the mesh's index while building
   order_.resize(f);
+  slot_.resize(f);
   std::vector<Vector3d> centroids(f);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t t = range.begin(); t != range.end(); ++t) {
-      for (int c = 0; c < 3; ++c) corners_[3 * t + std::size_t(c)] = vertices[static_cast<std::size_t>(triangles[t][c])] - origin_;
-      centroids[t] = (corners_[3 * t] + corners_[3 * t + 1] + corners_[3 * t + 2]) / 3.0;
+      centroids[t] = (slot_corner(t, 0) + slot_corner(t, 1) + slot_corner(t, 2)) / 3.0;
       order_[t] = static_cast<int>(t);
     }
   });
-  if (f == 0) return;
+  if (f == 0) {
+    vertices_.clear();
+    return;
+  }
   nodes_.resize(static_cast<std::size_t>(subtree_nodes(static_cast<int>(f))));
   build(0, 0, static_cast<int>(f), centroids, 0);
+  centroids = {};
+  // Faces in leaf order and vertices renumbered by first use: a leaf's triangles and their
+  // corners lie side by side in memory. Unused vertices are dropped.
+  std::vector<int> renumber(vertices_.size(), -1);
+  std::vector<Vector3d> used;
+  used.reserve(vertices_.size());
+  std::vector<Triangle> ordered(f);
+  for (std::size_t i = 0; i < f; ++i) {
+    const std::size_t t = static_cast<std::size_t>(order_[i]);
+    slot_[t] = static_cast<int>(i);
+    for (int c = 0; c < 3; ++c) {
+      int& id = renumber[static_cast<std::size_t>(faces_[t][c])];
+      if (id < 0) {
+        id = static_cast<int>(used.size());
+        used.push_back(vertices_[static_cast<std::size_t>(faces_[t][c])]);
+      }
+      ordered[i][c] = id;
+    }
+  }
+  faces_ = std::move(ordered);
+  vertices_ = std::move(used);
 }
 
 void TriangleBvh::build(int index, int begin, int end, std::vector<Vector3d>& centroids, int depth) {
@@ -121,26 +149,13 @@ void TriangleBvh::build(int index, int begin, int end, std::vector<Vector3d>& ce
   node.lo = Vector3d::Constant(std::numeric_limits<double>::infinity());
   node.hi = -node.lo;
   Vector3d clo = node.lo, chi = node.hi;
-  Vector3d weighted = Vector3d::Zero();
-  double area = 0.0;
-  node.area_normal.setZero();
   for (int i = begin; i < end; ++i) {
     const std::size_t t = static_cast<std::size_t>(order_[static_cast<std::size_t>(i)]);
-    const Vector3d &a = corners_[3 * t], &b = corners_[3 * t + 1], &c = corners_[3 * t + 2];
+    const Vector3d &a = slot_corner(t, 0), &b = slot_corner(t, 1), &c = slot_corner(t, 2);
     node.lo = node.lo.cwiseMin(a).cwiseMin(b).cwiseMin(c);
     node.hi = node.hi.cwiseMax(a).cwiseMax(b).cwiseMax(c);
     clo = clo.cwiseMin(centroids[t]);
     chi = chi.cwiseMax(centroids[t]);
-    const Vector3d n = 0.5 * (b - a).cross(c - a);
-    const double ta = n.norm();
-    node.area_normal += n;
-    weighted += ta * centroids[t];
-    area += ta;
-  }
-  node.area_centroid = area > 0.0 ? Vector3d(weighted / area) : Vector3d(0.5 * (node.lo + node.hi));
-  for (int k = 0; k < 8; ++k) {
-    const Vector3d corner((k & 1) ? node.hi.x() : node.lo.x(), (k & 2) ? node.hi.y() : node.lo.y(), (k & 4) ? node.hi.z() : node.lo.z());
-    node.radius = std::max(node.radius, (corner - node.area_centroid).norm());
   }
   const int n = end - begin;
   if (n <= kLeafSize) {
@@ -164,6 +179,42 @@ void TriangleBvh::build(int index, int begin, int end, std::vector<Vector3d>& ce
   }
 }
 
+void TriangleBvh::make_dipoles(int index, int depth) const {
+  const Node& node = nodes_[static_cast<std::size_t>(index)];
+  Dipole& d = dipoles_[static_cast<std::size_t>(index)];
+  Vector3d weighted = Vector3d::Zero();
+  if (node.count > 0) {
+    for (int i = node.first; i < node.first + node.count; ++i) {
+      const std::size_t slot = static_cast<std::size_t>(i);
+      const Vector3d &a = slot_corner(slot, 0), &b = slot_corner(slot, 1), &c = slot_corner(slot, 2);
+      const Vector3d n = 0.5 * (b - a).cross(c - a);
+      const double area = n.norm();
+      d.area_normal += n;
+      d.area += area;
+      weighted += area * (a + b + c) / 3.0;
+    }
+  } else {
+    const int left = index + 1, right = node.right;
+    if (depth < 12)
+      tbb::parallel_invoke([&] { make_dipoles(left, depth + 1); }, [&] { make_dipoles(right, depth + 1); });
+    else {
+      make_dipoles(left, depth + 1);
+      make_dipoles(right, depth + 1);
+    }
+    for (const int child : {left, right}) {
+      const Dipole& c = dipoles_[static_cast<std::size_t>(child)];
+      d.area_normal += c.area_normal;
+      d.area += c.area;
+      weighted += c.area * c.area_centroid;
+    }
+  }
+  d.area_centroid = d.area > 0.0 ? Vector3d(weighted / d.area) : Vector3d(0.5 * (node.lo + node.hi));
+  for (int k = 0; k < 8; ++k) {
+    const Vector3d corner((k & 1) ? node.hi.x() : node.lo.x(), (k & 2) ? node.hi.y() : node.lo.y(), (k & 4) ? node.hi.z() : node.lo.z());
+    d.radius = std::max(d.radius, (corner - d.area_centroid).norm());
+  }
+}
+
 ClosestPoint TriangleBvh::closest(const Vector3d& query, double max_distance) const {
   ClosestPoint best;
   if (nodes_.empty()) return best;
@@ -182,11 +233,11 @@ ClosestPoint TriangleBvh::closest(const Vector3d& query, double max_distance) co
     const Node& node = nodes_[static_cast<std::size_t>(e.node)];
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
-        const std::size_t t = static_cast<std::size_t>(order_[static_cast<std::size_t>(i)]);
-        ClosestPoint c = closest_point_on_triangle(p, corners_[3 * t], corners_[3 * t + 1], corners_[3 * t + 2]);
+        const std::size_t slot = static_cast<std::size_t>(i);
+        ClosestPoint c = closest_point_on_triangle(p, slot_corner(slot, 0), slot_corner(slot, 1), slot_corner(slot, 2));
         if (c.squared_distance < best2 || (!best.found() && c.squared_distance <= best2)) {
           best2 = c.squared_distance;
-          c.triangle = static_cast<int>(t);
+          c.triangle = order_[slot];
           best = c;
         }
       }
@@ -209,24 +260,30 @@ ClosestPoint TriangleBvh::closest(const Vector3d& query, double max_distance) co
 
 double TriangleBvh::winding_number(const Vector3d& query, double accuracy) const {
   if (nodes_.empty()) return 0.0;
+  std::call_once(dipoles_once_, [this] {
+    dipoles_.resize(nodes_.size());
+    make_dipoles(0, 0);
+  });
   const Vector3d p = query - origin_;
   double solid_angle = 0.0;
   int stack[128];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
-    const Vector3d d = node.area_centroid - p;
+    const std::size_t index = static_cast<std::size_t>(stack[--top]);
+    const Node& node = nodes_[index];
+    const Dipole& dipole = dipoles_[index];
+    const Vector3d d = dipole.area_centroid - p;
     const double dist = d.norm();
-    if (dist > accuracy * node.radius && dist > 0.0) {
-      solid_angle += d.dot(node.area_normal) / (dist * dist * dist);
+    if (dist > accuracy * dipole.radius && dist > 0.0) {
+      solid_angle += d.dot(dipole.area_normal) / (dist * dist * dist);
       continue;
     }
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
-        const std::size_t t = static_cast<std::size_t>(order_[static_cast<std::size_t>(i)]);
+        const std::size_t t = static_cast<std::size_t>(i);
         // Van Oosterom and Strackee's formula for the signed solid angle of one triangle.
-        const Vector3d a = corners_[3 * t] - p, b = corners_[3 * t + 1] - p, c = corners_[3 * t + 2] - p;
+        const Vector3d a = slot_corner(t, 0) - p, b = slot_corner(t, 1) - p, c = slot_corner(t, 2) - p;
         const double la = a.norm(), lb = b.norm(), lc = c.norm();
         const double numerator = a.dot(b.cross(c));
         const double denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
@@ -234,9 +291,8 @@ double TriangleBvh::winding_number(const Vector3d& query, double accuracy) const
       }
       continue;
     }
-    const int self = static_cast<int>(&node - nodes_.data());
     stack[top++] = node.right;
-    stack[top++] = self + 1;
+    stack[top++] = static_cast<int>(index) + 1;
   }
   return solid_angle / (4.0 * kPi);
 }
@@ -252,10 +308,10 @@ void TriangleBvh::overlapping(const Vector3d& lo_abs, const Vector3d& hi_abs, co
     if ((node.lo.array() > hi.array()).any() || (node.hi.array() < lo.array()).any()) continue;
     if (node.count > 0) {
       for (int i = node.first; i < node.first + node.count; ++i) {
-        const std::size_t t = static_cast<std::size_t>(order_[static_cast<std::size_t>(i)]);
-        const Vector3d &a = corners_[3 * t], &b = corners_[3 * t + 1], &c = corners_[3 * t + 2];
+        const std::size_t slot = static_cast<std::size_t>(i);
+        const Vector3d &a = slot_corner(slot, 0), &b = slot_corner(slot, 1), &c = slot_corner(slot, 2);
         const Vector3d tlo = a.cwiseMin(b).cwiseMin(c), thi = a.cwiseMax(b).cwiseMax(c);
-        if ((tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all()) visit(static_cast<int>(t));
+        if ((tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all()) visit(order_[slot]);
       }
       continue;
     }

@@ -141,8 +141,12 @@ TEST(MeshDistance, PseudoNormalsOfACubeCornerPointOutward) {
     const Vector3d corner = test::cube_mesh().vertices[v];
     EXPECT_GT(n.vertex[v].normalized().dot(corner.normalized()), 0.99) << v;
   }
-  ASSERT_EQ(n.edge.size(), 36u);
-  for (const Vector3d& e : n.edge) EXPECT_GT(e.norm(), 0.9);
+  ASSERT_EQ(n.across.size(), 36u);
+  for (std::size_t t = 0; t < 12; ++t)
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_GE(n.across[3 * t + std::size_t(i)], 0);  // closed: every edge has a face across
+      EXPECT_GT(n.edge(t, i).norm(), 0.9);
+    }
 }
 
 TEST(MeshDistance, BadInputIsNamed) {

@@ -55,13 +55,19 @@ void check_measurable_mesh(const TriangleMesh& mesh, const std::string& what);
 MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshDistanceParams& params = {},
                                   const TriangleBvh* bvh = nullptr, const ProgressCallback& progress = {});
 
-/// Angle-weighted pseudo-normals of a mesh: per vertex, per triangle edge (3 per triangle, edge
-/// i from corner i to i+1: the sum of the normals of the triangles sharing it) and per face
-/// (unit normals; zero for degenerate faces).
+/// Angle-weighted pseudo-normals of a mesh: per vertex (the angle-weighted sum of the unit
+/// normals of its faces) and per face (unit normals; zero for degenerate faces). An edge's
+/// pseudo-normal is the sum of the normals of its two faces: `across` holds, for edge i of
+/// triangle t (from corner i to i+1), the other triangle on that edge at 3t + i (-1 on a boundary
+/// or a non-manifold edge, where the face's own normal stands).
 struct PseudoNormals {
   std::vector<Vector3d> vertex;  // V
-  std::vector<Vector3d> edge;    // 3F
   std::vector<Vector3d> face;    // F
+  std::vector<int> across;       // 3F
+  Vector3d edge(std::size_t t, int i) const {
+    const int other = across[3 * t + static_cast<std::size_t>(i)];
+    return other < 0 ? face[t] : Vector3d(face[t] + face[static_cast<std::size_t>(other)]);
+  }
 };
 PseudoNormals pseudo_normals(const TriangleMesh& mesh);
 

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -39,7 +40,7 @@ public:
   TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
   explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices, mesh.triangles) {}
 
-  std::size_t triangle_count() const noexcept { return corners_.size() / 3; }
+  std::size_t triangle_count() const noexcept { return faces_.size(); }
   const Vector3d& origin() const noexcept { return origin_; }
 
   /// The closest point of the mesh to `query`, among points closer than `max_distance`
@@ -56,23 +57,38 @@ public:
   /// coordinates).
   void overlapping(const Vector3d& lo, const Vector3d& hi, const std::function<void(int)>& visit) const;
 
-  /// Corner `c` (0..2) of triangle `t`, relative to origin().
-  const Vector3d& corner(std::size_t t, int c) const noexcept { return corners_[3 * t + static_cast<std::size_t>(c)]; }
+  /// Corner `c` (0..2) of triangle `t` (the mesh's index), relative to origin().
+  const Vector3d& corner(std::size_t t, int c) const noexcept {
+    return vertices_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(slot_[t])][c])];
+  }
 
 private:
+  // What the closest-point walk reads, one cache line per node.
   struct Node {
     Vector3d lo, hi;                 // box, relative to origin
-    Vector3d area_centroid;          // area-weighted centroid (winding number)
-    Vector3d area_normal;            // sum of area vectors (half the cross products)
-    double radius = 0.0;             // farthest box corner from area_centroid
-    int first = 0, count = 0;        // leaf: range in order_; inner: count == 0
+    int first = 0, count = 0;        // leaf: range of leaf-order slots; inner: count == 0
     int right = 0;                   // inner: right child index (left child is index + 1)
   };
+  // What only the winding number reads, made on its first call.
+  struct Dipole {
+    Vector3d area_centroid = Vector3d::Zero();  // area-weighted centroid
+    Vector3d area_normal = Vector3d::Zero();    // sum of area vectors (half the cross products)
+    double area = 0.0;
+    double radius = 0.0;             // farthest box corner from area_centroid
+  };
   void build(int node, int begin, int end, std::vector<Vector3d>& centroids, int depth);
+  void make_dipoles(int node, int depth) const;
+  const Vector3d& slot_corner(std::size_t slot, int c) const noexcept {
+    return vertices_[static_cast<std::size_t>(faces_[slot][c])];
+  }
   Vector3d origin_ = Vector3d::Zero();
-  std::vector<Vector3d> corners_;    // 3 per triangle, relative to origin
-  std::vector<int> order_;           // triangle indices, leaf order
+  std::vector<Vector3d> vertices_;   // relative to origin, in order of first use by the leaves
+  std::vector<Triangle> faces_;      // per leaf-order slot: indices into vertices_
+  std::vector<int> order_;           // leaf-order slot -> the mesh's triangle index
+  std::vector<int> slot_;            // the mesh's triangle index -> leaf-order slot
   std::vector<Node> nodes_;
+  mutable std::vector<Dipole> dipoles_;  // one per node
+  mutable std::once_flag dipoles_once_;
 };
 
 /// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5), in
