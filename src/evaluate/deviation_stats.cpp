@@ -10,6 +10,53 @@
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
+namespace {
+
+// Equal bins over [lo, hi] (widened around a single value); values outside go to the end bins.
+void fill_histogram(std::span<const double> values, std::size_t bins, double lo, double hi, std::vector<double>& edges,
+                    std::vector<std::size_t>& counts) {
+  if (!(hi > lo)) {
+    const double half = lo != 0.0 ? 0.5 * std::abs(lo) : 0.5;
+    lo -= half;
+    hi += half;
+  }
+  edges.resize(bins + 1);
+  for (std::size_t i = 0; i <= bins; ++i) edges[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
+  counts.assign(bins, 0);
+  for (double v : values) {
+    const double f = (v - lo) / (hi - lo) * static_cast<double>(bins);
+    counts[static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(bins - 1)))]++;
+  }
+}
+
+}  // namespace
+
+double percentile_of_sorted(std::span<const double> sorted, double percent) {
+  if (sorted.empty()) return 0.0;
+  const double n = static_cast<double>(sorted.size());
+  const double rank = std::ceil(percent / 100.0 * n);
+  return sorted[static_cast<std::size_t>(std::clamp(rank, 1.0, n)) - 1];
+}
+
+ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo, double hi) {
+  ValueDistribution d;
+  if (values.empty() || bins == 0) return d;
+  std::sort(values.begin(), values.end());
+  d.min = values.front();
+  d.max = values.back();
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  d.mean = sum / static_cast<double>(values.size());
+  d.p05 = percentile_of_sorted(values, 5);
+  d.p50 = percentile_of_sorted(values, 50);
+  d.p95 = percentile_of_sorted(values, 95);
+  if (!(hi > lo)) {
+    lo = d.min;
+    hi = d.max;
+  }
+  fill_histogram(values, bins, lo, hi, d.edges, d.counts);
+  return d;
+}
 
 DeviationStats summarize_deviation(std::span<const double> deviations, const DeviationParams& params) {
   if (!(params.tolerance >= 0.0)) throw UsageError(fmt::format("tolerance: {} must be >= 0", params.tolerance));
@@ -61,11 +108,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
   s.within_tolerance = params.tolerance > 0.0 ? static_cast<double>(within) / n : 0.0;
 
   std::sort(values.begin(), values.end());
-  for (double p : params.percentiles) {
-    const double rank = std::ceil(p / 100.0 * n);
-    const std::size_t i = static_cast<std::size_t>(std::clamp(rank, 1.0, n)) - 1;
-    s.percentile_values.push_back(values[i]);
-  }
+  for (double p : params.percentiles) s.percentile_values.push_back(percentile_of_sorted(values, p));
   double lo = params.histogram_min, hi = params.histogram_max;
   if (!(hi > lo)) {
     lo = values.front();
@@ -79,21 +122,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
     const double wanted = width > 0.0 ? std::ceil((hi - lo) / width) : 10.0;
     bins = static_cast<std::size_t>(std::clamp(std::isfinite(wanted) ? wanted : 10.0, 10.0, 200.0));
   }
-  if (!(hi > lo)) {
-    lo -= 0.5;
-    hi += 0.5;
-    if (values.front() != 0.0) {
-      lo = values.front() - 0.5 * std::abs(values.front());
-      hi = values.front() + 0.5 * std::abs(values.front());
-    }
-  }
-  s.histogram_edges.resize(bins + 1);
-  for (std::size_t i = 0; i <= bins; ++i) s.histogram_edges[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
-  s.histogram_counts.assign(bins, 0);
-  for (double d : values) {
-    const double f = (d - lo) / (hi - lo) * static_cast<double>(bins);
-    s.histogram_counts[static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(bins - 1)))]++;
-  }
+  fill_histogram(values, bins, lo, hi, s.histogram_edges, s.histogram_counts);
   return s;
 }
 

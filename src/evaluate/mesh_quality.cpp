@@ -46,40 +46,7 @@ bool triangles_intersect(const std::array<Vector3d, 3>& x, const std::array<Vect
   return false;
 }
 
-double percentile_sorted(const std::vector<double>& sorted, double q) {
-  if (sorted.empty()) return 0.0;
-  const double rank = std::ceil(q * static_cast<double>(sorted.size()));
-  const std::size_t i = static_cast<std::size_t>(std::clamp(rank, 1.0, static_cast<double>(sorted.size()))) - 1;
-  return sorted[i];
-}
-
 }  // namespace
-
-ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo, double hi) {
-  ValueDistribution d;
-  if (values.empty() || bins == 0) return d;
-  std::sort(values.begin(), values.end());
-  d.min = values.front();
-  d.max = values.back();
-  double sum = 0.0;
-  for (double v : values) sum += v;
-  d.mean = sum / static_cast<double>(values.size());
-  d.p05 = percentile_sorted(values, 0.05);
-  d.p50 = percentile_sorted(values, 0.50);
-  d.p95 = percentile_sorted(values, 0.95);
-  if (!(hi > lo)) {
-    lo = d.min;
-    hi = d.max > d.min ? d.max : d.min + 1.0;
-  }
-  d.edges.resize(bins + 1);
-  for (std::size_t i = 0; i <= bins; ++i) d.edges[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
-  d.counts.assign(bins, 0);
-  for (double v : values) {
-    const double f = (v - lo) / (hi - lo) * static_cast<double>(bins);
-    d.counts[static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(bins - 1)))]++;
-  }
-  return d;
-}
 
 std::size_t count_self_intersections(const TriangleMesh& mesh, const TriangleBvh& bvh) {
   const std::size_t f = mesh.triangles.size();

@@ -33,7 +33,7 @@ std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, st
   for (std::size_t i = 0; i < n; ++i) {
     const double pick = uniform(rng) * total;
     const std::size_t t =
-        std::min<std::size_t>(triangles.size() - 1, static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()));
+        std::min<std::size_t>(triangles.size() - 1, static_cast<std::size_t>(std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()));
     double u = uniform(rng), v = uniform(rng);
     if (u + v > 1.0) {
       u = 1.0 - u;

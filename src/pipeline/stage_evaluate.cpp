@@ -223,17 +223,7 @@ void run_evaluate(StageRun& run) {
     rec.metric("region_field", region);
     const std::vector<RegionDeviation> regions = summarize_deviation_by_region(dist.distances, ref.cloud.fields.find(region)->values, sp);
     rec.count("regions", as_count(regions.size()));
-    for (const RegionDeviation& r : regions) {
-      const std::string p = fmt::format("deviation_by_region/{}_{}/", region, r.label);
-      rec.metric(p + "count", static_cast<std::int64_t>(r.stats.count));
-      rec.metric(p + "max_positive", r.stats.max_positive);
-      rec.metric(p + "max_negative", r.stats.max_negative);
-      rec.metric(p + "mean_positive", r.stats.mean_positive);
-      rec.metric(p + "mean_negative", r.stats.mean_negative);
-      rec.metric(p + "rms", r.stats.rms);
-      rec.metric(p + "std", r.stats.std);
-      rec.metric(p + "within_tolerance", r.stats.within_tolerance);
-    }
+    for (const RegionDeviation& r : regions) record_deviation(rec, fmt::format("deviation_by_region/{}_{}/", region, r.label), r.stats);
   }
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.

@@ -42,6 +42,21 @@ struct RegionDeviation {
   DeviationStats stats;
 };
 
+/// A distribution of values (triangle angles, aspect ratios).
+struct ValueDistribution {
+  double min = 0.0, max = 0.0, mean = 0.0;
+  double p05 = 0.0, p50 = 0.0, p95 = 0.0;  // percentiles (nearest rank)
+  std::vector<double> edges;               // histogram bin edges (bins + 1)
+  std::vector<std::size_t> counts;         // values per bin (bins); values outside go to the end bins
+};
+
+/// Summary of `values` (any order) with `bins` equal bins over [lo, hi]; lo == hi: over the
+/// data's range. Empty values give zeros.
+ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo = 0.0, double hi = 0.0);
+
+/// The nearest-rank percentile `percent` (0..100) of ascending `sorted` values (0 when empty).
+double percentile_of_sorted(std::span<const double> sorted, double percent);
+
 /// Statistics of `deviations` (cloud units, signed). Non-finite values are counted in `ignored`.
 /// Throws UsageError for a negative tolerance, percentiles outside [0, 100] or
 /// histogram_max < histogram_min. O(N log N); thread-safe.

@@ -7,18 +7,11 @@
 
 #include "pointsurf/core/mesh_topology.h"
 #include "pointsurf/core/triangle_mesh.h"
+#include "pointsurf/evaluate/deviation_stats.h"
 
 namespace pointsurf {
 
 class TriangleBvh;
-
-/// A distribution of per-triangle values.
-struct ValueDistribution {
-  double min = 0.0, max = 0.0, mean = 0.0;
-  double p05 = 0.0, p50 = 0.0, p95 = 0.0;  // percentiles (nearest rank)
-  std::vector<double> edges;               // histogram bin edges (bins + 1)
-  std::vector<std::size_t> counts;         // values per bin (bins)
-};
 
 struct MeshQuality {
   MeshTopology topology;                   // counts, manifoldness, orientation, loops, components
@@ -46,9 +39,5 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
 /// Pairs of triangles that share no vertex and intersect (touching counts; coplanar overlaps
 /// are not detected). Parallel; thread-safe.
 std::size_t count_self_intersections(const TriangleMesh& mesh, const TriangleBvh& bvh);
-
-/// Summary of `values` (any order) with `bins` equal bins over [lo, hi]; lo == hi: over the
-/// data's range. Empty values give zeros.
-ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo = 0.0, double hi = 0.0);
 
 }  // namespace pointsurf
