@@ -27,6 +27,7 @@
 #include "pointsurf/evaluate/deviation_stats.h"
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/evaluate/mesh_quality.h"
+#include "pointsurf/evaluate/m3c2.h"
 #include "pointsurf/pipeline/stage.h"
 #include "pointsurf/pipeline/context.h"
 #include "pointsurf/pipeline/registry.h"
