@@ -101,7 +101,8 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
     const bool manifold = topo.edge_manifold() && topo.non_manifold_vertices == 0 && topo.oriented();
     bool intersecting = false;
     if (manifold && topo.closed()) {
-      result.self_intersections = count_self_intersections(mesh, *bvh);
+      result.self_intersections = params.known_self_intersections >= 0 ? static_cast<std::size_t>(params.known_self_intersections)
+                                                                       : count_self_intersections(mesh, *bvh);
       intersecting = result.self_intersections > 0;
     }
     const bool nearly_closed =

@@ -171,10 +171,12 @@ void run_evaluate(StageRun& run) {
                                  ref_tag, gap, mesh_tag, ref_box.diagonal(), mesh_box.diagonal()));
 
   const TriangleBvh bvh(mesh);
+  const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
   // The points measured: the reference cloud, or the vertices of a reference mesh.
   MeshDistanceParams dp;
   dp.sign = sign_from(a.text("sign"));
   dp.max_distance = a.number("max_distance");
+  dp.known_self_intersections = static_cast<long>(q.self_intersections);
   const MeshDistanceResult dist = mesh_distances(ref.cloud.positions, mesh, dp, &bvh, sub_progress(run.progress, 0.0, 0.7));
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
@@ -247,7 +249,6 @@ void run_evaluate(StageRun& run) {
   rec.metric("distance/hausdorff", std::max(forward_max, back_max));
   rec.metric("distance/mesh_samples", static_cast<std::int64_t>(on_mesh.size()));
 
-  const MeshQuality q = analyze_mesh_quality(mesh, &bvh);
   record_quality(rec, q);
 
   rec.summary = fmt::format("evaluate: {} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "

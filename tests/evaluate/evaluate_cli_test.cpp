@@ -54,7 +54,10 @@ Scene make_scene() {
 }
 
 TEST_F(EvaluateCli, ReportsTheDeviationAndQualityBlocksAndWritesTheDeviationField) {
-  const Scene s = make_scene();
+  Scene s = make_scene();
+  // Labels: the points outside are region 0, those inside region 1.
+  ScalarField& segment = s.cloud.fields.add("segment", s.cloud.size(), ScalarType::Int32);
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) segment.values[i] = static_cast<double>(i % 2);
   write_mesh(path("mesh.ply"), s.mesh);
   write_point_cloud(path("scan.ply"), s.cloud);
   const test::CliResult r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("scan.ply") +
@@ -74,6 +77,11 @@ TEST_F(EvaluateCli, ReportsTheDeviationAndQualityBlocksAndWritesTheDeviationFiel
   EXPECT_TRUE(d["percentiles"].contains("p50"));
   EXPECT_EQ(d["histogram"]["edges"].size(), d["histogram"]["counts"].size() + 1);
   EXPECT_EQ(e["metrics"]["sign"], "pseudo-normal");
+  const nlohmann::json& regions = e["metrics"]["deviation_by_region"];
+  EXPECT_NEAR(regions["segment_0"]["max_positive"].get<double>(), 0.01, 1e-9);
+  EXPECT_DOUBLE_EQ(regions["segment_0"]["max_negative"].get<double>(), 0.0);
+  EXPECT_NEAR(regions["segment_1"]["max_negative"].get<double>(), -0.01, 1e-9);
+  EXPECT_EQ(e["counts"]["regions"], 2);
   const nlohmann::json& q = e["metrics"]["quality"];
   EXPECT_EQ(q["watertight"], true);
   EXPECT_EQ(q["genus"], 0);

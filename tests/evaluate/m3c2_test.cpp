@@ -24,13 +24,18 @@ PointCloud noisy_plane(double z, double sigma, std::uint64_t seed, const Vector3
   return c;
 }
 
+M3c2Params scales(double normal, double projection, double depth) {
+  M3c2Params p;
+  p.normal_scale = normal;
+  p.projection_scale = projection;
+  p.max_depth = depth;
+  return p;
+}
+
 TEST(M3c2, ParallelPlanesAreTheirSeparationApartWithALevelOfDetection) {
   const PointCloud a = noisy_plane(0.0, 0.005, 1), b = noisy_plane(0.2, 0.005, 2);
   const std::vector<Vector3d> core = {{0, 0, 0}, {0.3, -0.2, 0}, {-0.4, 0.5, 0}};
-  M3c2Params p;
-  p.normal_scale = 0.4;
-  p.projection_scale = 0.2;
-  p.max_depth = 0.5;
+  M3c2Params p = scales(0.4, 0.2, 0.5);
   const M3c2Result r = m3c2_distances(a, b, core, p);
   ASSERT_EQ(r.valid, 3u);
   EXPECT_EQ(r.significant_count, 3u);
@@ -62,10 +67,7 @@ TEST(M3c2, SignFollowsTheFirstCloudsNormals) {
   const PointCloud inner = test::sample_sphere(6000, 1.0, Vector3d::Zero(), 3), outer = test::sample_sphere(6000, 1.1, Vector3d::Zero(), 4);
   ASSERT_TRUE(inner.has_normals());
   const std::vector<Vector3d> core = {inner.positions[0], inner.positions[10], inner.positions[100]};
-  M3c2Params p;
-  p.normal_scale = 0.3;
-  p.projection_scale = 0.2;
-  p.max_depth = 0.3;
+  const M3c2Params p = scales(0.3, 0.2, 0.3);
   const M3c2Result r = m3c2_distances(inner, outer, core, p);
   ASSERT_EQ(r.valid, 3u);
   for (std::size_t i = 0; i < core.size(); ++i) EXPECT_NEAR(r.distance[i], 0.1, 0.01) << i;
@@ -75,10 +77,7 @@ TEST(M3c2, SignFollowsTheFirstCloudsNormals) {
 
 TEST(M3c2, TooFewPointsGiveNoDistanceAndBadInputThrows) {
   const PointCloud a = noisy_plane(0.0, 0.001, 1), b = noisy_plane(0.2, 0.001, 2);
-  M3c2Params p;
-  p.normal_scale = 0.4;
-  p.projection_scale = 0.2;
-  p.max_depth = 0.1;  // the cylinder does not reach cloud 2
+  M3c2Params p = scales(0.4, 0.2, 0.1);  // the cylinder does not reach cloud 2
   const M3c2Result r = m3c2_distances(a, b, std::vector<Vector3d>{{0, 0, 0}}, p);
   EXPECT_EQ(r.valid, 0u);
   EXPECT_TRUE(std::isnan(r.distance[0]));

@@ -33,6 +33,7 @@ struct MeshDistanceParams {
   double max_distance = 0.0;       // cloud units; points farther get +-infinity; 0: no limit
   double max_crack_share = 0.01;   // Auto: the winding number is used when at most this share
                                    // of the edges are boundary edges (a crack, not an open surface)
+  long known_self_intersections = -1;  // Auto: the mesh's count when already known (-1: counted here)
 };
 
 struct MeshDistanceResult {
