@@ -47,6 +47,10 @@ std::string help_row(const std::string& left, const std::string& text) {
   return out + "\n";
 }
 
+// A stage measuring its input against a reference (evaluate): on the command line the
+// reference is a file, read like the input.
+bool takes_reference(const StageSpec& s) { return s.consumes.size() == 2 && s.consumes[1].name == "reference"; }
+
 // One help line per parameter declaration.
 std::string param_line(const std::string& stage, const ParamSpec& p, bool show_methods) {
   std::string left = option_name(stage, p.name);
@@ -69,7 +73,8 @@ std::string param_line(const std::string& stage, const ParamSpec& p, bool show_m
 
 std::string stage_help(const StageSpec& s) {
   const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
-  std::string out = fmt::format("pointsurf {} {} OUT [options]\n{}\n", s.name, multi ? "IN1 IN2 [IN...]" : "IN", s.summary);
+  std::string out = s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
+                               : fmt::format("pointsurf {} {} OUT [options]\n{}\n", s.name, multi ? "IN1 IN2 [IN...]" : "IN", s.summary);
   if (!s.description.empty()) out += s.description + "\n";
   if (!s.params.empty() || !s.methods.empty()) out += "\nOptions (pipeline keys are the same with _ for -):\n";
   if (!s.methods.empty()) {
@@ -78,7 +83,11 @@ std::string stage_help(const StageSpec& s) {
     out += help_row("--method " + list,
                     fmt::format("{} (default {})", s.method_list ? "Comma-separated methods, applied in order" : "Method", s.default_method));
   }
-  for (const ParamSpec& p : s.params) out += param_line(s.name, p, !s.methods.empty());
+  for (const ParamSpec& p : s.params) {
+    if (s.measures && p.name == "reference") out += help_row("--reference FILE", "The cloud or mesh to measure (required)");
+    else out += param_line(s.name, p, !s.methods.empty());
+  }
+  if (s.measures) out += help_row("--out FILE", "Write the result (evaluate: the reference with a field deviation)");
   out += "\nInput options:\n";
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") out += param_line("read", p, false);
@@ -117,6 +126,57 @@ std::string cli_message(const std::string& message, const StageSpec& s) {
   return message;
 }
 
+using KeyValues = std::vector<std::pair<std::string, std::string>>;
+
+// Builds and runs a checked pipeline for one command, in the command line's words.
+void run_steps(const StageSpec& s, const std::vector<StepText>& steps, const CommonOptions& common) {
+  Pipeline pipeline;
+  try {
+    pipeline = build_pipeline(steps, "cli");
+  } catch (const UsageError& e) {
+    throw UsageError(cli_message(e.what(), s));
+  }
+  try {
+    run_with_report(pipeline, common, s.name);
+  } catch (const Error& e) {
+    const std::string m = cli_message(fmt::format("cli: {}", e.what()), s);
+    if (e.exit_code() == 1) throw UsageError(m);
+    if (e.exit_code() == 2) throw InputError(m);
+    throw ComputeError(m);
+  }
+}
+
+// `pointsurf evaluate MESH --reference FILE [--out FILE]`, `pointsurf quality MESH [--out FILE]`:
+// [read IN, read reference, STAGE, write --out].
+int run_measure(const StageSpec& s, const std::vector<std::string>& positionals, const std::string& reference_file,
+                const std::string& out_file, const KeyValues& stage_params, const KeyValues& read_params, const KeyValues& write_params,
+                const CommonOptions& common) {
+  if (positionals.size() != 1)
+    throw UsageError(fmt::format("expected one input file IN, got {} file names (see pointsurf {} --help)", positionals.size(), s.name));
+  if (takes_reference(s) && reference_file.empty())
+    throw UsageError(fmt::format("--reference FILE is required (see pointsurf {} --help)", s.name));
+  check_common_options(common);
+  std::vector<StepText> steps;
+  StepText read{"read", "in1", {}, read_params};
+  read.params.emplace_back("filename", positionals.front());
+  steps.push_back(std::move(read));
+  std::vector<std::string> inputs = {"in1"};
+  if (takes_reference(s)) {
+    StepText ref{"read", "reference", {}, read_params};
+    ref.params.emplace_back("filename", reference_file);
+    steps.push_back(std::move(ref));
+    inputs.push_back("reference");
+  }
+  steps.push_back(StepText{s.name, s.name, inputs, stage_params});
+  if (!out_file.empty()) {
+    StepText write{"write", "out", {}, write_params};
+    write.params.emplace_back("filename", out_file);
+    steps.push_back(std::move(write));
+  }
+  run_steps(s, steps, common);
+  return 0;
+}
+
 int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
   CommonOptions common;
   std::vector<OptionDef> options;
@@ -138,6 +198,21 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
                            if (kv.first == "method") throw UsageError("--method given twice");
                          stage_params.emplace_back("method", v);
                        }});
+  std::string reference_file, out_file;
+  if (s.measures) {
+    options.push_back({"--out", false, "FILE", [&](const std::string& v) {
+                         if (!out_file.empty()) throw UsageError("--out given twice");
+                         out_file = v;
+                       }});
+    seen.insert("--out");
+    if (takes_reference(s)) {
+      options.push_back({"--reference", false, "FILE", [&](const std::string& v) {
+                           if (!reference_file.empty()) throw UsageError("--reference given twice");
+                           reference_file = v;
+                         }});
+      seen.insert("--reference");
+    }
+  }
   for (const ParamSpec& p : s.params) add(s.name, p, stage_params);
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") add("read", p, read_params);
@@ -156,6 +231,7 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
     return 0;
   }
   const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
+  if (s.measures) return run_measure(s, positionals, reference_file, out_file, stage_params, read_params, write_params, common);
   if (positionals.size() < (multi ? 3u : 2u) || (!multi && positionals.size() > 2))
     throw UsageError(fmt::format("expected {} OUT, got {} file name{} (see pointsurf {} --help)", multi ? "IN1 IN2 [IN...]" : "IN",
                                  positionals.size(), positionals.size() == 1 ? "" : "s", s.name));
@@ -173,20 +249,7 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
   StepText write{"write", "out", {}, write_params};
   write.params.emplace_back("filename", positionals.back());
   steps.push_back(std::move(write));
-  Pipeline pipeline;
-  try {
-    pipeline = build_pipeline(steps, "cli");
-  } catch (const UsageError& e) {
-    throw UsageError(cli_message(e.what(), s));
-  }
-  try {
-    run_with_report(pipeline, common, s.name);
-  } catch (const Error& e) {
-    const std::string m = cli_message(fmt::format("cli: {}", e.what()), s);
-    if (e.exit_code() == 1) throw UsageError(m);
-    if (e.exit_code() == 2) throw InputError(m);
-    throw ComputeError(m);
-  }
+  run_steps(s, steps, common);
   return 0;
 }
 

@@ -5,9 +5,9 @@
 // stdout: the result's topology (analyze_topology: boundary edges, holes, non-manifold edges
 // and vertices, orientation, components, Euler characteristic), its triangle-angle figures, and
 // Chamfer / Hausdorff distances between the two surfaces. Both meshes are sampled area-uniformly
-// (`samples` points each, default 200000, seeded), and each sample's distance is the exact
-// point-to-triangle distance to the nearest of the 16 triangles of the other mesh whose centroids
-// are closest to it (exact for meshes without triangles far larger than their neighbours).
+// (`samples` points each, default 200000, seeded: evaluate's sample_mesh_surface), and each
+// sample's distance is the exact point-to-triangle distance to the other mesh (evaluate's
+// TriangleBvh, through nearest_surface_distances).
 // Used by every reconstruction benchmark in bench/reconstruct/; the interface stays stable.
 // Exit codes: 0 ok, 1 usage, 2 unreadable input.
 #include <algorithm>
@@ -15,83 +15,40 @@
 #include <cstdio>
 #include <exception>
 #include <numbers>
-#include <random>
 #include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/evaluate/deviation_stats.h"
+#include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/io/io.h"
-#include "pointsurf/spatial/kd_tree.h"
 
 namespace {
 
 using pointsurf::Vector3d;
-
-// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Vector3d closest_on_triangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  const Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return a;
-  const Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
-  const Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
 
 struct Mesh {
   std::vector<Vector3d> vertices;  // shifted by the common origin
   std::vector<Eigen::Vector3i> triangles;
 };
 
-std::vector<Vector3d> sample_surface(const Mesh& m, std::size_t n, std::uint64_t seed, double& area) {
-  std::vector<double> cumulative(m.triangles.size());
+double surface_area(const Mesh& m) {
   double total = 0.0;
-  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-    const Vector3d& a = m.vertices[m.triangles[t][0]];
-    total += 0.5 * (m.vertices[m.triangles[t][1]] - a).cross(m.vertices[m.triangles[t][2]] - a).norm();
-    cumulative[t] = total;
-  }
-  area = total;
-  std::vector<Vector3d> samples;
-  if (m.triangles.empty() || !(total > 0.0)) return samples;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  samples.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double pick = uniform(rng) * total;
-    const std::size_t t = std::min<std::size_t>(
-        m.triangles.size() - 1, std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
-    double u = uniform(rng), v = uniform(rng);
-    if (u + v > 1.0) { u = 1.0 - u; v = 1.0 - v; }
-    const Vector3d& a = m.vertices[m.triangles[t][0]];
-    samples.push_back(a + u * (m.vertices[m.triangles[t][1]] - a) + v * (m.vertices[m.triangles[t][2]] - a));
-  }
-  return samples;
+  for (const Eigen::Vector3i& f : m.triangles)
+    total += 0.5 * (m.vertices[f[1]] - m.vertices[f[0]]).cross(m.vertices[f[2]] - m.vertices[f[0]]).norm();
+  return total;
 }
 
 struct OneSided {
   double mean = 0.0, rms = 0.0, max = 0.0, p95 = 0.0;
 };
 
-// Distances from `samples` to the surface of `target`.
+// Exact distances from `samples` to the surface of `target`.
 OneSided distances_to(const std::vector<Vector3d>& samples, const Mesh& target) {
   OneSided out;
   if (samples.empty()) return out;
@@ -99,34 +56,13 @@ OneSided distances_to(const std::vector<Vector3d>& samples, const Mesh& target) 
     out.mean = out.rms = out.max = out.p95 = INFINITY;
     return out;
   }
-  std::vector<Vector3d> centroids(target.triangles.size());
-  for (std::size_t t = 0; t < centroids.size(); ++t) {
-    const Eigen::Vector3i& f = target.triangles[t];
-    centroids[t] = (target.vertices[f[0]] + target.vertices[f[1]] + target.vertices[f[2]]) / 3.0;
-  }
-  const pointsurf::KdTree tree(centroids);
-  const std::size_t k = std::min<std::size_t>(16, centroids.size());
-  std::vector<double> d(samples.size());
-  tbb::enumerable_thread_specific<std::vector<pointsurf::Neighbor>> buffers;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<pointsurf::Neighbor>& nb = buffers.local();
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      tree.knn(samples[i], k, nb);
-      double best = INFINITY;
-      for (const pointsurf::Neighbor& n : nb) {
-        const Eigen::Vector3i& f = target.triangles[n.index];
-        const Vector3d q = closest_on_triangle(samples[i], target.vertices[f[0]], target.vertices[f[1]], target.vertices[f[2]]);
-        best = std::min(best, (q - samples[i]).squaredNorm());
-      }
-      d[i] = std::sqrt(best);
-    }
-  });
+  std::vector<double> d = pointsurf::nearest_surface_distances(samples, pointsurf::SurfaceView{target.vertices, target.triangles});
   double sum = 0.0, sq = 0.0;
   for (double v : d) { sum += v; sq += v * v; out.max = std::max(out.max, v); }
   out.mean = sum / double(d.size());
   out.rms = std::sqrt(sq / double(d.size()));
-  std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() * 95 / 100), d.end());
-  out.p95 = d[d.size() * 95 / 100];
+  std::sort(d.begin(), d.end());
+  out.p95 = pointsurf::percentile_of_sorted(d, 95);
   return out;
 }
 
@@ -184,8 +120,9 @@ int main(int argc, char** argv) {
     Mesh a{result.mesh.vertices, result.mesh.triangles}, b{reference.mesh.vertices, reference.mesh.triangles};
     for (Vector3d& v : a.vertices) v -= origin;
     for (Vector3d& v : b.vertices) v -= origin;
-    double area_a = 0.0, area_b = 0.0;
-    const std::vector<Vector3d> sa = sample_surface(a, samples, 11, area_a), sb = sample_surface(b, samples, 12, area_b);
+    const double area_a = surface_area(a), area_b = surface_area(b);
+    const std::vector<Vector3d> sa = pointsurf::sample_mesh_surface(a.vertices, a.triangles, samples, 11),
+                                sb = pointsurf::sample_mesh_surface(b.vertices, b.triangles, samples, 12);
     const OneSided ab = distances_to(sa, b), ba = distances_to(sb, a);
     const double diagonal = box.diagonal();
 

@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/clean/remove_outliers.h"
+#include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/simplify/simplify.h"
@@ -42,14 +43,8 @@ struct Distances {
 };
 
 Distances distances(const std::vector<Vector3d>& a, const std::vector<Vector3d>& b) {
-  const KdTree ta(a), tb(b);
-  Distances d;
-  const NeighborLists ab = tb.knn_all(a, 1), ba = ta.knn_all(b, 1);
-  for (const Neighbor& nb : ab.neighbors) d.mean_ab += std::sqrt(nb.squared_distance), d.max_ab = std::max(d.max_ab, std::sqrt(nb.squared_distance));
-  for (const Neighbor& nb : ba.neighbors) d.mean_ba += std::sqrt(nb.squared_distance), d.max_ba = std::max(d.max_ba, std::sqrt(nb.squared_distance));
-  d.mean_ab /= double(a.size());
-  d.mean_ba /= double(b.size());
-  return d;
+  const SurfaceDistanceResult r = surface_distance(SurfaceView{a, {}}, SurfaceView{b, {}});
+  return {r.a_to_b.mean, r.a_to_b.max, r.b_to_a.mean, r.b_to_a.max};
 }
 
 nlohmann::json quality(const PointCloud& full, const PointCloud& simplified) {

@@ -253,6 +253,19 @@ public:
         if (multi) step.inputs = open;
         else if (!last.empty()) step.inputs = {last};
       }
+      if (spec->consumes.size() == 2 && spec->consumes[1].name == "reference" && step.inputs.size() == 1) {
+        // The reference: the tag the stage names, else the cloud as read before the chain.
+        const std::string named = step.args.has("reference") ? step.args.text("reference") : std::string();
+        if (!named.empty() && !known_.count(named)) {
+          std::vector<std::string> k(known_.begin(), known_.end());
+          const std::string near = closest_name(named, k);
+          throw UsageError(fmt::format("{}: reference \"{}\" is not the tag of an earlier stage{}", where, named,
+                                       near.empty() ? fmt::format(" (tags so far: {})", join(k)) : fmt::format("; did you mean \"{}\"?", near)));
+        }
+        step.inputs.push_back(named.empty() ? origin_of_[step.inputs.front()] : named);
+      }
+      if (spec->name == "read" || step.inputs.size() != 1) origin_of_[step.tag] = step.tag;
+      else origin_of_[step.tag] = origin_of_[step.inputs.front()];
       if (!spec->consumes.empty()) {
         if (step.inputs.empty())
           throw UsageError(fmt::format("{}: {} before any data (start the pipeline with a file to read)", where,
@@ -271,7 +284,7 @@ public:
       }
       p.steps.push_back(std::move(step));
     }
-    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s); }))
+    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s) || s.spec->measures; }))
       throw UsageError(fmt::format("{}: no output: end the pipeline with a file name to write", origin_));
     return p;
   }
@@ -316,6 +329,7 @@ private:
 
   std::string origin_;
   std::set<std::string> known_;
+  std::map<std::string, std::string> origin_of_;  // tag -> the reader its chain starts from
 };
 
 

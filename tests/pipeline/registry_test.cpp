@@ -13,6 +13,9 @@
 #include "pointsurf/clean/remove_outliers.h"
 #include "pointsurf/clean/smooth_points.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/deviation_stats.h"
+#include "pointsurf/evaluate/mesh_distance.h"
+#include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/reconstruct/ball_pivot.h"
@@ -57,7 +60,7 @@ TEST(Registry, StagesAreUniqueAndEveryParameterIsDocumented) {
     }
   }
   for (const char* stage : {"read", "write", "crop", "range", "merge", "transform", "clean", "simplify", "normals", "curvature", "features",
-                            "reconstruct"})
+                            "reconstruct", "quality", "evaluate"})
     EXPECT_NE(find_stage(stage), nullptr) << stage;
 }
 
@@ -88,8 +91,18 @@ std::vector<Expected> library_defaults() {
   const TriangulateParams tp;
   const CoconeParams cp;
   const BallPivotParams bp;
+  const MeshDistanceParams md;
+  const DeviationParams dev;
+  const SurfaceDistanceParams sd;
   using I = std::int64_t;
   return {
+      {"evaluate", "", "tolerance", dev.tolerance},
+      {"evaluate", "", "bins", I(dev.bins)},
+      {"evaluate", "", "percentiles", dev.percentiles},
+      {"evaluate", "", "max_distance", md.max_distance},
+      {"evaluate", "", "sign", std::string(distance_sign_name(md.sign))},
+      {"evaluate", "", "samples", I(sd.samples)},
+      {"evaluate", "", "seed", I(sd.seed)},
       {"normals", "", "k", I{n.k}},
       {"normals", "", "radius", n.radius},
       {"normals", "", "radius_in_spacings", n.radius_in_spacings},

@@ -50,7 +50,7 @@ TriangleMesh grid(int n) {
 }
 
 TEST(FillHoles, ClosesASmallHoleOnASphereWithTrianglesOnTheSurface) {
-  const TriangleMesh whole = test::icosphere(4, 1.0);  // 5120 faces, edge ~0.06
+  const TriangleMesh whole = test::icosphere_mesh(4, 1.0);  // 5120 faces, edge ~0.06
   TriangleMesh holed = cut(whole, Vector3d(0, 0, 1), 0.15);
   const MeshTopology before = analyze_topology(holed);
   ASSERT_EQ(before.boundary_loops.size(), 1u);
@@ -75,7 +75,7 @@ TEST(FillHoles, ClosesASmallHoleOnASphereWithTrianglesOnTheSurface) {
 }
 
 TEST(FillHoles, TheLimitDecidesWhichHolesClose) {
-  const TriangleMesh whole = test::icosphere(4, 1.0);
+  const TriangleMesh whole = test::icosphere_mesh(4, 1.0);
   const TriangleMesh holed = cut(cut(whole, Vector3d(0, 0, 1), 0.12), Vector3d(0, 0, -1), 0.45);  // small and large
   ASSERT_EQ(analyze_topology(holed).boundary_loops.size(), 2u);
   const double edge = mean_edge(holed);
@@ -115,7 +115,7 @@ TEST(FillHoles, ClosesAnInnerHoleOfAnOpenGridAndLeavesItsBorder) {
 }
 
 TEST(FillHoles, SameResultAMillionMetresAway) {
-  TriangleMesh m = cut(test::icosphere(4, 1.0), Vector3d(0, 0, 1), 0.15);
+  TriangleMesh m = cut(test::icosphere_mesh(4, 1.0), Vector3d(0, 0, 1), 0.15);
   // Jittered (seeded) so that no two fillings tie exactly, as on a scan.
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> jitter(-0.005, 0.005);
@@ -129,7 +129,7 @@ TEST(FillHoles, SameResultAMillionMetresAway) {
 }
 
 TEST(FillHoles, RejectsBadParametersAndMeshes) {
-  TriangleMesh m = test::icosphere(2);
+  TriangleMesh m = test::icosphere_mesh(2);
   EXPECT_THROW(fill_holes(m, {-1.0}), UsageError);
   EXPECT_THROW(fill_holes(m, {std::nan("")}), UsageError);
   m.triangles.emplace_back(0, 1, int(m.vertices.size()));

@@ -75,7 +75,7 @@ TEST(FlatRegions, JitteredPlaneIsOneRegion) {
 }
 
 TEST(FlatRegions, SphereIsCutIntoCapsNoWiderThanTheSeedCone) {
-  const TriangleMesh sphere = test::icosphere(3);  // 1280 faces, about 8 degrees between neighbours
+  const TriangleMesh sphere = test::icosphere_mesh(3);  // 1280 faces, about 8 degrees between neighbours
   const FlatRegionParams params;
   const FlatRegionResult r = label_flat_regions(sphere, params);
   // Each region lies within max_seed_angle_deg of its seed: at most a cap of that half-angle,
@@ -106,7 +106,7 @@ std::set<std::set<std::size_t>> partition(const std::vector<int>& region, const 
 }
 
 TEST(FlatRegions, PermutedFacesGiveTheSamePartition) {
-  const TriangleMesh sphere = test::icosphere(3);
+  const TriangleMesh sphere = test::icosphere_mesh(3);
   std::vector<std::size_t> identity(sphere.triangle_count());
   std::iota(identity.begin(), identity.end(), 0);
   std::vector<std::size_t> order = identity;
@@ -124,7 +124,7 @@ TEST(FlatRegions, PermutedFacesGiveTheSamePartition) {
 TEST(FlatRegions, ShiftBy1e6GivesTheSameLabels) {
   // Vertices on a grid of 2^-20 so that the shift itself is exact: what is tested is that
   // nothing downstream depends on the distance from the origin.
-  TriangleMesh sphere = test::icosphere(3, 2.0);
+  TriangleMesh sphere = test::icosphere_mesh(3, 2.0);
   for (Vector3d& p : sphere.vertices) p = (p * 1048576.0).array().round().matrix() / 1048576.0;
   TriangleMesh shifted = sphere;
   for (Vector3d& p : shifted.vertices) p += Vector3d(1e6, -2e6, 5e5);

@@ -17,7 +17,7 @@ namespace {
 // A 1280-face sphere, three lone triangles far away and one pair sharing an edge; a face
 // field "id" holds each face's index, to follow the faces.
 TriangleMesh sphere_with_specks() {
-  TriangleMesh mesh = test::icosphere(3, 1.0);
+  TriangleMesh mesh = test::icosphere_mesh(3, 1.0);
   auto add_triangle = [&](const Vector3d& at) {
     const int base = static_cast<int>(mesh.vertices.size());
     mesh.vertices.insert(mesh.vertices.end(), {at, at + Vector3d(0.01, 0, 0), at + Vector3d(0, 0.01, 0)});

@@ -10,7 +10,7 @@
 namespace pointsurf {
 
 /// All stages, in the order of the command list (data flow): read, crop, range, transform,
-/// merge, clean, simplify, normals, curvature, features, reconstruct, write.
+/// merge, clean, simplify, normals, curvature, features, reconstruct, quality, evaluate, write.
 const std::vector<StageSpec>& registered_stages();
 /// The stage named `name`, or nullptr.
 const StageSpec* find_stage(std::string_view name);

@@ -137,6 +137,11 @@ struct StageSpec {
   std::vector<ParamSpec> params;     // "method" is implied by `methods`
   std::vector<std::string> examples; // command lines for --help
   int order = 0;                     // place in the command list (data flow)
+  /// An evaluation (evaluate, quality): its report is its product, so its command takes IN and
+  /// an optional --out FILE, and a pipeline that ends with it needs no writer. A second consumed
+  /// slot named "reference" defaults to the cloud as read at the start of the first input's
+  /// chain, or to the tag given by the stage's "reference" parameter.
+  bool measures = false;
   std::function<void(StageRun&)> run;
   /// Checks across parameters made before any work (e.g. a viewpoint given without
   /// orient = viewpoint); throws UsageError. May be empty.

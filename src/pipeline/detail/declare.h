@@ -79,6 +79,8 @@ StageSpec normals_stage();
 StageSpec curvature_stage();
 StageSpec features_stage();
 StageSpec reconstruct_stage();
+StageSpec quality_stage();
+StageSpec evaluate_stage();
 
 }  // namespace pointsurf::detail
 

@@ -125,7 +125,11 @@ nlohmann::json to_json(const ResultValue& v) {
 
 nlohmann::json to_json(const ResultList& list) {
   nlohmann::json out = nlohmann::json::object();
-  for (const auto& [key, value] : list) out[key] = to_json(value);
+  // A key with '/' nests: "deviation/rms" is {"deviation": {"rms": ...}}.
+  for (const auto& [key, value] : list) {
+    if (key.find('/') == std::string::npos) out[key] = to_json(value);
+    else out[nlohmann::json::json_pointer("/" + key)] = to_json(value);
+  }
   return out;
 }
 

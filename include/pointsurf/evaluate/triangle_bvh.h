@@ -1,0 +1,98 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// A bounding-volume hierarchy over the triangles of a mesh: exact closest points (double
+// precision about a local origin, so 1e6 m coordinates lose nothing), the generalized winding
+// number (Barill, Dickson, Schmidt, Levin, Jacobson 2018, "Fast winding numbers for soups and
+// clouds") and box-overlap queries for the self-intersection pass.
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <mutex>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/triangle_mesh.h"
+
+namespace pointsurf {
+
+/// Which part of a triangle the closest point lies on.
+enum class TriangleFeature : unsigned char { Face, Edge, Vertex };
+
+/// The closest point of a mesh to a query.
+struct ClosestPoint {
+  double squared_distance = std::numeric_limits<double>::infinity();  // squared cloud units
+  Vector3d point = Vector3d::Zero();   // on the mesh, cloud units (absolute coordinates)
+  int triangle = -1;                   // index into the mesh's triangles; -1: none found
+  TriangleFeature feature = TriangleFeature::Face;
+  int local_index = 0;                 // Vertex: corner 0..2; Edge: edge i from corner i to i+1
+  bool found() const noexcept { return triangle >= 0; }
+};
+
+/// The hierarchy. Built once (parallel, O(F log F)); every query is const and thread-safe.
+/// The triangles' corners are held relative to the centre of the mesh's bounding box.
+/// Triangles with a vertex index out of range throw InputError at construction; degenerate
+/// triangles (repeated or collinear corners) are kept and answered as segments.
+class TriangleBvh {
+public:
+  TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
+  explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices, mesh.triangles) {}
+
+  std::size_t triangle_count() const noexcept { return faces_.size(); }
+  const Vector3d& origin() const noexcept { return origin_; }
+
+  /// The closest point of the mesh to `query`, among points closer than `max_distance`
+  /// (cloud units); `found()` is false when none is, or the mesh has no triangle.
+  ClosestPoint closest(const Vector3d& query, double max_distance = std::numeric_limits<double>::infinity()) const;
+
+  /// Generalized winding number of the mesh at `query`: 1 inside and 0 outside a closed,
+  /// outward-oriented surface, a smooth value in between near cracks and holes, and a sum over
+  /// pieces where they overlap. Far clusters are replaced by their dipole (first-order)
+  /// expansion when farther than `accuracy` times their radius (Barill et al. use 2).
+  double winding_number(const Vector3d& query, double accuracy = 2.0) const;
+
+  /// Calls `visit(t)` for every triangle whose bounding box overlaps [lo, hi] (absolute
+  /// coordinates).
+  void overlapping(const Vector3d& lo, const Vector3d& hi, const std::function<void(int)>& visit) const;
+
+  /// Corner `c` (0..2) of triangle `t` (the mesh's index), relative to origin().
+  const Vector3d& corner(std::size_t t, int c) const noexcept {
+    return vertices_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(slot_[t])][c])];
+  }
+
+private:
+  // What the closest-point walk reads, one cache line per node.
+  struct Node {
+    Vector3d lo, hi;                 // box, relative to origin
+    int first = 0, count = 0;        // leaf: range of leaf-order slots; inner: count == 0
+    int right = 0;                   // inner: right child index (left child is index + 1)
+  };
+  // What only the winding number reads, made on its first call.
+  struct Dipole {
+    Vector3d area_centroid = Vector3d::Zero();  // area-weighted centroid
+    Vector3d area_normal = Vector3d::Zero();    // sum of area vectors (half the cross products)
+    double area = 0.0;
+    double radius = 0.0;             // farthest box corner from area_centroid
+  };
+  void build(int node, int begin, int end, std::vector<Vector3d>& centroids, int depth);
+  void make_dipoles(int node, int depth) const;
+  const Vector3d& slot_corner(std::size_t slot, int c) const noexcept {
+    return vertices_[static_cast<std::size_t>(faces_[slot][c])];
+  }
+  Vector3d origin_ = Vector3d::Zero();
+  std::vector<Vector3d> vertices_;   // relative to origin, in order of first use by the leaves
+  std::vector<Triangle> faces_;      // per leaf-order slot: indices into vertices_
+  std::vector<int> order_;           // leaf-order slot -> the mesh's triangle index
+  std::vector<int> slot_;            // the mesh's triangle index -> leaf-order slot
+  std::vector<Node> nodes_;
+  mutable std::vector<Dipole> dipoles_;  // one per node
+  mutable std::once_flag dipoles_once_;
+};
+
+/// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5), in
+/// the caller's frame. Degenerate triangles are answered through their edges.
+ClosestPoint closest_point_on_triangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c);
+
+}  // namespace pointsurf

@@ -1,0 +1,143 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/evaluate/deviation_stats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "pointsurf/core/error.h"
+
+namespace pointsurf {
+namespace {
+
+// Equal bins over [lo, hi] (widened around a single value); values outside go to the end bins.
+void fill_histogram(std::span<const double> values, std::size_t bins, double lo, double hi, std::vector<double>& edges,
+                    std::vector<std::size_t>& counts) {
+  if (!(hi > lo)) {
+    const double half = lo != 0.0 ? 0.5 * std::abs(lo) : 0.5;
+    lo -= half;
+    hi += half;
+  }
+  edges.resize(bins + 1);
+  for (std::size_t i = 0; i <= bins; ++i) edges[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
+  counts.assign(bins, 0);
+  for (double v : values) {
+    const double f = (v - lo) / (hi - lo) * static_cast<double>(bins);
+    counts[static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(bins - 1)))]++;
+  }
+}
+
+}  // namespace
+
+double percentile_of_sorted(std::span<const double> sorted, double percent) {
+  if (sorted.empty()) return 0.0;
+  const double n = static_cast<double>(sorted.size());
+  const double rank = std::ceil(percent / 100.0 * n);
+  return sorted[static_cast<std::size_t>(std::clamp(rank, 1.0, n)) - 1];
+}
+
+ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo, double hi) {
+  ValueDistribution d;
+  if (values.empty() || bins == 0) return d;
+  std::sort(values.begin(), values.end());
+  d.min = values.front();
+  d.max = values.back();
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  d.mean = sum / static_cast<double>(values.size());
+  d.p05 = percentile_of_sorted(values, 5);
+  d.p50 = percentile_of_sorted(values, 50);
+  d.p95 = percentile_of_sorted(values, 95);
+  if (!(hi > lo)) {
+    lo = d.min;
+    hi = d.max;
+  }
+  fill_histogram(values, bins, lo, hi, d.edges, d.counts);
+  return d;
+}
+
+DeviationStats summarize_deviation(std::span<const double> deviations, const DeviationParams& params) {
+  if (!(params.tolerance >= 0.0)) throw UsageError(fmt::format("tolerance: {} must be >= 0", params.tolerance));
+  if (params.histogram_max < params.histogram_min)
+    throw UsageError(fmt::format("histogram_max {} is below histogram_min {}", params.histogram_max, params.histogram_min));
+  for (double p : params.percentiles)
+    if (!(p >= 0.0 && p <= 100.0)) throw UsageError(fmt::format("percentiles: {} is outside [0, 100]", p));
+  DeviationStats s;
+  s.tolerance = params.tolerance;
+  std::vector<double> values;
+  values.reserve(deviations.size());
+  for (double d : deviations) {
+    if (std::isfinite(d)) values.push_back(d);
+    else ++s.ignored;
+  }
+  s.count = values.size();
+  s.percentile_ranks = params.percentiles;
+  if (values.empty()) {
+    s.percentile_values.assign(params.percentiles.size(), 0.0);
+    return s;
+  }
+  // Sums about the first value keep the standard deviation accurate for offset data.
+  double sum = 0.0, sum_abs = 0.0, sum_sq = 0.0, sum_pos = 0.0, sum_neg = 0.0;
+  std::size_t within = 0;
+  for (double d : values) {
+    sum += d;
+    sum_abs += std::abs(d);
+    sum_sq += d * d;
+    if (d > 0.0) {
+      ++s.positive;
+      sum_pos += d;
+      s.max_positive = std::max(s.max_positive, d);
+    } else if (d < 0.0) {
+      ++s.negative;
+      sum_neg += d;
+      s.max_negative = std::min(s.max_negative, d);
+    }
+    if (std::abs(d) <= params.tolerance) ++within;
+  }
+  const double n = static_cast<double>(s.count);
+  s.mean = sum / n;
+  s.mean_absolute = sum_abs / n;
+  s.rms = std::sqrt(sum_sq / n);
+  double centred = 0.0;
+  for (double d : values) centred += (d - s.mean) * (d - s.mean);
+  s.std = std::sqrt(centred / n);
+  s.mean_positive = s.positive > 0 ? sum_pos / static_cast<double>(s.positive) : 0.0;
+  s.mean_negative = s.negative > 0 ? sum_neg / static_cast<double>(s.negative) : 0.0;
+  s.within_tolerance = params.tolerance > 0.0 ? static_cast<double>(within) / n : 0.0;
+
+  std::sort(values.begin(), values.end());
+  for (double p : params.percentiles) s.percentile_values.push_back(percentile_of_sorted(values, p));
+  double lo = params.histogram_min, hi = params.histogram_max;
+  if (!(hi > lo)) {
+    lo = values.front();
+    hi = values.back();
+  }
+  std::size_t bins = params.bins;
+  if (bins == 0) {
+    // Freedman-Diaconis: width 2 IQR / cbrt(n), clamped to 10..200 bins.
+    const double iqr = values[std::size_t(0.75 * (n - 1))] - values[std::size_t(0.25 * (n - 1))];
+    const double width = 2.0 * iqr / std::cbrt(n);
+    const double wanted = width > 0.0 ? std::ceil((hi - lo) / width) : 10.0;
+    bins = static_cast<std::size_t>(std::clamp(std::isfinite(wanted) ? wanted : 10.0, 10.0, 200.0));
+  }
+  fill_histogram(values, bins, lo, hi, s.histogram_edges, s.histogram_counts);
+  return s;
+}
+
+std::vector<RegionDeviation> summarize_deviation_by_region(std::span<const double> deviations, std::span<const double> labels,
+                                                           const DeviationParams& params) {
+  if (labels.size() != deviations.size())
+    throw InputError(fmt::format("{} labels for {} deviations", labels.size(), deviations.size()));
+  std::map<long, std::vector<double>> groups;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (!std::isfinite(labels[i])) throw InputError(fmt::format("label of point {} is not finite", i));
+    groups[std::lround(labels[i])].push_back(deviations[i]);
+  }
+  std::vector<RegionDeviation> out;
+  for (const auto& [label, values] : groups) out.push_back({label, summarize_deviation(values, params)});
+  return out;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,139 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/evaluate/mesh_quality.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/triangle_bvh.h"
+
+namespace pointsurf {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Does segment [p, q] meet triangle (a, b, c)? Moller-Trumbore, boundaries included.
+bool segment_hits_triangle(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  const Vector3d dir = q - p, e1 = b - a, e2 = c - a;
+  const Vector3d h = dir.cross(e2);
+  const double det = e1.dot(h);
+  const double scale = e1.norm() * e2.norm() * dir.norm();
+  if (std::abs(det) <= 1e-12 * scale) return false;  // parallel or coplanar
+  const double inv = 1.0 / det;
+  const Vector3d s = p - a;
+  const double u = inv * s.dot(h);
+  if (u < 0.0 || u > 1.0) return false;
+  const Vector3d qv = s.cross(e1);
+  const double v = inv * dir.dot(qv);
+  if (v < 0.0 || u + v > 1.0) return false;
+  const double t = inv * e2.dot(qv);
+  return t >= 0.0 && t <= 1.0;
+}
+
+// Two non-coplanar triangles meet exactly when an edge of one crosses the other.
+bool triangles_intersect(const std::array<Vector3d, 3>& x, const std::array<Vector3d, 3>& y) {
+  for (int i = 0; i < 3; ++i) {
+    if (segment_hits_triangle(x[i], x[(i + 1) % 3], y[0], y[1], y[2])) return true;
+    if (segment_hits_triangle(y[i], y[(i + 1) % 3], x[0], x[1], x[2])) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::size_t count_self_intersections(const TriangleMesh& mesh, const TriangleBvh& bvh) {
+  const std::size_t f = mesh.triangles.size();
+  tbb::combinable<std::size_t> count([] { return std::size_t(0); });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::size_t& local = count.local();
+    for (std::size_t t = range.begin(); t != range.end(); ++t) {
+      const Triangle& tt = mesh.triangles[t];
+      const std::array<Vector3d, 3> x = {bvh.corner(t, 0), bvh.corner(t, 1), bvh.corner(t, 2)};
+      const Vector3d lo = x[0].cwiseMin(x[1]).cwiseMin(x[2]) + bvh.origin(), hi = x[0].cwiseMax(x[1]).cwiseMax(x[2]) + bvh.origin();
+      bvh.overlapping(lo, hi, [&](int u) {
+        if (static_cast<std::size_t>(u) <= t) return;
+        const Triangle& tu = mesh.triangles[static_cast<std::size_t>(u)];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            if (tt[i] == tu[j]) return;  // neighbours touch by construction
+        const std::size_t uu = static_cast<std::size_t>(u);
+        const std::array<Vector3d, 3> y = {bvh.corner(uu, 0), bvh.corner(uu, 1), bvh.corner(uu, 2)};
+        if (triangles_intersect(x, y)) ++local;
+      });
+    }
+  });
+  return count.combine([](std::size_t a, std::size_t b) { return a + b; });
+}
+
+MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bvh) {
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const int v = mesh.triangles[t][c];
+      if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.size())
+        throw InputError(fmt::format("triangle {}: vertex index {} out of range (the mesh has {} vertices)", t, v, mesh.vertices.size()));
+      if (!mesh.vertices[static_cast<std::size_t>(v)].allFinite())
+        throw InputError(fmt::format("vertex {} (of triangle {}) is not finite", v, t));
+    }
+  MeshQuality q;
+  q.topology = analyze_topology(mesh);
+  const MeshTopology& topo = q.topology;
+  q.edge_manifold = topo.edge_manifold();
+  q.vertex_manifold = topo.non_manifold_vertices == 0;
+  q.oriented = topo.oriented();
+  q.closed = topo.closed() && topo.triangles > 0;
+  q.watertight = topo.watertight();
+  q.genus = topo.genus();
+
+  // Geometry about the centre of the vertices, so 1e6 m offsets lose nothing.
+  BoundingBox box;
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
+  const Vector3d origin = box.center();
+  std::vector<std::array<int, 3>> sorted_faces;
+  std::vector<double> angles, aspects;
+  double volume6 = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vector3d a = mesh.vertices[static_cast<std::size_t>(t[0])] - origin, b = mesh.vertices[static_cast<std::size_t>(t[1])] - origin,
+                   c = mesh.vertices[static_cast<std::size_t>(t[2])] - origin;
+    std::array<int, 3> key = {t[0], t[1], t[2]};
+    std::sort(key.begin(), key.end());
+    sorted_faces.push_back(key);
+    const double area = 0.5 * (b - a).cross(c - a).norm();
+    volume6 += a.dot(b.cross(c));
+    const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
+    const double longest = std::max({la, lb, lc});
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(area > 1e-14 * longest * longest)) {
+      ++q.degenerate_faces;
+      continue;
+    }
+    q.area += area;
+    const std::array<Vector3d, 3> p = {a, b, c};
+    for (int i = 0; i < 3; ++i) {
+      const Vector3d e1 = p[std::size_t((i + 1) % 3)] - p[std::size_t(i)], e2 = p[std::size_t((i + 2) % 3)] - p[std::size_t(i)];
+      angles.push_back(std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180.0 / kPi);
+    }
+    aspects.push_back(longest * (la + lb + lc) / (4.0 * std::sqrt(3.0) * area));
+  }
+  std::sort(sorted_faces.begin(), sorted_faces.end());
+  for (std::size_t i = 1; i < sorted_faces.size(); ++i)
+    if (sorted_faces[i] == sorted_faces[i - 1]) ++q.duplicate_faces;
+  q.has_volume = q.closed && q.oriented && q.edge_manifold;
+  q.volume = q.has_volume ? volume6 / 6.0 : 0.0;
+  q.angles_deg = distribution_of(std::move(angles), 18, 0.0, 180.0);
+  q.aspect_ratios = distribution_of(std::move(aspects), 10);
+  if (!mesh.triangles.empty()) {
+    std::optional<TriangleBvh> own;
+    if (bvh == nullptr) bvh = &own.emplace(mesh);
+    q.self_intersections = count_self_intersections(mesh, *bvh);
+  }
+  return q;
+}
+
+}  // namespace pointsurf

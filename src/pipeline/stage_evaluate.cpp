@@ -1,0 +1,315 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The evaluate stage (signed deviation of a reference from a mesh, its statistics, Chamfer and
+// Hausdorff, the mesh's quality) and the quality stage (the quality block alone).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/deviation_stats.h"
+#include "pointsurf/evaluate/mesh_distance.h"
+#include "pointsurf/evaluate/mesh_quality.h"
+#include "pointsurf/evaluate/surface_distance.h"
+#include "pointsurf/evaluate/triangle_bvh.h"
+#include "pointsurf/pipeline/context.h"
+
+namespace pointsurf::detail {
+namespace {
+
+DistanceSign sign_from(const std::string& name) {
+  if (name == "pseudo-normal") return DistanceSign::PseudoNormal;
+  if (name == "winding-number") return DistanceSign::WindingNumber;
+  if (name == "unsigned") return DistanceSign::Unsigned;
+  return DistanceSign::Auto;
+}
+
+// "p50", "p99_9": a percentile's key in the report.
+std::string percentile_key(double rank) {
+  std::string text = format_value(rank);
+  std::replace(text.begin(), text.end(), '.', '_');
+  return "p" + text;
+}
+
+std::vector<double> as_numbers(const std::vector<std::size_t>& counts) { return {counts.begin(), counts.end()}; }
+
+// The deviation block, under `prefix` ("deviation/"): the same keys in every report.
+void record_deviation(StageRecord& rec, const std::string& prefix, const DeviationStats& s) {
+  rec.metric(prefix + "count", static_cast<std::int64_t>(s.count));
+  rec.metric(prefix + "max_positive", s.max_positive);
+  rec.metric(prefix + "max_negative", s.max_negative);
+  rec.metric(prefix + "mean_positive", s.mean_positive);
+  rec.metric(prefix + "mean_negative", s.mean_negative);
+  rec.metric(prefix + "mean", s.mean);
+  rec.metric(prefix + "mean_absolute", s.mean_absolute);
+  rec.metric(prefix + "rms", s.rms);
+  rec.metric(prefix + "std", s.std);
+  rec.metric(prefix + "tolerance", s.tolerance);
+  rec.metric(prefix + "within_tolerance", s.within_tolerance);
+  rec.metric(prefix + "positive", static_cast<std::int64_t>(s.positive));
+  rec.metric(prefix + "negative", static_cast<std::int64_t>(s.negative));
+  rec.metric(prefix + "ignored", static_cast<std::int64_t>(s.ignored));
+  for (std::size_t i = 0; i < s.percentile_ranks.size(); ++i)
+    rec.metric(prefix + "percentiles/" + percentile_key(s.percentile_ranks[i]), s.percentile_values[i]);
+  rec.metric(prefix + "histogram/edges", s.histogram_edges);
+  rec.metric(prefix + "histogram/counts", as_numbers(s.histogram_counts));
+}
+
+void record_distribution(StageRecord& rec, const std::string& prefix, const ValueDistribution& d) {
+  rec.metric(prefix + "min", d.min);
+  rec.metric(prefix + "max", d.max);
+  rec.metric(prefix + "mean", d.mean);
+  rec.metric(prefix + "p05", d.p05);
+  rec.metric(prefix + "p50", d.p50);
+  rec.metric(prefix + "p95", d.p95);
+  rec.metric(prefix + "histogram/edges", d.edges);
+  rec.metric(prefix + "histogram/counts", as_numbers(d.counts));
+}
+
+// The quality block: the same keys from the quality and the evaluate stage.
+void record_quality(StageRecord& rec, const MeshQuality& q) {
+  const std::string p = "quality/";
+  const MeshTopology& t = q.topology;
+  rec.metric(p + "vertices", as_count(t.vertices));
+  rec.metric(p + "isolated_vertices", as_count(t.isolated_vertices));
+  rec.metric(p + "triangles", as_count(t.triangles));
+  rec.metric(p + "edges", as_count(t.edges));
+  rec.metric(p + "boundary_edges", as_count(t.boundary_edges));
+  rec.metric(p + "non_manifold_edges", as_count(t.non_manifold_edges));
+  rec.metric(p + "non_manifold_vertices", as_count(t.non_manifold_vertices));
+  rec.metric(p + "inconsistent_edges", as_count(t.inconsistent_edges));
+  rec.metric(p + "edge_manifold", q.edge_manifold);
+  rec.metric(p + "vertex_manifold", q.vertex_manifold);
+  rec.metric(p + "oriented", q.oriented);
+  rec.metric(p + "closed", q.closed);
+  rec.metric(p + "watertight", q.watertight);
+  rec.metric(p + "components", as_count(t.components));
+  rec.metric(p + "euler_characteristic", static_cast<std::int64_t>(t.euler_characteristic));
+  if (q.genus >= 0) rec.metric(p + "genus", static_cast<std::int64_t>(q.genus));
+  else rec.metric(p + "genus", std::numeric_limits<double>::quiet_NaN());
+  rec.metric(p + "boundary_loops", as_count(t.boundary_loops.size()));
+  std::vector<double> lengths;
+  for (const BoundaryLoop& l : t.boundary_loops) lengths.push_back(l.length);
+  rec.metric(p + "boundary_loop_lengths", lengths);
+  rec.metric(p + "degenerate_faces", as_count(q.degenerate_faces));
+  rec.metric(p + "duplicate_faces", as_count(q.duplicate_faces));
+  rec.metric(p + "self_intersections", as_count(q.self_intersections));
+  rec.metric(p + "area", q.area);
+  rec.metric(p + "volume", q.has_volume ? q.volume : std::numeric_limits<double>::quiet_NaN());
+  record_distribution(rec, p + "angles_deg/", q.angles_deg);
+  record_distribution(rec, p + "aspect_ratios/", q.aspect_ratios);
+}
+
+void quality_warnings(StageRecord& rec, const MeshQuality& q) {
+  const MeshTopology& t = q.topology;
+  if (t.non_manifold_edges > 0) rec.warnings.push_back(plural(t.non_manifold_edges, "non-manifold edge"));
+  if (t.non_manifold_vertices > 0) rec.warnings.push_back(plural(t.non_manifold_vertices, "non-manifold vertex", "non-manifold vertices"));
+  if (t.inconsistent_edges > 0) rec.warnings.push_back(plural(t.inconsistent_edges, "inconsistently oriented edge"));
+  if (q.self_intersections > 0) rec.warnings.push_back(plural(q.self_intersections, "self-intersecting triangle pair"));
+  if (q.degenerate_faces > 0) rec.warnings.push_back(plural(q.degenerate_faces, "degenerate face"));
+  if (q.duplicate_faces > 0) rec.warnings.push_back(plural(q.duplicate_faces, "duplicate face"));
+}
+
+std::string quality_line(const MeshQuality& q) {
+  const MeshTopology& t = q.topology;
+  return fmt::format("{}, {}, {}, {} boundary loop{}, {} self-intersection{}, area {:.6g}{}", plural(t.triangles, "triangle"),
+                     q.watertight ? "watertight" : q.closed ? "closed (not watertight)" : "open", plural(t.components, "component"),
+                     t.boundary_loops.size(), t.boundary_loops.size() == 1 ? "" : "s", q.self_intersections, q.self_intersections == 1 ? "" : "s",
+                     q.area, q.has_volume ? fmt::format(", volume {:.6g}", q.volume) : std::string());
+}
+
+TriangleMesh mesh_of(const DataItem& item, const std::string& tag) {
+  if (item.triangles.empty())
+    throw InputError(fmt::format("\"{}\" ({}) has no faces: a mesh is needed ({})", tag, plural(item.cloud.size(), "point"),
+                                 item.cloud.empty() ? "it is empty" : "is it a point cloud?"));
+  TriangleMesh mesh;
+  mesh.vertices = item.cloud.positions;
+  mesh.triangles = item.triangles;
+  check_measurable_mesh(mesh, fmt::format("mesh \"{}\"", tag));
+  return mesh;
+}
+
+BoundingBox used_box(const TriangleMesh& mesh) {
+  BoundingBox box;
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
+  return box;
+}
+
+double box_gap(const BoundingBox& a, const BoundingBox& b) {
+  const Vector3d gap = (a.min - b.max).cwiseMax(b.min - a.max).cwiseMax(0.0);
+  return gap.norm();
+}
+
+void run_quality(StageRun& run) {
+  const DataItem& item = run.context.item(run.output);
+  const TriangleMesh mesh = mesh_of(item, run.inputs.front());
+  const MeshQuality q = analyze_mesh_quality(mesh);
+  record_quality(run.record, q);
+  quality_warnings(run.record, q);
+  run.record.summary = "quality: " + quality_line(q);
+}
+
+void run_evaluate(StageRun& run) {
+  const StageArgs& a = run.args;
+  StageRecord& rec = run.record;
+  const std::string& mesh_tag = run.inputs.at(0);
+  const std::string& ref_tag = run.inputs.at(1);
+  const TriangleMesh mesh = mesh_of(run.context.item(mesh_tag), mesh_tag);
+  const DataItem& ref = run.context.item(ref_tag);
+  if (ref.cloud.empty()) throw InputError(fmt::format("the reference \"{}\" has no points", ref_tag));
+  for (std::size_t i = 0; i < ref.cloud.size(); ++i)
+    if (!ref.cloud.positions[i].allFinite()) throw InputError(fmt::format("the reference \"{}\": point {} is not finite", ref_tag, i));
+
+  const BoundingBox mesh_box = used_box(mesh), ref_box = bounding_box(ref.cloud.positions);
+  const double diagonal = std::max(mesh_box.diagonal(), ref_box.diagonal());
+  const double gap = box_gap(mesh_box, ref_box);
+  if (gap > diagonal && !a.boolean("allow_far"))
+    throw InputError(fmt::format("the reference \"{}\" lies {:.6g} away from the mesh \"{}\" (diagonals {:.6g} and {:.6g}): another unit or "
+                                 "coordinate system? (allow_far measures it anyway)",
+                                 ref_tag, gap, mesh_tag, ref_box.diagonal(), mesh_box.diagonal()));
+
+  const TriangleBvh bvh(mesh);
+  const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
+  // The points measured: the reference cloud, or the vertices of a reference mesh.
+  MeshDistanceParams dp;
+  dp.sign = sign_from(a.text("sign"));
+  dp.max_distance = a.number("max_distance");
+  dp.known_self_intersections = static_cast<long>(q.self_intersections);
+  const MeshDistanceResult dist = mesh_distances(ref.cloud.positions, mesh, dp, &bvh, sub_progress(run.progress, 0.0, 0.7));
+  for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
+
+  DeviationParams sp;
+  sp.tolerance = a.number("tolerance");
+  if (sp.tolerance == 0.0) {
+    sp.tolerance = run.context.mean_spacing(ref_tag);
+    rec.set_used("tolerance", sp.tolerance);
+  }
+  sp.bins = static_cast<std::size_t>(a.integer("bins"));
+  sp.percentiles = a.numbers("percentiles");
+  const DeviationStats stats = summarize_deviation(dist.distances, sp);
+  rec.count("reference_points", as_count(ref.cloud.size()));
+  rec.count("mesh_triangles", as_count(mesh.triangles.size()));
+  rec.metric("reference", ref_tag);
+  rec.set_used("reference", ref_tag);
+  rec.metric("sign", std::string(distance_sign_name(dist.sign_used)));
+  record_deviation(rec, "deviation/", stats);
+
+  // The points that did not become vertices of the mesh (removed by cleaning or
+  // simplification, or left out by the reconstruction): their deviation on its own.
+  std::vector<Vector3d> used;
+  {
+    std::vector<char> is_used(mesh.vertices.size(), 0);
+    for (const Triangle& t : mesh.triangles)
+      for (int c = 0; c < 3; ++c) is_used[static_cast<std::size_t>(t[c])] = 1;
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+      if (is_used[v]) used.push_back(mesh.vertices[v]);
+  }
+  const KdTree vertex_tree(used);
+  std::vector<double> unused;
+  std::vector<Neighbor> nn;
+  for (std::size_t i = 0; i < ref.cloud.size(); ++i) {
+    vertex_tree.knn(ref.cloud.positions[i], 1, nn);
+    if (nn.empty() || nn.front().squared_distance > 0.0) unused.push_back(dist.distances[i]);
+  }
+  rec.count("points_not_vertices", as_count(unused.size()));
+  record_deviation(rec, "deviation_not_vertices/", summarize_deviation(unused, sp));
+
+  // Per region, when the reference carries labels.
+  std::string region = a.text("region_field");
+  if (region.empty()) region = ref.cloud.fields.contains("segment") ? "segment" : ref.cloud.fields.contains("region") ? "region" : "";
+  else if (!ref.cloud.fields.contains(region))
+    throw InputError(fmt::format("region_field: the reference \"{}\" has no field \"{}\"", ref_tag, region));
+  if (!region.empty()) {
+    rec.metric("region_field", region);
+    const std::vector<RegionDeviation> regions = summarize_deviation_by_region(dist.distances, ref.cloud.fields.find(region)->values, sp);
+    rec.count("regions", as_count(regions.size()));
+    for (const RegionDeviation& r : regions) record_deviation(rec, fmt::format("deviation_by_region/{}_{}/", region, r.label), r.stats);
+  }
+
+  // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
+  const std::size_t samples = static_cast<std::size_t>(a.integer("samples"));
+  const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, samples, static_cast<std::uint64_t>(a.integer("seed")));
+  const SurfaceView ref_view{ref.cloud.positions, ref.triangles};
+  const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);
+  double back_sum = 0.0, back_max = 0.0;
+  for (double d : back) {
+    back_sum += d;
+    back_max = std::max(back_max, d);
+  }
+  const double forward_max = std::max(stats.max_positive, -stats.max_negative);
+  const double back_mean = back.empty() ? 0.0 : back_sum / static_cast<double>(back.size());
+  rec.count("mesh_samples", as_count(on_mesh.size()));
+  rec.metric("distance/reference_to_mesh_mean", stats.mean_absolute);
+  rec.metric("distance/reference_to_mesh_max", forward_max);
+  rec.metric("distance/mesh_to_reference_mean", back_mean);
+  rec.metric("distance/mesh_to_reference_max", back_max);
+  rec.metric("distance/chamfer", 0.5 * (stats.mean_absolute + back_mean));
+  rec.metric("distance/hausdorff", std::max(forward_max, back_max));
+  rec.metric("distance/mesh_samples", static_cast<std::int64_t>(on_mesh.size()));
+
+  record_quality(rec, q);
+
+  rec.summary = fmt::format("evaluate: {} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
+                            "Hausdorff {:.4g}; mesh {}",
+                            plural(ref.cloud.size(), "point"), mesh_tag, distance_sign_name(dist.sign_used), stats.max_positive,
+                            stats.max_negative, stats.mean_positive, stats.mean_negative, stats.rms, 100.0 * stats.within_tolerance,
+                            stats.tolerance, std::max(forward_max, back_max), quality_line(q));
+
+  // The output: the measured points with their deviation.
+  run.context.copy(ref_tag, run.output);
+  DataItem& out = run.context.item(run.output);
+  out.triangles.clear();
+  out.is_mesh = false;
+  out.cloud.fields.add("deviation", out.cloud.size()).values = dist.distances;
+}
+
+}  // namespace
+
+StageSpec evaluate_stage() {
+  const MeshDistanceParams mp;
+  const DeviationParams dp;
+  const SurfaceDistanceParams sd;
+  StageSpec s;
+  s.name = "evaluate";
+  s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
+  s.description = "Every reference point gets its exact distance to the mesh's triangles, positive outside (where the normals point). "
+                  "In a pipeline the reference is the cloud as read, unless reference names another tag. The output is the reference "
+                  "with a field deviation.";
+  s.order = 130;
+  s.consumes = {Slot{"mesh", DataKind::Mesh}, Slot{"reference", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Cloud};
+  s.measures = true;
+  s.params = {
+      P::text("reference", "", "Tag of the cloud to measure (pipeline); the command line takes a file. Default: the cloud as read").meta("TAG"),
+      P::number("tolerance", dp.tolerance, "Share within +-tolerance is reported; 0: the reference's mean spacing").unit("cloud units").non_negative().meta("T"),
+      P::choice("sign", distance_sign_name(mp.sign), {"auto", "pseudo-normal", "winding-number", "unsigned"},
+                "How the side is decided: auto picks pseudo-normals, the winding number, or unsigned"),
+      P::number("max_distance", mp.max_distance, "Points farther are left out of the statistics; 0: no limit").unit("cloud units").non_negative(),
+      P::integer("bins", static_cast<std::int64_t>(dp.bins), "Histogram bins; 0: from the data").range(0, 10000),
+      P::numbers("percentiles", dp.percentiles, "Percentiles of the signed deviation").unit("percent").range(0, 100),
+      P::integer("samples", static_cast<std::int64_t>(sd.samples), "Points sampled area-uniformly on the mesh for the mesh-to-reference distance").range(1, 1e9),
+      P::integer("seed", static_cast<std::int64_t>(sd.seed), "Seed of the sampling").non_negative(),
+      P::text("region_field", "", "Field with region labels for a per-region breakdown; default segment or region when present").meta("NAME"),
+      P::boolean("allow_far", false, "Measure even when the reference lies farther from the mesh than their size"),
+  };
+  s.examples = {"pointsurf evaluate mesh.ply --reference scan.ply --tolerance 0.5 --out deviation.ply"};
+  s.run = run_evaluate;
+  return s;
+}
+
+StageSpec quality_stage() {
+  StageSpec s;
+  s.name = "quality";
+  s.summary = "Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume";
+  s.order = 125;
+  s.consumes = {Slot{"mesh", DataKind::Mesh}};
+  s.produces = Slot{"mesh", DataKind::Mesh};
+  s.measures = true;
+  s.examples = {"pointsurf quality mesh.ply --report quality.json"};
+  s.run = run_quality;
+  return s;
+}
+
+}  // namespace pointsurf::detail

@@ -1,0 +1,156 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End-to-end tests of `pointsurf evaluate` and `pointsurf quality` and of the evaluate stage in
+// a pipeline: the deviation and quality blocks of the report, the cloud written with its
+// deviation field, the reference defaulting to the cloud as read, and the error paths.
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "pipeline/cli_run.h"
+#include "pointsurf/io/io.h"
+#include "support/files.h"
+#include "support/mesh_shapes.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+class EvaluateCli : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = test::temp_dir(std::string("evaluate_cli_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  nlohmann::json stage(const std::string& report, const std::string& type) const {
+    const nlohmann::json json = nlohmann::json::parse(test::read_bytes(dir_ / report));
+    for (const nlohmann::json& s : json["stages"])
+      if (s["type"] == type) return s;
+    return nullptr;
+  }
+  std::filesystem::path dir_;
+};
+
+// A sphere mesh far from the origin and points at +-0.01 from its face centres along the face
+// normals (convex: the distance is exactly 0.01).
+struct Scene {
+  TriangleMesh mesh;
+  PointCloud cloud;
+};
+Scene make_scene() {
+  const Vector3d center(1.0e6, 2.0e6, 10.0);
+  Scene s{test::icosphere_mesh(2, 1.0, center), {}};
+  for (std::size_t t = 0; t < s.mesh.triangles.size(); ++t) {
+    const Triangle& f = s.mesh.triangles[t];
+    const Vector3d a = s.mesh.vertices[std::size_t(f[0])], b = s.mesh.vertices[std::size_t(f[1])], c = s.mesh.vertices[std::size_t(f[2])];
+    const Vector3d n = (b - a).cross(c - a).normalized();
+    s.cloud.positions.push_back((a + b + c) / 3.0 + (t % 2 == 0 ? 0.01 : -0.01) * n);
+  }
+  return s;
+}
+
+TEST_F(EvaluateCli, ReportsTheDeviationAndQualityBlocksAndWritesTheDeviationField) {
+  Scene s = make_scene();
+  // Labels: the points outside are region 0, those inside region 1.
+  ScalarField& segment = s.cloud.fields.add("segment", s.cloud.size(), ScalarType::Int32);
+  for (std::size_t i = 0; i < s.cloud.size(); ++i) segment.values[i] = static_cast<double>(i % 2);
+  write_mesh(path("mesh.ply"), s.mesh);
+  write_point_cloud(path("scan.ply"), s.cloud);
+  const test::CliResult r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("scan.ply") +
+                                              " --tolerance 0.02 --out " + path("dev.ply") + " --report " + path("r.json"),
+                                          dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json e = stage("r.json", "evaluate");
+  ASSERT_FALSE(e.is_null());
+  const nlohmann::json& d = e["metrics"]["deviation"];
+  EXPECT_NEAR(d["max_positive"].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(d["max_negative"].get<double>(), -0.01, 1e-9);
+  EXPECT_NEAR(d["mean_positive"].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(d["mean_negative"].get<double>(), -0.01, 1e-9);
+  EXPECT_NEAR(d["rms"].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(d["std"].get<double>(), 0.01, 1e-9);
+  EXPECT_DOUBLE_EQ(d["within_tolerance"].get<double>(), 1.0);
+  EXPECT_TRUE(d["percentiles"].contains("p50"));
+  EXPECT_EQ(d["histogram"]["edges"].size(), d["histogram"]["counts"].size() + 1);
+  EXPECT_EQ(e["metrics"]["sign"], "pseudo-normal");
+  const nlohmann::json& regions = e["metrics"]["deviation_by_region"];
+  EXPECT_NEAR(regions["segment_0"]["max_positive"].get<double>(), 0.01, 1e-9);
+  EXPECT_DOUBLE_EQ(regions["segment_0"]["max_negative"].get<double>(), 0.0);
+  EXPECT_NEAR(regions["segment_1"]["max_negative"].get<double>(), -0.01, 1e-9);
+  EXPECT_EQ(e["counts"]["regions"], 2);
+  const nlohmann::json& q = e["metrics"]["quality"];
+  EXPECT_EQ(q["watertight"], true);
+  EXPECT_EQ(q["genus"], 0);
+  EXPECT_EQ(q["self_intersections"], 0);
+  EXPECT_TRUE(q.contains("angles_deg"));
+  EXPECT_GT(e["metrics"]["distance"]["hausdorff"].get<double>(), 0.0);
+  EXPECT_EQ(e["counts"]["mesh_samples"], 100000);
+  EXPECT_EQ(e["parameters"]["tolerance"], 0.02);
+  const CloudReadResult out = read_point_cloud(path("dev.ply"));
+  const ScalarField* field = out.cloud.fields.find("deviation");
+  ASSERT_NE(field, nullptr);
+  ASSERT_EQ(field->values.size(), s.cloud.size());
+  EXPECT_NEAR(field->values[0], 0.01, 1e-9);
+  EXPECT_NEAR(field->values[1], -0.01, 1e-9);
+
+  // quality alone: the same keys.
+  const test::CliResult qr = test::run_cli("quality " + path("mesh.ply") + " --report " + path("q.json"), dir_);
+  ASSERT_EQ(qr.exit_code, 0) << qr.err;
+  const nlohmann::json qs = stage("q.json", "quality");
+  for (const auto& [key, value] : q.items()) EXPECT_TRUE(qs["metrics"]["quality"].contains(key)) << key;
+  EXPECT_NEAR(qs["metrics"]["quality"]["area"].get<double>(), q["area"].get<double>(), 1e-12);
+}
+
+TEST_F(EvaluateCli, BadInputGetsAClearAnswer) {
+  const Scene s = make_scene();
+  write_mesh(path("mesh.ply"), s.mesh);
+  write_point_cloud(path("scan.ply"), s.cloud);
+  test::CliResult r = test::run_cli("evaluate " + path("scan.ply") + " --reference " + path("scan.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(test::contains(r.err, "has no faces")) << r.err;
+  r = test::run_cli("evaluate " + path("mesh.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--reference FILE is required")) << r.err;
+  // The same scan in millimetres: far away and a thousand times larger.
+  PointCloud mm = s.cloud;
+  for (Vector3d& p : mm.positions) p *= 1000.0;
+  write_point_cloud(path("mm.ply"), mm);
+  r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("mm.ply") + " --out " + path("dev.ply"), dir_);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(test::contains(r.err, "another unit or coordinate system")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(path("dev.ply")));
+  r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("scan.ply") + " --tolerance -1", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--tolerance")) << r.err;
+}
+
+TEST_F(EvaluateCli, InAPipelineTheReferenceIsTheCloudAsRead) {
+  write_point_cloud(path("sphere.ply"), test::sample_sphere(3000, 1.0, Vector3d(5.0, 0.0, 0.0), 3));
+  const std::string json = "[\"" + path("sphere.ply") +
+                           "\", {\"type\": \"simplify\", \"method\": \"random\", \"ratio\": 0.5}, {\"type\": \"reconstruct\", \"method\": "
+                           "\"ball-pivot\"}, {\"type\": \"evaluate\"}, \"" + path("dev.ply") + "\"]";
+  test::write_bytes(dir_ / "p.json", json);
+  const test::CliResult r = test::run_cli("run " + path("p.json") + " --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json e = stage("r.json", "evaluate");
+  EXPECT_EQ(e["parameters"]["reference"], "read1");
+  EXPECT_EQ(e["counts"]["reference_points"], 3000);
+  // Half of the points were simplified away: they are measured on their own too.
+  EXPECT_GE(e["counts"]["points_not_vertices"].get<int>(), 1400);
+  EXPECT_TRUE(e["metrics"]["deviation_not_vertices"].contains("rms"));
+  EXPECT_LT(e["metrics"]["deviation"]["rms"].get<double>(), 0.05);
+  EXPECT_EQ(read_point_cloud(path("dev.ply")).cloud.size(), 3000u);
+  // An unknown reference tag is refused before any work.
+  test::write_bytes(dir_ / "bad.json", "[\"" + path("sphere.ply") + "\", {\"type\": \"reconstruct\", \"method\": \"ball-pivot\"}, "
+                                      "{\"type\": \"evaluate\", \"reference\": \"raed1\"}]");
+  const test::CliResult bad = test::run_cli("run " + path("bad.json"), dir_);
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_TRUE(test::contains(bad.err, "did you mean \"read1\"")) << bad.err;
+}
+
+}  // namespace
+}  // namespace pointsurf

@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The triangle hierarchy against brute force: closest points on random soups and random
+// queries, the feature of the closest point, winding numbers of closed and open meshes, box
+// overlaps, and the error paths.
+#include "pointsurf/evaluate/triangle_bvh.h"
+
+#include <cmath>
+#include <random>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/error.h"
+#include "support/mesh_shapes.h"
+
+namespace pointsurf {
+namespace {
+
+TEST(TriangleBvh, ClosestPointAgreesWithBruteForceOnRandomSoups) {
+  for (const std::size_t count : {1u, 7u, 300u, 3000u}) {
+    const TriangleMesh soup = test::random_soup(count, 11 + count);
+    const TriangleBvh bvh(soup);
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> u(-0.5, 1.5);
+    for (int q = 0; q < 300; ++q) {
+      const Vector3d p(u(rng), u(rng), u(rng));
+      const ClosestPoint c = bvh.closest(p);
+      ASSERT_TRUE(c.found());
+      const double expected = test::brute_force_squared_distance(p, soup);
+      EXPECT_NEAR(c.squared_distance, expected, 1e-12 * (1.0 + expected)) << "soup of " << count << ", query " << q;
+      // The point returned lies on the triangle returned, at the distance returned.
+      EXPECT_NEAR((c.point - p).squaredNorm(), c.squared_distance, 1e-12);
+      const double on_triangle = test::brute_force_squared_distance(
+          c.point, TriangleMesh{{soup.vertices.begin() + 3 * c.triangle, soup.vertices.begin() + 3 * c.triangle + 3}, {Triangle(0, 1, 2)}});
+      EXPECT_LT(on_triangle, 1e-20);
+    }
+  }
+}
+
+TEST(TriangleBvh, MaxDistanceLimitsTheSearch) {
+  const TriangleMesh cube = test::cube_mesh();
+  const TriangleBvh bvh(cube);
+  EXPECT_FALSE(bvh.closest(Vector3d(3, 0, 0), 1.5).found());
+  const ClosestPoint c = bvh.closest(Vector3d(3, 0, 0), 2.5);
+  ASSERT_TRUE(c.found());
+  EXPECT_NEAR(std::sqrt(c.squared_distance), 2.0, 1e-15);
+}
+
+TEST(TriangleBvh, ClosestFeatureIsFaceEdgeOrVertex) {
+  const Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_EQ(closest_point_on_triangle(Vector3d(0.2, 0.2, 1), a, b, c).feature, TriangleFeature::Face);
+  const ClosestPoint edge = closest_point_on_triangle(Vector3d(0.5, -1, 0.3), a, b, c);
+  EXPECT_EQ(edge.feature, TriangleFeature::Edge);
+  EXPECT_EQ(edge.local_index, 0);  // a -> b
+  const ClosestPoint hyp = closest_point_on_triangle(Vector3d(1, 1, 0), a, b, c);
+  EXPECT_EQ(hyp.feature, TriangleFeature::Edge);
+  EXPECT_EQ(hyp.local_index, 1);   // b -> c
+  const ClosestPoint vertex = closest_point_on_triangle(Vector3d(-1, -1, 0), a, b, c);
+  EXPECT_EQ(vertex.feature, TriangleFeature::Vertex);
+  EXPECT_EQ(vertex.local_index, 0);
+  // A degenerate triangle (collinear corners) is answered as its segments.
+  const ClosestPoint flat = closest_point_on_triangle(Vector3d(0.5, 1, 0), a, b, Vector3d(2, 0, 0));
+  EXPECT_NEAR(flat.squared_distance, 1.0, 1e-15);
+}
+
+TEST(TriangleBvh, WindingNumberIsOneInsideZeroOutsideAndFractionalThroughAHole) {
+  const TriangleMesh sphere = test::icosphere_mesh(3);
+  const TriangleBvh bvh(sphere);
+  EXPECT_NEAR(bvh.winding_number(Vector3d(0.1, 0.2, -0.3)), 1.0, 2e-2);
+  EXPECT_NEAR(bvh.winding_number(Vector3d(0.0, 0.0, 0.97)), 1.0, 2e-2);
+  EXPECT_NEAR(bvh.winding_number(Vector3d(2.0, 1.0, 0.0)), 0.0, 2e-2);
+  EXPECT_NEAR(bvh.winding_number(Vector3d(0.0, 0.0, 1.02)), 0.0, 2e-2);
+  // Exact summation (accuracy beyond every cluster) agrees with the hierarchical one.
+  EXPECT_NEAR(bvh.winding_number(Vector3d(0.3, 0.3, 0.3), 1e9), 1.0, 1e-12);
+  // The open box: from its centre the missing face subtends 1/6 of the sphere of directions.
+  const TriangleBvh open(test::open_box_mesh());
+  EXPECT_NEAR(open.winding_number(Vector3d::Zero(), 1e9), 5.0 / 6.0, 1e-12);
+  EXPECT_NEAR(open.winding_number(Vector3d::Zero()), 5.0 / 6.0, 2e-2);
+}
+
+TEST(TriangleBvh, OverlappingVisitsExactlyTheTrianglesWhoseBoxesOverlap) {
+  const TriangleMesh soup = test::random_soup(500, 3);
+  const TriangleBvh bvh(soup);
+  const Vector3d lo(0.2, 0.3, 0.1), hi(0.5, 0.6, 0.4);
+  std::set<int> got;
+  bvh.overlapping(lo, hi, [&](int t) { got.insert(t); });
+  std::set<int> expected;
+  for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
+    Vector3d tlo = soup.vertices[3 * t], thi = tlo;
+    for (int c = 1; c < 3; ++c) {
+      tlo = tlo.cwiseMin(soup.vertices[3 * t + std::size_t(c)]);
+      thi = thi.cwiseMax(soup.vertices[3 * t + std::size_t(c)]);
+    }
+    if ((tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all()) expected.insert(static_cast<int>(t));
+  }
+  EXPECT_EQ(got, expected);
+  EXPECT_FALSE(expected.empty());
+}
+
+TEST(TriangleBvh, BadIndicesThrowAndAnEmptyMeshFindsNothing) {
+  TriangleMesh bad = test::cube_mesh();
+  bad.triangles[4][1] = 8;
+  try {
+    const TriangleBvh bvh(bad);
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle 4: vertex index 8 out of range"), std::string::npos) << e.what();
+  }
+  const TriangleBvh empty(TriangleMesh{});
+  EXPECT_FALSE(empty.closest(Vector3d::Zero()).found());
+  EXPECT_EQ(empty.winding_number(Vector3d::Zero()), 0.0);
+}
+
+}  // namespace
+}  // namespace pointsurf
