@@ -89,14 +89,15 @@ CrustParams crust_params(const StageArgs& a) {
   return p;
 }
 
-// Counts both Delaunay methods report.
-void record_delaunay_stats(const DelaunaySurfaceStats& stats, StageRecord& rec) {
+// The counts every method reports (ReconstructionStats), then its own.
+void record_stats(const ReconstructionStats& stats, StageRecord& rec) {
   rec.count("duplicate_points", as_count(stats.duplicate_points));
-  rec.count("delaunay_cells", as_count(stats.delaunay_cells));
   rec.count("candidate_triangles", as_count(stats.candidate_triangles));
-  rec.count("normal_filtered", as_count(stats.normal_filtered));
-  rec.count("pruned", as_count(stats.pruned));
   rec.count("holes_filled", as_count(stats.holes_filled));
+  rec.count("fill_triangles", as_count(stats.fill_triangles));
+  for (const auto& [name, value] : stats.counts) rec.count(name, as_count(value));
+  for (const auto& [name, value] : stats.figures) rec.metric(name, value);
+  rec.metric("method_seconds", stats.seconds);
 }
 
 BallPivotParams ball_params(const StageArgs& a) {
@@ -164,26 +165,11 @@ void run_reconstruct(StageRun& run) {
         noise.median_in_spacings, kNoisyInSpacings));
   ReconstructionResult result;
   if (method == "triangulate") {
-    const TriangulateParams p = triangulate_params(a);
-    TriangulateResult r = reconstruct_region_growing(cloud, p, &tree, progress);
-    rec.count("candidate_triangles", as_count(r.candidate_triangles));
-    rec.count("selected_triangles", as_count(r.selected_triangles));
-    rec.count("holes_filled", as_count(r.holes_filled));
-    rec.count("fill_triangles", as_count(r.fill_triangles));
-    rec.count("duplicate_points", as_count(r.duplicate_points));
-    rec.metric("local_spacing_mean", r.local_spacing_mean);
-    result = std::move(r);
+    result = reconstruct_region_growing(cloud, triangulate_params(a), &tree, progress);
   } else if (method == "cocone") {
-    CoconeStats stats;
-    result = reconstruct_cocone(cloud, cocone_params(a), progress, &stats);
-    record_delaunay_stats(stats, rec);
+    result = reconstruct_cocone(cloud, cocone_params(a), progress);
   } else if (method == "crust") {
-    CrustStats stats;
-    result = reconstruct_crust(cloud, crust_params(a), progress, &stats);
-    record_delaunay_stats(stats, rec);
-    rec.count("poles", as_count(stats.poles));
-    rec.count("second_delaunay_vertices", as_count(stats.second_delaunay_vertices));
-    rec.count("second_delaunay_cells", as_count(stats.second_delaunay_cells));
+    result = reconstruct_crust(cloud, crust_params(a), progress);
   } else {
     const BallPivotParams p = ball_params(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
@@ -194,6 +180,7 @@ void run_reconstruct(StageRun& run) {
     radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
     rec.set_used("radii", radii);
   }
+  record_stats(result.stats, rec);
   clean_and_label_faces(result, a, rec);
   const MeshTopology& t = result.topology;
   const LoopKinds loops = classify_loops(t, cloud, tree);

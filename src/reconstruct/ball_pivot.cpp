@@ -8,6 +8,7 @@
 #include "pointsurf/reconstruct/fill_holes.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -456,6 +457,7 @@ void BallPivotParams::validate() const {
 
 ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,
                                                const ProgressCallback& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
   const std::size_t n = cloud.size();
   if (n < 3) throw UsageError(fmt::format("reconstruct_ball_pivoting: needs at least 3 points, got {}", n));
   if (n > std::size_t(std::numeric_limits<int>::max() / 4))
@@ -492,6 +494,7 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   // Skipped: exact copies (by sorting, so a stack of copies stays cheap), points without a
   // usable normal, and near-duplicates of an earlier point that has one.
   std::vector<std::uint8_t> skip = detail::later_exact_copies(cloud.positions);
+  result.stats.duplicate_points = std::size_t(std::count(skip.begin(), skip.end(), std::uint8_t{1}));
   const auto usable_normal = [&](std::size_t i) {
     const double len = cloud.normals[i].norm();
     return len > 0.0 && std::isfinite(len);
@@ -531,9 +534,16 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   result.mesh = TriangleMesh::from_cloud(cloud, pivoter.take_triangles());
   // Small holes (where the ball could not rest on a hole's corners, typically at a sharp edge):
   // the hole filler every reconstruction shares.
-  fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
+  result.stats.candidate_triangles = result.mesh.triangles.size();
+  const HoleFillStats filled = fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
   result.topology = analyze_topology(result.mesh);
   result.unused_points = result.topology.isolated_vertices;
+  ReconstructionStats& stats = result.stats;
+  stats.input_points = n;
+  stats.holes_filled = filled.holes_filled;
+  stats.fill_triangles = filled.triangles_added;
+  stats.counts = {{"fill_triangles_removed", filled.triangles_removed}};
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return result;
 }
 

@@ -117,6 +117,7 @@ ReconstructionResult reconstruct_cocone(const PointCloud& cloud, const CoconePar
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  result.stats = detail::common_stats(stats);
   if (stats_out) *stats_out = stats;
   return result;
 }

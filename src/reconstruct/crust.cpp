@@ -93,6 +93,10 @@ ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParam
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   stats.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  result.stats = detail::common_stats(stats,
+                                      {{"poles", stats.poles},
+                                       {"second_delaunay_vertices", stats.second_delaunay_vertices},
+                                       {"second_delaunay_cells", stats.second_delaunay_cells}});
   if (stats_out) *stats_out = stats;
   return result;
 }

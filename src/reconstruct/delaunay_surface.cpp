@@ -586,5 +586,23 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
 }
 
 
+ReconstructionStats common_stats(const DelaunaySurfaceStats& stats, std::vector<std::pair<std::string, std::size_t>> extra) {
+  ReconstructionStats out;
+  out.input_points = stats.input_points;
+  out.duplicate_points = stats.duplicate_points;
+  out.candidate_triangles = stats.candidate_triangles;
+  out.holes_filled = stats.holes_filled;
+  out.fill_triangles = stats.fill_triangles;
+  out.seconds = stats.seconds_total;
+  out.counts = {{"delaunay_cells", stats.delaunay_cells}, {"hull_points", stats.hull_points},
+                {"normal_filtered", stats.normal_filtered},  {"pruned", stats.pruned},
+                {"open_pieces", stats.open_pieces},          {"closed_pieces", stats.closed_pieces},
+                {"walk_dropped", stats.walk_dropped},        {"rim_peeled", stats.rim_peeled},
+                {"flipped_pieces", stats.flipped_pieces},    {"fill_triangles_removed", stats.fill_triangles_removed}};
+  out.counts.insert(out.counts.end(), extra.begin(), extra.end());
+  out.figures = {{"seconds_delaunay", stats.seconds_delaunay}};
+  return out;
+}
+
 }  // namespace detail
 }  // namespace pointsurf

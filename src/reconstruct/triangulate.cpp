@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -510,6 +511,7 @@ void TriangulateParams::validate() const {
 
 TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
                                              const ProgressCallback& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
   check_params(cloud, params, tree);
   const std::size_t n = cloud.size();
   std::optional<KdTree> own_tree;
@@ -716,6 +718,18 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   for (const Triangle& t : result.mesh.triangles)
     for (int c = 0; c < 3; ++c) used[static_cast<std::size_t>(t[c])] = 1;
   result.unused_points = n - static_cast<std::size_t>(std::count(used.begin(), used.end(), std::uint8_t{1}));
+  ReconstructionStats& stats = result.stats;
+  stats.input_points = n;
+  stats.duplicate_points = result.duplicate_points;
+  stats.candidate_triangles = result.candidate_triangles;
+  stats.holes_filled = result.holes_filled;
+  stats.fill_triangles = result.fill_triangles;
+  stats.counts = {{"selected_triangles", result.selected_triangles},
+                  {"front_triangles", result.front_triangles},
+                  {"pinch_triangles_removed", result.pinch_triangles_removed},
+                  {"inserted_points", result.inserted_points}};
+  stats.figures = {{"local_spacing_mean", result.local_spacing_mean}};
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return result;

@@ -121,14 +121,26 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
   EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
 }
 
-TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommand) {
-  const PointCloud sphere = test::sample_sphere(2000, 1.0);
+TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommandAndReportsTheSameCounts) {
+  PointCloud sphere = test::sample_sphere(2000, 1.0);
+  sphere.positions.push_back(sphere.positions[7]);  // one exact duplicate
+  sphere.normals.push_back(sphere.normals[7]);
   write_point_cloud(path("sphere.ply"), sphere);
   for (const std::string method : {"triangulate", "cocone", "crust", "ball-pivot"}) {
-    const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path(method + ".ply") + " --method " + method, dir_);
+    const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path(method + ".ply") + " --method " + method +
+                                    " --report " + path(method + ".json"),
+                                dir_);
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
     EXPECT_TRUE(test::contains(r.err, method + " ")) << r.err;
-    EXPECT_GT(read_mesh(path(method + ".ply")).mesh.triangle_count(), 0u) << method;
+    const std::size_t faces = read_mesh(path(method + ".ply")).mesh.triangle_count();
+    EXPECT_GT(faces, 0u) << method;
+    const nlohmann::json f = stage(method + ".json", "reconstruct")["figures"];
+    for (const char* key : {"candidate_triangles", "holes_filled", "fill_triangles", "duplicate_points", "method_seconds",
+                            "noise_in_spacings", "holes", "border_loops", "regions", "components_removed"})
+      EXPECT_TRUE(f.contains(key)) << method << " lacks " << key;
+    EXPECT_EQ(f["duplicate_points"], 1) << method;
+    EXPECT_GT(f["candidate_triangles"].get<std::size_t>(), faces / 2) << method;
+    EXPECT_GT(f["method_seconds"].get<double>(), 0.0) << method;
   }
 }
 

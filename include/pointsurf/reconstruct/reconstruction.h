@@ -3,11 +3,28 @@
 // What every surface reconstruction returns: the mesh and its topology, so that each method
 // reports holes, manifoldness and components the same way.
 #include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "pointsurf/core/mesh_topology.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
+
+/// Counts every method reports under the same names (the reconstruct stage writes them all to
+/// the report), then the method's own counts by name.
+struct ReconstructionStats {
+  std::size_t input_points = 0;         // points given
+  std::size_t duplicate_points = 0;     // exact duplicates of earlier points, left unused
+  std::size_t candidate_triangles = 0;  // triangles the method proposed before choosing (ball
+                                        // pivoting: the triangles the balls made)
+  std::size_t holes_filled = 0;         // holes the shared hole filler closed (fill_holes)
+  std::size_t fill_triangles = 0;       // triangles it added
+  double seconds = 0.0;                 // wall time of the whole method
+  std::vector<std::pair<std::string, std::size_t>> counts;  // the method's own counts, in report order
+  std::vector<std::pair<std::string, double>> figures;      // and its own measures (seconds, lengths)
+};
 
 struct ReconstructionResult {
   TriangleMesh mesh;           // interpolating methods: the input points (with their normals,
@@ -16,6 +33,7 @@ struct ReconstructionResult {
   MeshTopology topology;       // analyze_topology(mesh): holes, non-manifold edges, components
   std::size_t unused_points = 0;  // input points that no triangle uses (smaller is better)
   double mean_spacing = 0.0;   // the cloud's mean spacing, from which the defaults were derived
+  ReconstructionStats stats;   // the same counts from every method
 };
 
 }  // namespace pointsurf

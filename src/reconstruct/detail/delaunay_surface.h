@@ -39,4 +39,8 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
                                               const DelaunaySurfaceParams& params, DelaunaySurfaceStats& stats,
                                               ProgressReporter& reporter);
 
+/// The counts of `stats` as the ReconstructionStats every method fills (the extraction's own in
+/// its counts, `extra` appended).
+ReconstructionStats common_stats(const DelaunaySurfaceStats& stats, std::vector<std::pair<std::string, std::size_t>> extra = {});
+
 }  // namespace pointsurf::detail
