@@ -7,12 +7,12 @@
 #include <optional>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
@@ -45,17 +45,9 @@ BoundaryResult detect_boundary_points(const PointCloud& cloud, const BoundaryPar
       tree->knn(x, std::size_t(params.k) + 1, near);
       Vector3d normal = has_normals ? cloud.normals[i] : Vector3d::Zero();
       if (!(normal.squaredNorm() > 0.0)) {
-        Vector3d mean = Vector3d::Zero();
-        for (const Neighbor& nb : near) mean += cloud.positions[nb.index] - x;
-        mean /= double(near.size());
-        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (const Neighbor& nb : near) {
-          const Vector3d d = cloud.positions[nb.index] - x - mean;
-          cov += d * d.transpose();
-        }
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-        if (!(eig.eigenvalues()(1) > 0.0)) continue;  // collinear or single: no plane, no verdict
-        normal = eig.eigenvectors().col(0);
+        const detail::LocalPca pca = detail::local_pca([&](std::size_t j) { return Vector3d(cloud.positions[near[j].index] - x); }, near.size());
+        if (!pca.valid) continue;  // collinear or single: no plane, no verdict
+        normal = pca.normal();
       }
       normal.normalize();
       const Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);

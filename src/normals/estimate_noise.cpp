@@ -7,11 +7,11 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
@@ -45,16 +45,9 @@ NoiseEstimate estimate_noise(const PointCloud& cloud, const KdTree& tree, std::s
         }
       if (counted < 3) continue;
       spacing /= 3.0;
-      Vector3d mean = Vector3d::Zero();
-      for (const Neighbor& nb : near) mean += cloud.positions[nb.index] - x;
-      mean /= double(near.size());
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (const Neighbor& nb : near) {
-        const Vector3d d = cloud.positions[nb.index] - x - mean;
-        cov += d * d.transpose();
-      }
-      cov /= double(near.size());
-      const double l0 = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov, Eigen::EigenvaluesOnly).eigenvalues()(0);
+      const detail::LocalPca pca = detail::local_pca([&](std::size_t j) { return Vector3d(cloud.positions[near[j].index] - x); }, near.size());
+      if (!pca.valid) continue;
+      const double l0 = pca.eigenvalues[0];
       ratio[s] = std::sqrt(std::max(l0, 0.0)) / spacing;
     }
   });
