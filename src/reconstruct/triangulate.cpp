@@ -285,15 +285,15 @@ std::size_t close_front(const PointCloud& cloud, const std::vector<Vector3d>& no
   const std::size_t n = cloud.size();
   std::vector<std::uint32_t> next(n, kNone), prev(n, kNone);
   std::vector<std::uint8_t> out_degree(n, 0), in_degree(n, 0);
-  for (std::size_t t = 0; t < sel.triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c) {
-      const auto x = std::uint32_t(sel.triangles[t][c]), y = std::uint32_t(sel.triangles[t][(c + 1) % 3]);
-      if (sel.edges.contains(y, x)) continue;
-      next[x] = y;
-      prev[y] = x;
-      out_degree[x] = std::uint8_t(std::min(out_degree[x] + 1, 2));
-      in_degree[y] = std::uint8_t(std::min(in_degree[y] + 1, 2));
-    }
+  // Boundary edges x -> y. Where several leave or reach a vertex, which one next / prev keep
+  // does not matter: such a vertex is never an ear tip.
+  for (const detail::HoleEdge& e : detail::all_hole_edges(sel)) {
+    const std::uint32_t x = e.x, y = e.y;
+    next[x] = y;
+    prev[y] = x;
+    out_degree[x] = std::uint8_t(std::min(out_degree[x] + 1, 2));
+    in_degree[y] = std::uint8_t(std::min(in_degree[y] + 1, 2));
+  }
   const double max_angle = radians(max_angle_deg);
   // Hole-side angle at v, or infinity when v cannot be an ear tip.
   const auto hole_angle = [&](std::uint32_t v) {
@@ -369,7 +369,7 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
   const std::size_t n = positions.size();
   std::size_t inserted = 0;
   std::vector<std::uint8_t> used(n), taken;
-  std::vector<std::uint32_t> unused, offset(n + 1), around;
+  std::vector<std::uint32_t> unused, offset(n + 1), around, new_id;
   std::vector<Neighbor> neighbors;
   std::vector<Triangle> next_triangles;
   for (int round = 0; round < kInsertRounds; ++round) {
@@ -470,15 +470,13 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
     }
     if (placed == 0) break;
     inserted += placed;
-    Selection kept(f + next_triangles.size());
-    const auto add = [&](const Triangle& t) {
+    // The split triangles leave in place (the others keep their order and edges), their parts
+    // come last.
+    sel.remove(taken, new_id);
+    for (const Triangle& t : next_triangles) {
       const auto a = std::uint32_t(t[0]), b = std::uint32_t(t[1]), c = std::uint32_t(t[2]);
-      kept.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
-    };
-    for (std::size_t t = 0; t < f; ++t)
-      if (!taken[t]) add(sel.triangles[t]);
-    for (const Triangle& t : next_triangles) add(t);
-    sel = std::move(kept);
+      sel.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+    }
   }
   return inserted;
 }

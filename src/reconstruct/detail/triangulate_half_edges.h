@@ -32,6 +32,36 @@ public:
     ++count_;
   }
 
+  /// Removes the entry from -> to of `triangle` if present (a duplicated edge keeps its other
+  /// entries). Backward-shift deletion: no tombstones, lookups stay short.
+  void erase(std::uint32_t from, std::uint32_t to, std::uint32_t triangle) noexcept {
+    const std::uint64_t key = make_key(from, to);
+    std::size_t hole = hash(key) & mask_;
+    for (;; hole = (hole + 1) & mask_) {
+      if (keys_[hole] == key && values_[hole] == triangle) break;
+      if (keys_[hole] == kEmpty) return;
+    }
+    for (std::size_t j = (hole + 1) & mask_; keys_[j] != kEmpty; j = (j + 1) & mask_) {
+      // The entry at j may fill the hole unless its home slot lies cyclically in (hole, j].
+      const std::size_t home = hash(keys_[j]) & mask_;
+      if (((j - home) & mask_) >= ((j - hole) & mask_)) {
+        keys_[hole] = keys_[j];
+        values_[hole] = values_[j];
+        hole = j;
+      }
+    }
+    keys_[hole] = kEmpty;
+    values_[hole] = kNone;
+    --count_;
+  }
+
+  /// Replaces each stored triangle t by new_id[t] (after the triangles were renumbered): one
+  /// sequential pass over the table instead of inserting every edge again.
+  void renumber(const std::vector<std::uint32_t>& new_id) noexcept {
+    for (std::size_t slot = 0; slot < keys_.size(); ++slot)
+      if (keys_[slot] != kEmpty) values_[slot] = new_id[values_[slot]];
+  }
+
 private:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
   static std::uint64_t make_key(std::uint32_t from, std::uint32_t to) noexcept {
