@@ -20,6 +20,8 @@ struct Selection {
   std::vector<Vector3d> normals;
   HalfEdgeMap edges;
   explicit Selection(std::size_t expected) : edges(3 * expected) {}
+  /// With the spatial rank of each vertex (see HalfEdgeMap); `vertex_rank` must outlive it.
+  Selection(std::size_t expected, const std::vector<std::uint32_t>* vertex_rank) : edges(3 * expected, vertex_rank) {}
 
   bool free_edges(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
     return !edges.contains(a, b) && !edges.contains(b, c) && !edges.contains(c, a);
