@@ -6,7 +6,8 @@
 # mean spacing of the clean cloud, given to both tools. Each run is its own process; the table
 # shows medians of REPEATS runs (Open3D runs once at 1M points: it takes minutes), the time and
 # memory ratio pointsurf / Open3D (below 1: pointsurf is faster / smaller), and the topology and
-# Chamfer / Hausdorff distances to the true mesh (bench/reconstruct/mesh_metrics_runner).
+# Chamfer / Hausdorff distances to the true mesh (bench/reconstruct/mesh_metrics_runner). Raw
+# results: bench/results/reconstruct_ball_pivot.csv (appended, with commit, date and machine).
 # Needs: BUILD_DIR with ball_pivot_runner, mesh_metrics_runner and pointsurf_bench built.
 set -euo pipefail
 WORK_NAME=ball_pivot
@@ -48,10 +49,21 @@ for n in $SIZES; do
   done
 done
 
-"$PY" - "$RESULTS" "$MESH" <<'PYEOF' | tee "$OUT/ball_pivot.md"
-import json, statistics, sys
+COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+git -C "$ROOT" diff --quiet HEAD -- src include 2>/dev/null || COMMIT="$COMMIT+dirty"
+"$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_ball_pivot.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/ball_pivot.md"
+import csv, datetime, json, os, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 mesh = sys.argv[2]
+csv_path, commit = sys.argv[3], sys.argv[4]
+new_file = not os.path.exists(csv_path)
+out = csv.writer(open(csv_path, "a", newline=""))
+if new_file:
+    out.writerow(["commit", "date", "machine", "mesh", "points", "cloud", "tool", "runs", "seconds_median", "seconds_min", "seconds_max",
+                  "pointsurf_time_ratio", "peak_rss_mb_median", "triangles", "holes", "boundary_edges", "non_manifold_edges",
+                  "non_manifold_vertices", "components", "chamfer", "hausdorff"])
+date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+machine = f"{os.uname().nodename} {os.cpu_count()} cores"
 def med(tool, kind, n, key):
     v = [r[key] for r in rows if r["tool"] == tool and r["kind"] == kind and r["points"] == n and key in r]
     return statistics.median(v) if v else None
@@ -84,5 +96,10 @@ for n in sorted({r["points"] for r in rows}):
                   f"{f(mem, 0)} | {ratio(pm, om) if tool == 'pointsurf' else ''} | {f(find(m, 'triangles'))} | {f(find(m, 'boundary_loops'))} | "
                   f"{f(find(m, 'boundary_edges'))} | {f(find(m, 'non_manifold_edges'))} | {f(find(m, 'non_manifold_vertices'))} | "
                   f"{f(find(m, 'components'))} | {f(find(m, 'chamfer'), 5)} | {f(find(m, 'hausdorff'), 5)} |")
+            secs = [r["seconds"] for r in rows if r["tool"] == tool and r["kind"] == kind and r["points"] == n and "seconds" in r]
+            out.writerow([commit, date, machine, mesh, n, kind, tool, len(secs), sec, min(secs) if secs else None,
+                          max(secs) if secs else None, (ps / os_) if tool == "pointsurf" and ps and os_ else None, mem,
+                          find(m, "triangles"), find(m, "boundary_loops"), find(m, "boundary_edges"), find(m, "non_manifold_edges"),
+                          find(m, "non_manifold_vertices"), find(m, "components"), find(m, "chamfer"), find(m, "hausdorff")])
 PYEOF
-echo "results: $OUT/ball_pivot.md" >&2
+echo "results: $OUT/ball_pivot.md, bench/results/reconstruct_ball_pivot.csv" >&2

@@ -11,6 +11,9 @@
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
@@ -126,47 +129,71 @@ private:
   std::vector<std::pair<std::uint32_t, std::uint32_t>> stack_;
 };
 
+}  // namespace
+
+std::vector<HoleEdge> all_hole_edges(const Selection& sel) {
+  tbb::enumerable_thread_specific<std::vector<HoleEdge>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sel.triangles.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<HoleEdge>& out = found.local();
+    for (std::size_t t = r.begin(); t != r.end(); ++t)
+      for (int c = 0; c < 3; ++c) {
+        const auto x = static_cast<std::uint32_t>(sel.triangles[t][c]), y = static_cast<std::uint32_t>(sel.triangles[t][(c + 1) % 3]);
+        if (!sel.edges.contains(y, x)) out.push_back({y, static_cast<std::uint32_t>(t), x});
+      }
+  });
+  std::vector<HoleEdge> edges;
+  for (const std::vector<HoleEdge>& part : found) edges.insert(edges.end(), part.begin(), part.end());
+  std::sort(edges.begin(), edges.end(), [](const HoleEdge& a, const HoleEdge& b) {
+    return a.y != b.y ? a.y < b.y : a.triangle < b.triangle;
+  });
+  return edges;
+}
+
+namespace {
+
+// Whether the edge-connected piece of triangle `t` among the triangles below `triangle_total`
+// has at most `limit` triangles: a breadth-first walk that stops after limit + 1.
+bool piece_at_most(const Selection& sel, std::uint32_t t, std::size_t triangle_total, std::size_t limit,
+                   std::vector<std::uint32_t>& seen) {
+  seen.assign(1, t);
+  for (std::size_t head = 0; head < seen.size(); ++head) {
+    const Triangle& tri = sel.triangles[seen[head]];
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t twin = sel.edges.find(std::uint32_t(tri[(c + 1) % 3]), std::uint32_t(tri[c]));
+      if (twin == kNone || twin >= triangle_total || std::find(seen.begin(), seen.end(), twin) != seen.end()) continue;
+      seen.push_back(twin);
+      if (seen.size() > limit) return false;
+    }
+  }
+  return true;
+}
+
 // Closes the holes with at most kMaxHoleCorners corners whose perimeter is at most
-// `max_perimeter_in_spacings` local spacings (LoopFiller). Returns the number of holes closed
-// and adds the triangles it made to `added`; flags the corners of the small holes it could not
-// close in `reopen`.
+// `max_perimeter_in_spacings` local spacings (LoopFiller), walking the hole half-edges `hole`
+// (all of them, in the order of all_hole_edges). Returns the number of holes closed and adds the
+// triangles it made to `added`; flags the corners of the small holes it could not close in
+// `reopen`.
 std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                              const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
-                             LoopFiller& filler, const std::vector<std::uint8_t>& repaired, const std::vector<std::uint8_t>& blocked,
-                             std::vector<std::uint8_t>& reopen,
-                             std::size_t& added) {
+                             LoopFiller& filler, const std::vector<HoleEdge>& hole, const std::vector<std::uint8_t>& repaired,
+                             const std::vector<std::uint8_t>& blocked, std::vector<std::uint8_t>& reopen, std::size_t& added) {
   const std::size_t n = positions.size();
-  // Triangles per edge-connected piece (union-find), to tell the rim of a tiny isolated piece
-  // from a hole.
+  // The rim of a tiny isolated piece is not a hole: its size is counted among the triangles
+  // there were before this pass.
   const std::size_t triangle_total = sel.triangles.size();
-  std::vector<std::uint32_t> parent(triangle_total), piece_size(triangle_total, 0);
-  for (std::size_t t = 0; t < triangle_total; ++t) parent[t] = static_cast<std::uint32_t>(t);
-  const auto root = [&](std::uint32_t t) {
-    while (parent[t] != t) t = parent[t] = parent[parent[t]];
-    return t;
-  };
-  for (std::size_t t = 0; t < triangle_total; ++t)
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t twin = sel.edges.find(std::uint32_t(sel.triangles[t][(c + 1) % 3]), std::uint32_t(sel.triangles[t][c]));
-      if (twin != kNone) parent[root(twin)] = root(static_cast<std::uint32_t>(t));
-    }
-  for (std::size_t t = 0; t < triangle_total; ++t) ++piece_size[root(static_cast<std::uint32_t>(t))];
   // Hole half-edges run opposite to the boundary edges of the mesh: y -> x for an edge x -> y
   // without twin. The filling triangles use them in that direction. Up to three hole edges
   // leave a vertex (more than one at a pinch, where fans touch); more are left alone.
   constexpr std::size_t kSlots = 3;
   std::vector<std::array<std::uint32_t, kSlots>> hole_out(n, {kNone, kNone, kNone});
-  const std::size_t triangle_count = sel.triangles.size();
-  for (std::size_t t = 0; t < triangle_count; ++t) {
-    for (int c = 0; c < 3; ++c) {
-      const auto x = static_cast<std::uint32_t>(sel.triangles[t][c]), y = static_cast<std::uint32_t>(sel.triangles[t][(c + 1) % 3]);
-      if (sel.edges.contains(y, x)) continue;
-      for (std::uint32_t& slot : hole_out[y])
-        if (slot == kNone) {
-          slot = x;
-          break;
-        }
-    }
+  std::vector<std::uint32_t> starts;
+  for (const HoleEdge& e : hole) {
+    if (starts.empty() || starts.back() != e.y) starts.push_back(e.y);
+    for (std::uint32_t& slot : hole_out[e.y])
+      if (slot == kNone) {
+        slot = e.x;
+        break;
+      }
   }
   // Interior angle of the hole at v between the edges p -> v and v -> w, in v's tangent plane:
   // at a pinch the walk takes the tightest turn, which pairs each incoming hole edge with the
@@ -183,11 +210,11 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
   // The walk follows hole edges as a path; whenever it reaches a vertex already on the path,
   // the part from there on is a simple closed loop, which is filled (when small) and cut off.
   std::vector<std::uint32_t> position(n, kNone);
-  std::vector<std::uint32_t> path, cycle;
+  std::vector<std::uint32_t> path, cycle, seen;
   std::size_t filled = 0;
-  for (std::size_t start = 0; start < n; ++start) {
+  for (const std::uint32_t start : starts) {
     while (hole_out[start][0] != kNone) {
-      path.assign(1, static_cast<std::uint32_t>(start));
+      path.assign(1, start);
       position[start] = 0;
       while (!path.empty()) {
         const std::uint32_t v = path.back();
@@ -233,7 +260,7 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
         if (filler.fill(cycle, positions, normals, sel)) ++filled;
         else {
           const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
-          const bool tiny_piece = beside < triangle_total && piece_size[root(beside)] <= 2 * cycle.size();
+          const bool tiny_piece = beside < triangle_total && piece_at_most(sel, beside, triangle_total, 2 * cycle.size(), seen);
           if (!tiny_piece)
             for (std::uint32_t x : cycle) reopen[x] = 1;
         }
@@ -246,13 +273,53 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
   return filled;
 }
 
+// The fans of the triangles `local` around v (triangle s has the corner v -> next[s] ->
+// prev[s], counter-clockwise): fan_of[s] labels them, fan_angle sums each fan's angles at v
+// when `angles` is set. Returns the number of fans. Neighbours are found in `local` itself, not
+// in the half-edge map: the lists are short and this keeps the scan in cache.
+std::size_t label_fans(const std::vector<Vector3d>& positions, std::uint32_t v, const std::vector<std::uint32_t>& next,
+                       const std::vector<std::uint32_t>& prev, bool angles, std::vector<std::uint32_t>& fan_of,
+                       std::vector<double>& fan_angle) {
+  const std::size_t m = next.size();
+  fan_of.assign(m, kNone);
+  fan_angle.clear();
+  // The triangle with the directed edge v -> w (next == w) and the one with w -> v (prev == w).
+  const auto with_next = [&](std::uint32_t w) { return std::size_t(std::find(next.begin(), next.end(), w) - next.begin()); };
+  const auto with_prev = [&](std::uint32_t w) { return std::size_t(std::find(prev.begin(), prev.end(), w) - prev.begin()); };
+  // Label chains from their first triangle (none before it across an edge); what is left are
+  // closed fans.
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t s = 0; s < m; ++s) {
+      if (fan_of[s] != kNone) continue;
+      if (pass == 0 && with_next(prev[s]) < m) continue;
+      const auto fan = static_cast<std::uint32_t>(fan_angle.size());
+      fan_angle.push_back(0.0);
+      for (std::size_t at = s; at < m && fan_of[at] == kNone; at = with_prev(next[at])) {
+        fan_of[at] = fan;
+        if (!angles) continue;
+        const Vector3d a = positions[next[at]] - positions[v], b = positions[prev[at]] - positions[v];
+        fan_angle[fan] += std::atan2(a.cross(b).norm(), a.dot(b));
+      }
+    }
+  return fan_angle.size();
+}
+
+// Per-thread buffers of the fan labelling.
+struct FanBuffers {
+  std::vector<std::uint32_t> local, next, prev, fan_of;
+  std::vector<double> fan_angle;
+};
+
 // Opens what the hole filling could not close: removes the triangles with two corners flagged
 // in `reopen` (those along a small hole that had no valid filling, e.g. at a fold), so that
 // the next pass sees one larger, simpler hole; at a vertex whose triangles form more than one fan
 // (fronts that met there only), keeps the fan with the largest angle at the vertex and removes
-// the others. Clears `reopen`; returns the number of triangles removed.
+// the others. Clears `reopen`; returns the number of triangles removed. The vertices are visited
+// in order as if each were examined after the removals at the ones before it, but only those
+// with several fans, found in parallel, and those that lost a triangle are looked at again.
+// `hole` holds the hole half-edges before the call and, when triangles were removed, after it.
 std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std::uint8_t>& reopen, std::vector<std::uint8_t>& repaired,
-                         Selection& sel) {
+                         Selection& sel, std::vector<HoleEdge>& hole) {
   const std::size_t n = positions.size(), f = sel.triangles.size();
   std::vector<std::uint32_t> offset(n + 1, 0), around(3 * f);
   for (const Triangle& t : sel.triangles)
@@ -264,17 +331,7 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
       for (int c = 0; c < 3; ++c) around[cursor[std::size_t(sel.triangles[t][c])]++] = static_cast<std::uint32_t>(t);
   }
   std::vector<std::uint8_t> removed(f, 0);
-  std::vector<std::uint32_t> local, fan_of;
-  std::vector<double> fan_angle;
   std::size_t count = 0;
-  // The corner of triangle t at v: the next and previous vertices, counter-clockwise.
-  const auto corner = [&](std::uint32_t t, std::uint32_t v, std::uint32_t& next, std::uint32_t& prev) {
-    const Triangle& tri = sel.triangles[t];
-    const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
-    next = std::uint32_t(tri[(c + 1) % 3]);
-    prev = std::uint32_t(tri[(c + 2) % 3]);
-  };
-  const auto alive = [&](std::uint32_t t) { return t != kNone && !removed[t]; };
   for (std::size_t t = 0; t < f; ++t) {
     const Triangle& tri = sel.triangles[t];
     if (int(reopen[std::size_t(tri[0])]) + reopen[std::size_t(tri[1])] + reopen[std::size_t(tri[2])] >= 2) {
@@ -283,51 +340,74 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
     }
   }
   std::fill(reopen.begin(), reopen.end(), std::uint8_t{0});
+  // The live triangles around v with their corners at v.
+  const auto gather = [&](std::uint32_t v, FanBuffers& b) {
+    b.local.clear();
+    b.next.clear();
+    b.prev.clear();
+    for (std::uint32_t i = offset[v]; i < offset[v + 1]; ++i) {
+      const std::uint32_t t = around[i];
+      if (removed[t]) continue;
+      const Triangle& tri = sel.triangles[t];
+      const int c = std::uint32_t(tri[0]) == v ? 0 : std::uint32_t(tri[1]) == v ? 1 : 2;
+      b.local.push_back(t);
+      b.next.push_back(std::uint32_t(tri[(c + 1) % 3]));
+      b.prev.push_back(std::uint32_t(tri[(c + 2) % 3]));
+    }
+  };
+  std::vector<std::uint8_t> pinched(n, 0);
+  {
+    tbb::enumerable_thread_specific<FanBuffers> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, std::uint32_t(n), 2048), [&](const tbb::blocked_range<std::uint32_t>& r) {
+      FanBuffers& b = buffers.local();
+      for (std::uint32_t v = r.begin(); v != r.end(); ++v) {
+        if (offset[v + 1] - offset[v] < 2) continue;
+        gather(v, b);
+        if (b.local.size() >= 2 && label_fans(positions, v, b.next, b.prev, false, b.fan_of, b.fan_angle) >= 2) pinched[v] = 1;
+      }
+    });
+  }
+  FanBuffers b;
   for (std::uint32_t v = 0; v < n; ++v) {
-    local.clear();
-    for (std::uint32_t i = offset[v]; i < offset[v + 1]; ++i)
-      if (!removed[around[i]]) local.push_back(around[i]);
-    if (local.size() < 2) continue;
-    fan_of.assign(local.size(), kNone);
-    fan_angle.clear();
-    const auto index_of = [&](std::uint32_t t) {
-      return std::size_t(std::find(local.begin(), local.end(), t) - local.begin());
-    };
-    // Label chains from their first triangle (none before it across an edge); what is left
-    // are closed fans.
-    for (int pass = 0; pass < 2; ++pass)
-      for (std::size_t s = 0; s < local.size(); ++s) {
-        if (fan_of[s] != kNone) continue;
-        std::uint32_t next = 0, prev = 0;
-        corner(local[s], v, next, prev);
-        if (pass == 0 && alive(sel.edges.find(v, prev))) continue;
-        const auto fan = static_cast<std::uint32_t>(fan_angle.size());
-        fan_angle.push_back(0.0);
-        for (std::size_t at = s; at < local.size() && fan_of[at] == kNone;) {
-          fan_of[at] = fan;
-          corner(local[at], v, next, prev);
-          const Vector3d a = positions[next] - positions[v], b = positions[prev] - positions[v];
-          fan_angle[fan] += std::atan2(a.cross(b).norm(), a.dot(b));
-          const std::uint32_t t = sel.edges.find(next, v);
-          at = alive(t) ? index_of(t) : local.size();
-        }
-      }
-    if (fan_angle.size() < 2) continue;
-    const auto keep = static_cast<std::uint32_t>(std::max_element(fan_angle.begin(), fan_angle.end()) - fan_angle.begin());
-    for (std::size_t s = 0; s < local.size(); ++s)
-      if (fan_of[s] != keep) {
-        removed[local[s]] = 1;
-        ++count;
-      }
+    if (!pinched[v]) continue;
+    gather(v, b);
+    if (b.local.size() < 2 || label_fans(positions, v, b.next, b.prev, true, b.fan_of, b.fan_angle) < 2) continue;
+    const auto keep = static_cast<std::uint32_t>(std::max_element(b.fan_angle.begin(), b.fan_angle.end()) - b.fan_angle.begin());
+    for (std::size_t s = 0; s < b.local.size(); ++s) {
+      if (b.fan_of[s] == keep) continue;
+      removed[b.local[s]] = 1;
+      ++count;
+      // A later corner that lost a triangle may have split into fans.
+      for (std::uint32_t w : {b.next[s], b.prev[s]})
+        if (w > v) pinched[w] = 1;
+    }
   }
   if (count == 0) return 0;
-  Selection kept(f);
-  for (std::size_t t = 0; t < f; ++t) {
-    const Triangle& tri = sel.triangles[t];
-    if (!removed[t]) kept.add(std::uint32_t(tri[0]), std::uint32_t(tri[1]), std::uint32_t(tri[2]), sel.normals[t]);
-    else for (int c = 0; c < 3; ++c) repaired[std::size_t(tri[c])] = 1;
-  }
-  sel = std::move(kept);
+  // The hole edges after the removal start at the vertices of the old ones or at a corner of a
+  // removed triangle.
+  std::vector<std::uint32_t> touched;
+  for (const HoleEdge& e : hole) touched.push_back(e.y);
+  for (std::size_t t = 0; t < f; ++t)
+    if (removed[t])
+      for (int c = 0; c < 3; ++c) {
+        const auto v = std::uint32_t(sel.triangles[t][c]);
+        touched.push_back(v);
+        repaired[v] = 1;
+      }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  std::vector<std::uint32_t> new_id;
+  sel.remove(removed, new_id);
+  hole.clear();
+  for (const std::uint32_t y : touched)
+    for (std::uint32_t i = offset[y]; i < offset[y + 1]; ++i) {
+      const std::uint32_t t = around[i];
+      if (removed[t]) continue;
+      const Triangle& tri = sel.triangles[new_id[t]];
+      const int c = std::uint32_t(tri[1]) == y ? 0 : std::uint32_t(tri[2]) == y ? 1 : 2;  // the edge x -> y
+      const auto x = std::uint32_t(tri[c]);
+      if (!sel.edges.contains(y, x)) hole.push_back({y, new_id[t], x});
+    }
   return count;
 }
 
@@ -340,12 +420,14 @@ void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vecto
   const std::size_t n = positions.size();
   LoopFiller filler;
   std::vector<std::uint8_t> reopen(n, 0), repaired(n, 0);
+  // Only the first round scans every triangle for hole edges; the repair reports the ones it leaves.
+  std::vector<HoleEdge> hole = all_hole_edges(sel);
   for (int round = 0;; ++round) {
-    counts.holes_filled += fill_small_holes(positions, normals, local_spacing, max_perimeter_in_spacings, sel, filler, repaired,
+    counts.holes_filled += fill_small_holes(positions, normals, local_spacing, max_perimeter_in_spacings, sel, filler, hole, repaired,
                                             blocked, reopen, counts.fill_triangles);
     if (on_round) on_round(round);
     if (round == kRepairRounds) break;
-    const std::size_t removed = open_pinches(positions, reopen, repaired, sel);
+    const std::size_t removed = open_pinches(positions, reopen, repaired, sel, hole);
     counts.pinch_triangles_removed += removed;
     if (removed == 0) break;
   }

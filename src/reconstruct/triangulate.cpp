@@ -68,6 +68,13 @@ Candidate make_candidate(std::uint32_t a, std::uint32_t b, std::uint32_t c, doub
   return cand;
 }
 
+// A directed edge (from, to) of candidate `id`, whose third vertex is `third`; key: the kd-tree
+// rank of `from` (high half) and `to`.
+struct CandidateEdge {
+  std::uint64_t key;
+  std::uint32_t id, third;
+};
+
 // Inner angles of triangle abc, degrees; false if it is degenerate.
 bool inner_angles(const Vector3d& a, const Vector3d& b, const Vector3d& c, double& smallest, double& largest) {
   const std::array<Vector3d, 3> p{a, b, c};
@@ -286,15 +293,15 @@ std::size_t close_front(const PointCloud& cloud, const std::vector<Vector3d>& no
   const std::size_t n = cloud.size();
   std::vector<std::uint32_t> next(n, kNone), prev(n, kNone);
   std::vector<std::uint8_t> out_degree(n, 0), in_degree(n, 0);
-  for (std::size_t t = 0; t < sel.triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c) {
-      const auto x = std::uint32_t(sel.triangles[t][c]), y = std::uint32_t(sel.triangles[t][(c + 1) % 3]);
-      if (sel.edges.contains(y, x)) continue;
-      next[x] = y;
-      prev[y] = x;
-      out_degree[x] = std::uint8_t(std::min(out_degree[x] + 1, 2));
-      in_degree[y] = std::uint8_t(std::min(in_degree[y] + 1, 2));
-    }
+  // Boundary edges x -> y. Where several leave or reach a vertex, which one next / prev keep
+  // does not matter: such a vertex is never an ear tip.
+  for (const detail::HoleEdge& e : detail::all_hole_edges(sel)) {
+    const std::uint32_t x = e.x, y = e.y;
+    next[x] = y;
+    prev[y] = x;
+    out_degree[x] = std::uint8_t(std::min(out_degree[x] + 1, 2));
+    in_degree[y] = std::uint8_t(std::min(in_degree[y] + 1, 2));
+  }
   const double max_angle = radians(max_angle_deg);
   // Hole-side angle at v, or infinity when v cannot be an ear tip.
   const auto hole_angle = [&](std::uint32_t v) {
@@ -370,7 +377,7 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
   const std::size_t n = positions.size();
   std::size_t inserted = 0;
   std::vector<std::uint8_t> used(n), taken;
-  std::vector<std::uint32_t> unused, offset(n + 1), around;
+  std::vector<std::uint32_t> unused, offset(n + 1), around, new_id;
   std::vector<Neighbor> neighbors;
   std::vector<Triangle> next_triangles;
   for (int round = 0; round < kInsertRounds; ++round) {
@@ -471,15 +478,13 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
     }
     if (placed == 0) break;
     inserted += placed;
-    Selection kept(f + next_triangles.size());
-    const auto add = [&](const Triangle& t) {
+    // The split triangles leave in place (the others keep their order and edges), their parts
+    // come last.
+    sel.remove(taken, new_id);
+    for (const Triangle& t : next_triangles) {
       const auto a = std::uint32_t(t[0]), b = std::uint32_t(t[1]), c = std::uint32_t(t[2]);
-      kept.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
-    };
-    for (std::size_t t = 0; t < f; ++t)
-      if (!taken[t]) add(sel.triangles[t]);
-    for (const Triangle& t : next_triangles) add(t);
-    sel = std::move(kept);
+      sel.add(a, b, c, (positions[b] - positions[a]).cross(positions[c] - positions[a]).normalized());
+    }
   }
   return inserted;
 }
@@ -621,21 +626,33 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   // edge-manifold and consistently oriented by construction), when at every vertex already in
   // the mesh it continues that vertex's fan across an edge (no pinched vertex, no tunnel), and
   // when its normal is within max_dihedral_deg of each neighbour across a shared edge.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_edge(3 * unique);
+  // Each directed edge of each candidate, with its other vertex, filed by the kd-tree leaf rank
+  // of its first vertex: the growing front is compact in space, so its look-ups here and in the
+  // half-edge map (laid out the same way, see HalfEdgeMap) stay within a few cache lines instead
+  // of one miss each. The edges leaving rank r are by_edge[edges_from[r] .. edges_from[r + 1]).
+  std::vector<std::uint32_t> rank(n);
+  for (std::size_t pos = 0; pos < n; ++pos) rank[order[pos]] = static_cast<std::uint32_t>(pos);
+  std::vector<CandidateEdge> by_edge(3 * unique);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, unique, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c)
-      for (int e = 0; e < 3; ++e)
-        by_edge[3 * c + std::size_t(e)] = {(std::uint64_t{candidates[c].v[e]} << 32) | candidates[c].v[(e + 1) % 3], std::uint32_t(c)};
+      for (int e = 0; e < 3; ++e) {
+        const std::array<std::uint32_t, 3>& v = candidates[c].v;
+        by_edge[3 * c + std::size_t(e)] = {(std::uint64_t{rank[v[e]]} << 32) | v[(e + 1) % 3], std::uint32_t(c), v[(e + 2) % 3]};
+      }
   });
-  tbb::parallel_sort(by_edge.begin(), by_edge.end());
-  Selection sel(std::min<std::size_t>(unique, 2 * n + 16));
+  tbb::parallel_sort(by_edge.begin(), by_edge.end(), [](const CandidateEdge& x, const CandidateEdge& y) {
+    return x.key != y.key ? x.key < y.key : x.id < y.id;
+  });
+  std::vector<std::uint32_t> edges_from(n + 1, 0);
+  for (const CandidateEdge& entry : by_edge) ++edges_from[std::size_t(entry.key >> 32) + 1];
+  for (std::size_t r = 0; r < n; ++r) edges_from[r + 1] += edges_from[r];
+  Selection sel(std::min<std::size_t>(unique, 2 * n + 16), &rank);
   std::vector<std::uint8_t> in_mesh(n, 0), accepted(unique, 0);
   const double min_dihedral_cos = std::cos(radians(params.max_dihedral_deg));
   // mode 0: seed (all vertices new); 1: growth (fans continue at every old vertex);
   // 2: closing (attached by at least one edge; closes fronts that met out of step).
-  const auto try_accept = [&](std::uint32_t id, int mode) {
+  const auto try_accept = [&](std::uint32_t id, const std::array<std::uint32_t, 3>& v, int mode) {
     const bool seed = mode == 0;
-    const std::array<std::uint32_t, 3>& v = candidates[id].v;
     if (!sel.free_edges(v[0], v[1], v[2])) return false;
     std::array<std::uint32_t, 3> twin{};
     for (int e = 0; e < 3; ++e) twin[std::size_t(e)] = sel.edges.find(v[(e + 1) % 3], v[e]);
@@ -657,15 +674,22 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     accepted[id] = 1;
     return true;
   };
-  // Candidates sit in priority order, so a smaller id is a better one: a min-heap of ids.
-  std::priority_queue<std::uint32_t, std::vector<std::uint32_t>, std::greater<>> front;
-  const auto push_neighbours = [&](std::uint32_t id) {
-    const std::array<std::uint32_t, 3>& v = candidates[id].v;
+  // Candidates sit in priority order, so a smaller id is a better one: a min-heap of ids, each
+  // with its vertices (from by_edge, not from the candidate list, which the front visits at random).
+  struct FrontEntry {
+    std::uint32_t id;
+    std::array<std::uint32_t, 3> v;
+    bool operator>(const FrontEntry& other) const { return id > other.id; }
+  };
+  std::priority_queue<FrontEntry, std::vector<FrontEntry>, std::greater<>> front;
+  const auto push_neighbours = [&](const std::array<std::uint32_t, 3>& v) {
     for (int e = 0; e < 3; ++e) {
-      const std::uint64_t key = (std::uint64_t{v[(e + 1) % 3]} << 32) | v[e];
-      auto it = std::lower_bound(by_edge.begin(), by_edge.end(), std::make_pair(key, std::uint32_t{0}));
-      for (; it != by_edge.end() && it->first == key; ++it)
-        if (!accepted[it->second]) front.push(it->second);
+      const std::uint32_t from = v[(e + 1) % 3], to = v[e], r = rank[from];
+      const std::uint64_t key = (std::uint64_t{r} << 32) | to;
+      for (std::uint32_t i = edges_from[r]; i < edges_from[r + 1]; ++i) {
+        const CandidateEdge& entry = by_edge[i];
+        if (entry.key == key && !accepted[entry.id]) front.push({entry.id, make_candidate(from, to, entry.third, 0.0).v});
+      }
     }
   };
   // Progress of the serial growth: accepted triangles against the about 2 N a closed surface
@@ -675,21 +699,21 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     if ((++grown & 4095u) == 0) reporter.report(0.8 + 0.1 * std::min(1.0, double(grown) / double(2 * std::max<std::size_t>(n, 1))));
   };
   for (std::uint32_t seed = 0; seed < unique; ++seed) {
-    if (accepted[seed] || !try_accept(seed, 0)) continue;
-    push_neighbours(seed);
+    if (accepted[seed] || !try_accept(seed, candidates[seed].v, 0)) continue;
+    push_neighbours(candidates[seed].v);
     report_growth();
     while (!front.empty()) {
-      const std::uint32_t id = front.top();
+      const FrontEntry top = front.top();
       front.pop();
-      if (accepted[id] || !try_accept(id, 1)) continue;
-      push_neighbours(id);
+      if (accepted[top.id] || !try_accept(top.id, top.v, 1)) continue;
+      push_neighbours(top.v);
       report_growth();
     }
   }
   // Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
   // them with the remaining candidates that share an edge with the mesh.
   for (std::uint32_t id = 0; id < unique; ++id)
-    if (!accepted[id]) try_accept(id, 2);
+    if (!accepted[id]) try_accept(id, candidates[id].v, 2);
   std::vector<Candidate>().swap(candidates);
   result.selected_triangles = sel.triangles.size();
   reporter.report(0.9);

@@ -20,6 +20,8 @@ struct Selection {
   std::vector<Vector3d> normals;
   HalfEdgeMap edges;
   explicit Selection(std::size_t expected) : edges(3 * expected) {}
+  /// With the spatial rank of each vertex (see HalfEdgeMap); `vertex_rank` must outlive it.
+  Selection(std::size_t expected, const std::vector<std::uint32_t>* vertex_rank) : edges(3 * expected, vertex_rank) {}
 
   bool free_edges(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
     return !edges.contains(a, b) && !edges.contains(b, c) && !edges.contains(c, a);
@@ -32,7 +34,38 @@ struct Selection {
     edges.insert(b, c, t);
     edges.insert(c, a, t);
   }
+  /// Removes the triangles flagged in `removed` (one per triangle), keeping the order of the
+  /// others; new_id[t] is the new index of a kept triangle t. Linear, without re-hashing the kept
+  /// edges.
+  void remove(const std::vector<std::uint8_t>& removed, std::vector<std::uint32_t>& new_id) {
+    const std::size_t f = triangles.size();
+    new_id.assign(f, HalfEdgeMap::kNone);
+    std::size_t kept = 0;
+    for (std::size_t t = 0; t < f; ++t) {
+      const Triangle& tri = triangles[t];
+      if (removed[t]) {
+        for (int c = 0; c < 3; ++c) edges.erase(std::uint32_t(tri[c]), std::uint32_t(tri[(c + 1) % 3]), std::uint32_t(t));
+        continue;
+      }
+      new_id[t] = static_cast<std::uint32_t>(kept);
+      triangles[kept] = tri;
+      normals[kept] = normals[t];
+      ++kept;
+    }
+    triangles.resize(kept);
+    normals.resize(kept);
+    edges.renumber(new_id);
+  }
 };
+
+/// A hole half-edge y -> x: opposite to the boundary edge x -> y of `triangle`, which has no twin.
+struct HoleEdge {
+  std::uint32_t y, triangle, x;
+};
+
+/// The hole half-edges of `sel`, by y, then by triangle (the order in which a scan of all
+/// triangles meets them). Scans the triangles in parallel; the map is only read.
+std::vector<HoleEdge> all_hole_edges(const Selection& sel);
 
 /// What close_holes did.
 struct HoleClosing {
