@@ -79,6 +79,7 @@ void run_clean(StageRun& run) {
     const ProgressCallback progress = sub_progress(run.progress, share * double(m), share * double(m + 1));
     const bool smoothing = name == "bilateral" || name == "trilateral";
     if (smoothing && !cloud.has_normals()) estimate_missing_normals(run, a.int32("normals_k"), {});
+    else if (smoothing) check_input_normals(run, name == "bilateral" ? "not moved" : "not moved, normal kept");
     const KdTree& tree = run.context.tree(run.output);
     const std::size_t before = cloud.size();
     auto removal = [&](const OutlierResult& r, const char* threshold_name) {

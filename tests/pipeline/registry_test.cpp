@@ -220,7 +220,7 @@ TEST(Registry, RangesAndChoicesAreEnforcedAtTheirBounds) {
       }
     }
   const ParamSpec& orient = *find_stage("normals")->find_param("orient");
-  test::expect_error<UsageError>([&] { parse_param_text(orient, "msst"); }, "orient: \"msst\" is not one of mst, viewpoint, direction or none; did you mean \"mst\"?");
+  test::expect_error<UsageError>([&] { parse_param_text(orient, "msst"); }, "orient: \"msst\" is not one of mst, viewpoint, direction, none, input or keep; did you mean \"mst\"?");
   const ParamSpec& k = *find_stage("normals")->find_param("k");
   test::expect_error<UsageError>([&] { parse_param_text(k, "3.5"); }, "k: \"3.5\" is not an integer");
   test::expect_error<UsageError>([&] { parse_param_text(k, "abc"); }, "k: \"abc\" is not an integer");

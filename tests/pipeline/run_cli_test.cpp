@@ -52,7 +52,7 @@ TEST_F(RunCli, MalformedPipelinesFailBeforeAnyWorkNamingStageAndKey) {
        "stage 2 (normals): k: expected an integer, got a number"},
       {"out_of_range", "[" + in + ", {\"type\": \"normals\", \"k\": 2}, " + out + "]", "", "stage 2 (normals): k: 2 is out of range [3, inf)"},
       {"bad_choice", "[" + in + ", {\"type\": \"normals\", \"orient\": \"sideways\"}, " + out + "]", "",
-       "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction or none"},
+       "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction, none, input or keep"},
       {"other_method", "[" + in + ", {\"type\": \"simplify\", \"method\": \"grid\", \"region_angle_deg\": 20}, " + out + "]", "",
        "stage 2 (simplify): key \"region_angle_deg\" belongs to method regional, not to method grid"},
       {"ignored_option", "[" + in + ", {\"type\": \"normals\", \"viewpoint\": [0, 0, 5]}, " + out + "]", "",
