@@ -176,7 +176,7 @@ TEST_F(RunCli, CommandLineFindsOutputProblemsBeforeTheWorkAndRefusesIgnoredOptio
   r = test::run_cli("info " + path("words.txt"), dir_);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
-  r = test::run_cli("clean " + in + " " + path("o.ply") + " --std-ratio 3 --quiet", dir_);
+  r = test::run_cli("clean " + in + " " + path("o.ply") + " --method sor --std-ratio 3 --quiet", dir_);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(r.err.empty()) << r.err;
 }
