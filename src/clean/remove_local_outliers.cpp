@@ -54,29 +54,20 @@ OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierP
   std::vector<double> mean_distance(n);
   std::vector<std::uint32_t> neighbour_of(n * k);
   detail::ProgressReporter reporter(progress, 0.0, 1.0, 2 * n);
-  const std::span<const std::uint32_t> order = t.spatial_order();
-  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    if (reporter.cancelled()) return;
-    std::vector<Neighbor>& neighbors = buffers.local();
-    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
-      const std::uint32_t i = order[pos];
-      t.knn(cloud.positions[i], k + 1, neighbors);
-      // The point itself is normally first, but among duplicates another may precede it:
-      // skip it wherever it is and keep k others.
-      std::size_t used = 0;
-      double sum = 0.0;
-      for (const Neighbor& nb : neighbors) {
-        if (nb.index == i || used == k) continue;
-        neighbour_of[std::size_t(i) * k + used++] = nb.index;
-        sum += std::sqrt(nb.squared_distance);
-      }
-      for (std::size_t u = used; u < k; ++u) neighbour_of[std::size_t(i) * k + u] = i;  // cannot happen with n > k
-      mean_distance[i] = sum / double(std::max<std::size_t>(used, 1));
+  detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
+    t.knn(cloud.positions[i], k + 1, neighbors);
+    // The point itself is normally first, but among duplicates another may precede it: skip it
+    // wherever it is and keep k others (there are k + 1 points at least).
+    std::size_t used = 0;
+    double sum = 0.0;
+    for (const Neighbor& nb : neighbors) {
+      if (nb.index == i || used == k) continue;
+      neighbour_of[std::size_t(i) * k + used++] = nb.index;
+      sum += std::sqrt(nb.squared_distance);
     }
-    reporter.advance(r.size());
+    for (std::size_t u = used; u < k; ++u) neighbour_of[std::size_t(i) * k + u] = i;
+    mean_distance[i] = sum / double(std::max<std::size_t>(used, 1));
   });
-  reporter.throw_if_cancelled();
 
   // 2. Ratio to the neighbourhood's median mean distance.
   std::vector<double> ratio(n);

@@ -127,6 +127,13 @@ TEST_F(Cli, NormalsAgreeWithTheScansOwnNormals) {
   EXPECT_TRUE(out.cloud.fields.contains("variation"));
 }
 
+// Runs `args`, expecting exit code `code` and `message` on stderr.
+void expect_failure(const std::string& args, const std::filesystem::path& dir, int code, const std::string& message) {
+  const RunResult r = run(args, dir);
+  EXPECT_EQ(r.exit_code, code) << args;
+  EXPECT_TRUE(test::contains(r.err, message)) << args << ": " << r.err;
+}
+
 // The report's first stage that has metric `key`.
 nlohmann::json stage_with(const nlohmann::json& report, const std::string& key) {
   for (const auto& stage : report["stages"])
@@ -162,19 +169,16 @@ TEST_F(Cli, NormalsTakeTheInputsSidesAndWarnWhenAnotherOrientationDisagrees) {
   const PointCloud kept = read_point_cloud(path("kept.ply")).cloud;
   ASSERT_EQ(kept.normals.size(), sphere.normals.size());
   for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept.normals[i], sphere.normals[i]) << i;
-  r = run("normals " + path("inward.ply") + " " + path("kept.ply") + " --orient keep --k 12", dir_);
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "k: ignored with orient keep (no estimation)")) << r.err;
+  expect_failure("normals " + path("inward.ply") + " " + path("kept.ply") + " --orient keep --k 12", dir_, 1,
+                 "k: ignored with orient keep (no estimation)");
 
   // input and keep need normals in the input.
   sphere.normals.clear();
   write_point_cloud(path("bare.ply"), sphere);
-  r = run("normals " + path("bare.ply") + " " + path("o.ply") + " --orient keep", dir_);
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "orient keep: the input has no normals to keep (use mst, viewpoint or direction)")) << r.err;
-  r = run("normals " + path("bare.ply") + " " + path("o.ply") + " --orient input", dir_);
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "orient input: the input has no normals to agree with")) << r.err;
+  expect_failure("normals " + path("bare.ply") + " " + path("o.ply") + " --orient keep", dir_, 1,
+                 "orient keep: the input has no normals to keep (use mst, viewpoint or direction)");
+  expect_failure("normals " + path("bare.ply") + " " + path("o.ply") + " --orient input", dir_, 1,
+                 "orient input: the input has no normals to agree with");
 }
 
 TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
@@ -189,18 +193,14 @@ TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
   EXPECT_TRUE(test::contains(r.out + r.err, "(radius 0.1)")) << r.out << r.err;
   EXPECT_TRUE(test::contains(r.err, "20 points have (0.99 %) fewer than 3 neighbours within 0.1")) << r.err;
 
-  r = run("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_);
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "radius: every one of the 2020 points has fewer than 3 neighbours within 0.001")) << r.err;
+  expect_failure("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_, 1,
+                 "radius: every one of the 2020 points has fewer than 3 neighbours within 0.001");
 
   // Later stages refuse all-zero normals and say what they skip when only some are zero.
   cloud.normals.assign(cloud.size(), Vector3d::Zero());
   write_point_cloud(path("zero.ply"), cloud);
-  for (const char* stage : {"curvature", "clean --method bilateral", "clean --method trilateral", "features --normals input"}) {
-    r = run(std::string(stage) + " " + path("zero.ply") + " " + path("z.ply"), dir_);
-    EXPECT_EQ(r.exit_code, 2) << stage;
-    EXPECT_TRUE(test::contains(r.err, "all 2020 normals of the input are (0,0,0) or not finite")) << stage << ": " << r.err;
-  }
+  for (const char* stage : {"curvature", "clean --method bilateral", "clean --method trilateral", "features --normals input"})
+    expect_failure(std::string(stage) + " " + path("zero.ply") + " " + path("z.ply"), dir_, 2, "all 2020 normals of the input are (0,0,0) or not finite");
   for (std::size_t i = 0; i < 2000; ++i) cloud.normals[i] = Vector3d::UnitZ();
   write_point_cloud(path("some.ply"), cloud);
   r = run("clean " + path("some.ply") + " " + path("s.ply") + " --method bilateral", dir_);
