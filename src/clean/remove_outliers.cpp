@@ -38,21 +38,6 @@ constexpr double kSpread = 2.5;
 // corner's other faces reach it, a cluster of a few drift points mostly does not).
 constexpr double kOwnShare = 0.5;
 
-// Runs `visit(i, buffer)` for every point in the tree's spatial order, in parallel, with a
-// thread-local neighbour buffer and progress over [0, 1).
-template <typename Visit>
-void for_each_point(const KdTree& tree, detail::ProgressReporter& reporter, Visit&& visit) {
-  const std::span<const std::uint32_t> order = tree.spatial_order();
-  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    if (reporter.cancelled()) return;
-    std::vector<Neighbor>& buffer = buffers.local();
-    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) visit(order[pos], buffer);
-    reporter.advance(r.size());
-  });
-  reporter.throw_if_cancelled();
-}
-
 OutlierResult collect(const std::vector<std::uint8_t>& keep, double threshold) {
   OutlierResult result;
   result.threshold = threshold;
@@ -243,7 +228,7 @@ OutlierResult remove_statistical_outliers(const PointCloud& cloud, const Statist
 
   std::vector<double> mean_distance(n);
   detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
-  for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
+  detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     t.knn(cloud.positions[i], k, neighbors);
     double sum = 0.0;
     for (const Neighbor& nb : neighbors) sum += std::sqrt(nb.squared_distance);
@@ -286,7 +271,7 @@ OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlie
 
   std::vector<std::uint8_t> keep(cloud.size());
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
-  for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
+  detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     t.hybrid(cloud.positions[i], wanted, radius, neighbors);
     keep[i] = neighbors.size() >= wanted;
   });
@@ -312,7 +297,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
-  for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
+  detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     const Eigen::Vector3d& p = cloud.positions[i];
     t.knn(p, k, neighbors);
     // Offsets of the other points from this one: small numbers even for georeferenced clouds.

@@ -266,6 +266,14 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
     } else {
       scale[a] = 1e-4;
       while (reach / scale[a] > kIntMax - 1) scale[a] *= 10.0;
+      // An offset given far from the data must not coarsen the default scale unsaid: the
+      // offset the writer would choose keeps 1e-4 wherever the data's extent allows it.
+      const double own_offset = std::trunc(lo[a] / 1000.0) * 1000.0;
+      const double own_reach = std::max(std::abs(hi[a] - own_offset), std::abs(lo[a] - own_offset));
+      if (options.las_offset && scale[a] > 1e-4 && own_reach / 1e-4 <= kIntMax - 1)
+        throw UsageError(fmt::format("{}: LAS offset {} = {} is too far from the data ({} up to {}) for the default scale 1e-4: it "
+                                     "would need {:g}; give that scale explicitly (--las-scale) or an offset near the data",
+                                     name, "xyz"[a], offset[a], lo[a], hi[a], scale[a]));
     }
   }
 

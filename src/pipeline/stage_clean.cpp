@@ -2,6 +2,7 @@
 // The clean stage: outlier removal, duplicates and feature-aware denoising, applied in the
 // order of its method list.
 #include <cmath>
+#include <limits>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -24,6 +25,10 @@ BilateralParams bilateral_params(const StageArgs& a) {
   p.height_sigma_in_spacings = a.number("height_sigma_in_spacings");
   p.iterations = a.int32("iterations");
   return p;
+}
+
+LocalOutlierParams local_params(const StageArgs& a) {
+  return {.k = a.int32("k"), .min_ratio = a.number("min_ratio"), .mad_sigmas = a.number("mad_sigmas"), .far_ratio = a.number("far_ratio")};
 }
 
 StatisticalOutlierParams sor_params(const StageArgs& a) { return {.k = a.int32("k"), .std_ratio = a.number("std_ratio")}; }
@@ -79,6 +84,7 @@ void run_clean(StageRun& run) {
     const ProgressCallback progress = sub_progress(run.progress, share * double(m), share * double(m + 1));
     const bool smoothing = name == "bilateral" || name == "trilateral";
     if (smoothing && !cloud.has_normals()) estimate_missing_normals(run, a.int32("normals_k"), {});
+    else if (smoothing) check_input_normals(run, name == "bilateral" ? "not moved" : "not moved, normal kept");
     const KdTree& tree = run.context.tree(run.output);
     const std::size_t before = cloud.size();
     auto removal = [&](const OutlierResult& r, const char* threshold_name) {
@@ -98,7 +104,9 @@ void run_clean(StageRun& run) {
       rec.set_used(name + ".height_sigma", r.height_sigma_used);
       steps += fmt::format("{}{} moved {} (rms {:.4g}, max {:.4g})", steps.empty() ? "" : ", ", name, r.moved, r.rms_displacement, r.max_displacement);
     };
-    if (name == "sor") {
+    if (name == "local") {
+      removal(remove_local_outliers(cloud, local_params(a), &tree, progress), "ratio_threshold");
+    } else if (name == "sor") {
       removal(remove_statistical_outliers(cloud, sor_params(a), &tree, progress),
               "mean_distance_threshold");
     } else if (name == "radius") {
@@ -140,6 +148,7 @@ void run_clean(StageRun& run) {
 }  // namespace
 
 StageSpec clean_stage() {
+  const LocalOutlierParams local;
   const StatisticalOutlierParams sor;
   const RadiusOutlierParams radius;
   const RansacOutlierParams ransac;
@@ -148,16 +157,26 @@ StageSpec clean_stage() {
   const TrilateralParams tri;
   StageSpec s;
   s.name = "clean";
-  s.summary = "Remove outliers and duplicates, denoise (sor, radius, ransac, duplicates, bilateral, trilateral)";
-  s.description = "The methods of the comma-separated list run in order, each over the previous one's result.";
+  s.summary = "Remove outliers and duplicates, denoise (local, sor, radius, ransac, duplicates, bilateral, trilateral)";
+  s.description = "The methods of the comma-separated list run in order, each over the previous one's result. The default, "
+                  "local, drops points far from the surface relative to the spacing around them, so it keeps the sparse parts "
+                  "of a scan; sor is Open3D's statistical removal.";
   s.order = 30;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
-  s.methods = {"sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"};
-  s.default_method = "sor";
+  s.methods = {"local", "sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"};
+  s.default_method = "local";
   s.method_list = true;
   const std::vector<std::string> smooth = {"bilateral", "trilateral"};
   s.params = {
+      P::integer("k", local.k, "Neighbours per point, the point excluded").at_least(2).only({"local"}),
+      P::number("min_ratio", local.min_ratio, "Drop only points whose mean neighbour distance is above this many times their neighbours'")
+          .range(1.0, std::numeric_limits<double>::infinity(), true, false)
+          .only({"local"}),
+      P::number("mad_sigmas", local.mad_sigmas, "... and above the median ratio by this many robust standard deviations").positive().only({"local"}),
+      P::number("far_ratio", local.far_ratio, "Also drop points whose mean neighbour distance is above this many times the cloud's median")
+          .range(1.0, std::numeric_limits<double>::infinity(), true, false)
+          .only({"local"}),
       P::integer("k", sor.k, "Neighbours per point, the point included").at_least(1).only({"sor"}),
       P::number("std_ratio", sor.std_ratio, "Drop points whose mean kNN distance >= mean + std_ratio x std").positive().only({"sor"}),
       P::integer("min_neighbours", radius.min_neighbours, "Keep points with at least this many others within the radius").at_least(1).only({"radius"}),
@@ -198,7 +217,8 @@ StageSpec clean_stage() {
   s.examples = {"pointsurf clean scan.ply clean.ply --method sor,duplicates", "pointsurf clean part.ply smooth.ply --method trilateral --iterations 3"};
   s.run = run_clean;
   s.check = [](const StageArgs& a) {  // called once per listed method
-    if (a.method() == "sor") sor_params(a).validate();
+    if (a.method() == "local") local_params(a).validate();
+    else if (a.method() == "sor") sor_params(a).validate();
     else if (a.method() == "radius") radius_params(a).validate();
     else if (a.method() == "ransac") ransac_params(a).validate();
     else if (a.method() == "duplicates") duplicate_params(a).validate();

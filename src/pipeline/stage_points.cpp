@@ -16,7 +16,8 @@ namespace pointsurf::detail {
 namespace {
 
 const std::vector<std::string> kNeighborhoods = {"knn", "radius", "hybrid"};
-const std::vector<std::string> kOrientations = {"mst", "viewpoint", "direction", "none"};
+// "input" and "keep" are the stage's own: they need the normals the input came with.
+const std::vector<std::string> kOrientations = {"mst", "viewpoint", "direction", "none", "input", "keep"};
 
 const char* orientation_name(Orientation o) {
   switch (o) {
@@ -56,22 +57,25 @@ std::vector<ParamSpec> neighborhood_params(int k, double radius, double radius_i
           P::number("radius_in_spacings", radius_in_spacings, "Radius in mean spacings when radius is 0").unit("mean spacings").positive()};
 }
 
-// Angles between estimated normals and the normals the input came with.
-void compare_normals(const std::vector<Vector3d>& reference, const std::vector<Vector3d>& estimated, StageRecord& rec) {
-  double sum = 0.0;
-  std::size_t agree = 0, used = 0;
-  for (std::size_t i = 0; i < reference.size() && i < estimated.size(); ++i) {
-    const double nr = reference[i].norm(), ne = estimated[i].norm();
-    if (nr == 0.0 || ne == 0.0) continue;
-    const double c = reference[i].dot(estimated[i]) / (nr * ne);
-    sum += std::acos(std::min(1.0, std::abs(c))) * 180.0 / std::numbers::pi;
-    agree += c > 0.0;
-    ++used;
-  }
-  if (used == 0) return;
-  rec.count("input_normals_compared", as_count(used));
-  rec.metric("mean_angle_to_input_deg", sum / double(used));
-  rec.metric("orientation_agreement_with_input", double(agree) / double(used));
+// Below this share of agreement with the input's normals a new orientation is said to
+// disagree with them (a few percent of points may sit on thin parts or creases).
+constexpr double kInputAgreementWarning = 0.95;
+
+// Points whose normal carries no direction: (0,0,0) from a degenerate neighbourhood, or NaN.
+std::size_t zero_normal_count(const PointCloud& cloud) {
+  std::size_t zero = 0;
+  for (const Vector3d& n : cloud.normals) zero += !(n.allFinite() && n.squaredNorm() > 0.0);
+  return zero;
+}
+
+// Records how far the estimated normals agree with the ones the input came with.
+NormalAgreement record_agreement(const std::vector<Vector3d>& reference, const std::vector<Vector3d>& estimated, StageRecord& rec) {
+  const NormalAgreement agreement = compare_normals(reference, estimated);
+  if (agreement.compared == 0) return agreement;
+  rec.count("input_normals_compared", as_count(agreement.compared));
+  rec.metric("mean_angle_to_input_deg", agreement.mean_angle_deg);
+  rec.metric("orientation_agreement_with_input", agreement.share);
+  return agreement;
 }
 
 // The library's Params from a stage's arguments: the run and the check before any work build
@@ -122,13 +126,40 @@ FeatureParams feature_params(const StageArgs& a) {
   return params;
 }
 
+// The orientation a run uses: "orient" as given; not given, "input" when the input has
+// normals (they are the best evidence of each point's side), else the default.
+std::string orientation_used(const StageArgs& a, const PointCloud& cloud) {
+  if (a.given("orient") || !cloud.has_normals()) return a.text("orient");
+  return "input";
+}
+
+void run_keep_normals(StageRun& run) {
+  PointCloud& cloud = run.context.item(run.output).cloud;
+  StageRecord& rec = run.record;
+  if (!cloud.has_normals()) throw UsageError("orient keep: the input has no normals to keep (use mst, viewpoint or direction)");
+  const std::size_t zero = zero_normal_count(cloud);
+  rec.set_used("orient", std::string("keep"));
+  rec.count("points", as_count(cloud.size()));
+  rec.count("zero_normals", as_count(zero));
+  if (zero == cloud.size()) throw InputError(fmt::format("orient keep: all {} of the input's normals are zero or not finite", cloud.size()));
+  if (zero > 0)
+    rec.warnings.push_back(fmt::format("{} of the input's normals ({:.2f} %) are zero or not finite, kept as they are", zero,
+                                       100.0 * double(zero) / double(cloud.size())));
+  rec.summary = fmt::format("normals: {} kept from the input ({} zero)", plural(cloud.size(), "normal"), zero);
+}
+
 void run_normals(StageRun& run) {
   const StageArgs& a = run.args;
   DataItem& item = run.context.item(run.output);
   PointCloud& cloud = item.cloud;
   if (cloud.size() < 3) throw InputError(fmt::format("{}; normals need at least 3", plural(cloud.size(), "point")));
+  const std::string orientation = orientation_used(a, cloud);
+  if (orientation == "keep") return run_keep_normals(run);
+  if (orientation == "input" && !cloud.has_normals())
+    throw UsageError("orient input: the input has no normals to agree with (use mst, viewpoint or direction)");
   const NormalParams params = normal_params(a);
-  const OrientParams orient = orient_params(a);
+  OrientParams orient = orient_params(a);
+  if (orientation == "input") orient.method = Orientation::None;  // signs come from the input below
 
   std::vector<Vector3d> input_normals;
   std::swap(input_normals, cloud.normals);  // estimate from scratch; compare afterwards
@@ -136,23 +167,47 @@ void run_normals(StageRun& run) {
   const double spacing = run.context.mean_spacing(run.output);
   const NormalResult estimated = estimate_normals(cloud, params, &tree, sub_progress(run.progress, 0.0, 0.5));
   StageRecord& rec = run.record;
+  rec.set_used("orient", orientation);
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", estimated.radius_used);
   rec.count("points", as_count(cloud.size()));
   rec.count("degenerate", as_count(estimated.degenerate));
   rec.metric("mean_spacing", spacing);
+  const bool by_radius = params.neighborhood != NeighborhoodKind::Knn;
+  if (estimated.degenerate == cloud.size()) {
+    if (by_radius)
+      throw UsageError(fmt::format("radius: every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
+                                   "neighbourhood (mean spacing {:.4g}): no normal; use a radius of a few mean spacings "
+                                   "(--radius-in-spacings 3 gives {:.4g}) or --k",
+                                   cloud.size(), estimated.radius_used, spacing, 3.0 * spacing));
+    throw InputError(fmt::format("every one of the {} points has a degenerate neighbourhood (collinear or coincident points): no normal",
+                                 cloud.size()));
+  }
   if (estimated.degenerate > 0)
-    rec.warnings.push_back(fmt::format("{} fewer than 3 neighbours or a degenerate neighbourhood: normal (0,0,0)",
-                                       estimated.degenerate == 1 ? "1 point has" : fmt::format("{} points have", estimated.degenerate)));
+    rec.warnings.push_back(fmt::format("{} ({:.2f} %) fewer than 3 neighbours{} or a degenerate neighbourhood: normal (0,0,0), which "
+                                       "later stages skip",
+                                       estimated.degenerate == 1 ? "1 point has" : fmt::format("{} points have", estimated.degenerate),
+                                       100.0 * double(estimated.degenerate) / double(cloud.size()),
+                                       by_radius ? fmt::format(" within {:.4g}", estimated.radius_used) : std::string()));
   std::string oriented_text = "not oriented";
-  if (orient.method != Orientation::None) {
+  if (orientation == "input") {
+    const OrientResult r = orient_to_reference(cloud, input_normals);
+    rec.count("flipped", as_count(r.flipped));
+    oriented_text = fmt::format("oriented to the input's normals ({} flipped)", r.flipped);
+  } else if (orient.method != Orientation::None) {
     const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
     rec.count("flipped", as_count(r.flipped));
     if (orient.method == Orientation::Mst) rec.count("components", as_count(r.components));
     oriented_text = orient.method == Orientation::Mst ? fmt::format("oriented mst ({}, {} flipped)", plural(r.components, "component"), r.flipped)
                                                       : fmt::format("oriented by {} ({} flipped)", orientation_name(orient.method), r.flipped);
   }
-  if (!input_normals.empty()) compare_normals(input_normals, cloud.normals, rec);
+  if (!input_normals.empty()) {
+    const NormalAgreement agreement = record_agreement(input_normals, cloud.normals, rec);
+    if (orientation != "input" && orient.method != Orientation::None && agreement.share < kInputAgreementWarning)
+      rec.warnings.push_back(fmt::format("the new orientation ({}) disagrees with the input's normals on {:.1f} % of {}: "
+                                         "--orient input keeps the input's sides, --orient keep its normals",
+                                         orientation, 100.0 * (1.0 - agreement.share), plural(agreement.compared, "point")));
+  }
   rec.summary = fmt::format("normals: {} ({} {}), {}; mean spacing {:.4g}", plural(cloud.size(), "normal"),
                             params.neighborhood == NeighborhoodKind::Knn ? "k" : params.neighborhood == NeighborhoodKind::Radius ? "radius" : "hybrid",
                             params.neighborhood == NeighborhoodKind::Knn ? std::to_string(params.k) : fmt::format("{:.4g}", estimated.radius_used),
@@ -180,6 +235,7 @@ void run_curvature(StageRun& run) {
   if (cloud.size() < needed) throw InputError(fmt::format("{}; a degree-{} jet needs at least {}", plural(cloud.size(), "point"), params.degree, needed));
   const bool estimated = !cloud.has_normals();
   if (estimated) estimate_missing_normals_impl(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.3));
+  else check_input_normals(run, "curvature 0, surface_type 0 (undefined)");
   const KdTree& tree = run.context.tree(run.output);
   const CurvatureResult r = estimate_curvature(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
   StageRecord& rec = run.record;
@@ -218,6 +274,8 @@ void run_features(StageRun& run) {
   if (params.normals == FeatureNormals::Input && !cloud.has_normals()) {
     estimate_missing_normals_impl(run, params.k, sub_progress(run.progress, 0.0, 0.3));
     estimated = true;
+  } else if (params.normals == FeatureNormals::Input) {
+    check_input_normals(run, "left out of the normal clusters");
   }
   const KdTree& tree = run.context.tree(run.output);
   const FeatureResult r = detect_feature_points(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
@@ -257,6 +315,20 @@ void run_features(StageRun& run) {
 
 void estimate_missing_normals(StageRun& run, int k, const ProgressCallback& progress) { estimate_missing_normals_impl(run, k, progress); }
 
+std::size_t check_input_normals(StageRun& run, const std::string& skipped) {
+  const PointCloud& cloud = run.context.item(run.output).cloud;
+  const std::size_t zero = zero_normal_count(cloud);
+  if (zero == 0) return 0;
+  if (zero == cloud.size())
+    throw InputError(fmt::format("all {} normals of the input are (0,0,0) or not finite; estimate them again with more "
+                                 "neighbours (normals --k, or a --radius of a few mean spacings)",
+                                 cloud.size()));
+  run.record.count("zero_normals", as_count(zero));
+  run.record.warnings.push_back(fmt::format("{} ({:.2f} %) a zero or non-finite normal in the input: {}", zero == 1 ? "1 point has" : fmt::format("{} points have", zero),
+                                            100.0 * double(zero) / double(cloud.size()), skipped));
+  return zero;
+}
+
 StageSpec normals_stage() {
   const NormalParams n;
   const OrientParams o;
@@ -264,14 +336,18 @@ StageSpec normals_stage() {
   s.name = "normals";
   s.summary = "Estimate normals by PCA and orient them (MST propagation by default)";
   s.description = "PCA normals (Hoppe et al. 1992) over k nearest neighbours, a radius or both, then a consistent orientation. "
-                  "Adds the field \"variation\". A mesh keeps its faces.";
+                  "Adds the field \"variation\". When the input has normals, each new one takes the side of the input's unless "
+                  "orient is given; another orientation that disagrees with them on more than 5 % of points is warned of. "
+                  "A mesh keeps its faces.";
   s.order = 50;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = neighborhood_params(n.k, n.radius, n.radius_in_spacings, "Neighbours per point (knn; hybrid: at most k within r)");
   s.params[1] = P::integer("k", n.k, "Neighbours per point (knn; hybrid: at most k within r)").at_least(3);
   s.params.push_back(P::choice("orient", orientation_name(o.method), kOrientations,
-                               "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction or none"));
+                               "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction, none, input (each new normal on "
+                               "the side of the input's) or keep (the input's normals, no estimation); default: input when the "
+                               "input has normals, else mst"));
   s.params.push_back(P::vector3("viewpoint", as_list(o.viewpoint), "Scanner position (orient viewpoint)").unit("cloud units"));
   s.params.push_back(P::vector3("direction", as_list(o.direction), "Direction normals should face (orient direction)"));
   s.params.push_back(P::integer("orient_k", o.k, "Neighbours per point in the MST graph (orient mst)").at_least(1));
@@ -284,6 +360,9 @@ StageSpec normals_stage() {
     if (a.given("viewpoint") && orient != "viewpoint") throw UsageError("viewpoint: ignored unless orient is viewpoint");
     if (a.given("direction") && orient != "direction") throw UsageError("direction: ignored unless orient is direction");
     if (a.given("orient_k") && orient != "mst") throw UsageError("orient_k: ignored unless orient is mst");
+    if (orient == "keep")
+      for (const char* name : {"neighborhood", "k", "radius", "radius_in_spacings"})
+        if (a.given(name)) throw UsageError(fmt::format("{}: ignored with orient keep (no estimation)", name));
     if (orient == "viewpoint" && !a.given("viewpoint")) throw UsageError("orient viewpoint needs viewpoint X,Y,Z (the scanner position)");
     normal_params(a).validate();
     orient_params(a).validate();

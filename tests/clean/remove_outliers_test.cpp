@@ -123,14 +123,74 @@ TEST(StatisticalOutliers, DropsStacksOfDuplicatesLikeOpen3D) {
   for (std::uint32_t i = 500; i < 505; ++i) EXPECT_FALSE(std::binary_search(result.kept.begin(), result.kept.end(), i)) << i;
 }
 
-TEST(StatisticalOutliers, InvariantUnderPermutationAndAFarShift) {
+// The kept set of `remove` must not change when the points are permuted or shifted by 1e6 m.
+template <class Remove>
+void expect_invariant_under_permutation_and_a_far_shift(Remove remove) {
   Noisy s = noisy_sphere(5000);
-  const OutlierResult base = remove_statistical_outliers(s.cloud);
+  const OutlierResult base = remove(s.cloud);
   const std::vector<std::size_t> perm = permutation(s.cloud.size(), 9);
-  EXPECT_EQ(unpermute(remove_statistical_outliers(s.cloud.select(perm)).kept, perm), base.kept);
+  EXPECT_EQ(unpermute(remove(s.cloud.select(perm)).kept, perm), base.kept);
   PointCloud shifted = s.cloud;
   for (Vector3d& p : shifted.positions) p += Vector3d(1e6, -2e6, 1e6);
-  EXPECT_EQ(remove_statistical_outliers(shifted).kept, base.kept);
+  EXPECT_EQ(remove(shifted).kept, base.kept);
+}
+
+TEST(StatisticalOutliers, InvariantUnderPermutationAndAFarShift) {
+  expect_invariant_under_permutation_and_a_far_shift([](const PointCloud& c) { return remove_statistical_outliers(c); });
+}
+
+// A unit sphere whose density falls tenfold from the north pole to the south (a scan's near
+// and far sides), with Gaussian noise of 0.2 local spacings: every point lies on the surface.
+PointCloud uneven_sphere(std::uint64_t seed) {
+  const PointCloud dense = test::sample_sphere(60000, 1.0, Vector3d::Zero(), seed);
+  std::mt19937_64 rng(seed + 1);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<std::size_t> chosen;
+  for (std::size_t i = 0; i < dense.size(); ++i)
+    if (uniform(rng) < 0.1 + 0.9 * 0.5 * (dense.positions[i].z() + 1.0)) chosen.push_back(i);
+  PointCloud cloud = dense.select(chosen);
+  test::add_noise(cloud, 0.2 * mean_spacing(cloud.positions), seed + 2);
+  return cloud;
+}
+
+TEST(LocalOutliers, KeepsEverySurfacePointWhereDensityVaries) {
+  for (std::uint64_t seed : {21, 22}) {
+    const PointCloud cloud = uneven_sphere(seed);
+    const OutlierResult local = remove_local_outliers(cloud);
+    const OutlierResult sor = remove_statistical_outliers(cloud);
+    std::printf("uneven sphere (%zu points): local removes %zu (%.3f %%), sor %zu (%.3f %%)\n", cloud.size(), local.removed,
+                100.0 * double(local.removed) / double(cloud.size()), sor.removed, 100.0 * double(sor.removed) / double(cloud.size()));
+    EXPECT_LE(double(local.removed), 0.003 * double(cloud.size()));
+    EXPECT_GT(sor.removed, 10 * std::max<std::size_t>(local.removed, 1));  // the global cut takes the sparse side
+    EXPECT_EQ(local.kept.size() + local.removed, cloud.size());
+    EXPECT_TRUE(std::is_sorted(local.kept.begin(), local.kept.end()));
+  }
+}
+
+TEST(LocalOutliers, FindsFarOutliersInjectedAtKnownIndices) {
+  // A noisy unit sphere (20k points, noise 0.3 spacing) with drift points 15..30 spacings above
+  // it and points scattered through its bounding box at least 15 spacings from it: the
+  // outliers' indices are known. 15 spacings is about min_ratio = 5 times the mean distance to
+  // 16 neighbours on the surface (about 3 spacings).
+  for (std::uint64_t seed : {31, 32}) {
+    PointCloud cloud = test::sample_sphere(20000, 1.0, Vector3d::Zero(), seed);
+    const double spacing = mean_spacing(cloud.positions);
+    test::add_noise(cloud, 0.3 * spacing, seed + 1);
+    std::vector<std::uint32_t> outliers = test::add_drift_outliers(cloud, 150, 15.0 * spacing, 30.0 * spacing, seed + 2);
+    const std::vector<std::uint32_t> scattered = test::add_scattered_outliers(
+        cloud, 150, 0.2, 15.0 * spacing, [](const Vector3d& p) { return test::distance_to_sphere(p); }, seed + 3);
+    outliers.insert(outliers.end(), scattered.begin(), scattered.end());
+    const OutlierResult result = remove_local_outliers(cloud);
+    const test::Detection d = test::score_removal(result.kept, cloud.size(), outliers);
+    std::printf("local on a noisy sphere with %zu far outliers: precision %.3f recall %.3f (ratio cut %.3g)\n", outliers.size(), d.precision,
+                d.recall, result.threshold);
+    EXPECT_GE(d.recall, 0.95);
+    EXPECT_GE(d.precision, 0.95);
+  }
+}
+
+TEST(LocalOutliers, InvariantUnderPermutationAndAFarShift) {
+  expect_invariant_under_permutation_and_a_far_shift([](const PointCloud& c) { return remove_local_outliers(c); });
 }
 
 TEST(RadiusOutliers, RemovesDriftPointsAndKeepsTheSurface) {
@@ -342,6 +402,11 @@ TEST(Outliers, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_relative_support = -0.1}); },
                            "min_relative_support must be in [0, 1], got -0.1");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_relative_support = NAN}); }, "min_relative_support must be in [0, 1]");
+  expect_error<UsageError>([&] { remove_local_outliers(cloud, {.k = 1}); }, "remove_local_outliers: k must be >= 2, got 1");
+  expect_error<UsageError>([&] { remove_local_outliers(cloud, {.min_ratio = 1.0}); }, "min_ratio must be > 1, got 1");
+  expect_error<UsageError>([&] { remove_local_outliers(cloud, {.mad_sigmas = 0.0}); }, "mad_sigmas must be > 0, got 0");
+  expect_error<UsageError>([&] { remove_local_outliers(cloud, {.far_ratio = 0.5}); }, "far_ratio must be > 1, got 0.5");
+  expect_error<UsageError>([&] { remove_local_outliers(test::sample_sphere(16)); }, "needs at least 17 points, got 16");
   PointCloud one;
   one.positions = {Vector3d::Zero()};
   expect_error<UsageError>([&] { remove_statistical_outliers(one); }, "needs at least 2 points, got 1");

@@ -104,7 +104,7 @@ TEST_F(Cli, InfoJsonDescribesTheGeoreferencedTile) {
 }
 
 TEST_F(Cli, NormalsAgreeWithTheScansOwnNormals) {
-  const RunResult r = run("normals " + test::data_path("kitten.xyz").string() + " " + path("kitten.ply") + " --report " +
+  const RunResult r = run("normals " + test::data_path("kitten.xyz").string() + " " + path("kitten.ply") + " --orient mst --report " +
                               path("r.json") + " --quiet",
                           dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -125,6 +125,87 @@ TEST_F(Cli, NormalsAgreeWithTheScansOwnNormals) {
   EXPECT_EQ(out.cloud.size(), 5210u);
   EXPECT_TRUE(out.cloud.has_normals());
   EXPECT_TRUE(out.cloud.fields.contains("variation"));
+}
+
+// Runs `args`, expecting exit code `code` and `message` on stderr.
+void expect_failure(const std::string& args, const std::filesystem::path& dir, int code, const std::string& message) {
+  const RunResult r = run(args, dir);
+  EXPECT_EQ(r.exit_code, code) << args;
+  EXPECT_TRUE(test::contains(r.err, message)) << args << ": " << r.err;
+}
+
+// The report's first stage that has metric `key`.
+nlohmann::json stage_with(const nlohmann::json& report, const std::string& key) {
+  for (const auto& stage : report["stages"])
+    if (stage["metrics"].contains(key) || stage["counts"].contains(key)) return stage;
+  return {};
+}
+
+TEST_F(Cli, NormalsTakeTheInputsSidesAndWarnWhenAnotherOrientationDisagrees) {
+  // A sphere whose file carries inward normals (a choice MST would not make): by default the
+  // new normals keep the input's side everywhere; --orient mst turns them outward and warns.
+  PointCloud sphere = test::sample_sphere(3000);
+  for (Vector3d& n : sphere.normals) n = -n;
+  write_point_cloud(path("inward.ply"), sphere);
+  RunResult r = run("normals " + path("inward.ply") + " " + path("o.ply") + " --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.out + r.err, "oriented to the input's normals")) << r.out << r.err;
+  nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  nlohmann::json stage = stage_with(report, "orientation_agreement_with_input");
+  ASSERT_FALSE(stage.is_null());
+  EXPECT_EQ(stage["metrics"]["orientation_agreement_with_input"].get<double>(), 1.0);
+  EXPECT_EQ(stage["parameters"]["orient"], "input");
+  EXPECT_TRUE(stage["warnings"].empty()) << stage["warnings"];
+
+  r = run("normals " + path("inward.ply") + " " + path("o.ply") + " --orient mst --report " + path("r.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "the new orientation (mst) disagrees with the input's normals on 100.0 % of 3000 points")) << r.err;
+  report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_LT(stage_with(report, "orientation_agreement_with_input")["metrics"]["orientation_agreement_with_input"].get<double>(), 0.01);
+
+  // keep: the input's normals unchanged, no estimation.
+  r = run("normals " + path("inward.ply") + " " + path("kept.ply") + " --orient keep", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud kept = read_point_cloud(path("kept.ply")).cloud;
+  ASSERT_EQ(kept.normals.size(), sphere.normals.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept.normals[i], sphere.normals[i]) << i;
+  expect_failure("normals " + path("inward.ply") + " " + path("kept.ply") + " --orient keep --k 12", dir_, 1,
+                 "k: ignored with orient keep (no estimation)");
+
+  // input and keep need normals in the input.
+  sphere.normals.clear();
+  write_point_cloud(path("bare.ply"), sphere);
+  expect_failure("normals " + path("bare.ply") + " " + path("o.ply") + " --orient keep", dir_, 1,
+                 "orient keep: the input has no normals to keep (use mst, viewpoint or direction)");
+  expect_failure("normals " + path("bare.ply") + " " + path("o.ply") + " --orient input", dir_, 1,
+                 "orient input: the input has no normals to agree with");
+}
+
+TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
+  // 2000 points on a unit square (spacing about 0.02) and 20 isolated points 1 apart, far away:
+  // within radius 0.1 the square's points have neighbours, the isolated ones none.
+  PointCloud cloud = test::sample_plane(2000, 0.5);
+  cloud.normals.clear();
+  for (int i = 0; i < 20; ++i) cloud.positions.emplace_back(10.0 + i, 10.0, 10.0);
+  write_point_cloud(path("plane.ply"), cloud);
+  RunResult r = run("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.1", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.out + r.err, "(radius 0.1)")) << r.out << r.err;
+  EXPECT_TRUE(test::contains(r.err, "20 points have (0.99 %) fewer than 3 neighbours within 0.1")) << r.err;
+
+  expect_failure("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_, 1,
+                 "radius: every one of the 2020 points has fewer than 3 neighbours within 0.001");
+
+  // Later stages refuse all-zero normals and say what they skip when only some are zero.
+  cloud.normals.assign(cloud.size(), Vector3d::Zero());
+  write_point_cloud(path("zero.ply"), cloud);
+  for (const char* stage : {"curvature", "clean --method bilateral", "clean --method trilateral", "features --normals input"})
+    expect_failure(std::string(stage) + " " + path("zero.ply") + " " + path("z.ply"), dir_, 2, "all 2020 normals of the input are (0,0,0) or not finite");
+  for (std::size_t i = 0; i < 2000; ++i) cloud.normals[i] = Vector3d::UnitZ();
+  write_point_cloud(path("some.ply"), cloud);
+  r = run("clean " + path("some.ply") + " " + path("s.ply") + " --method bilateral", dir_);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "20 points have (0.99 %) a zero or non-finite normal in the input: not moved")) << r.err;
 }
 
 TEST_F(Cli, ConvertKeepsGeoreferencedPrecisionThroughLasAndPly) {

@@ -217,6 +217,23 @@ TEST(Las, WriteHonoursScaleAndOffsetAndWidensTheDefaultScaleForHugeExtents) {
   EXPECT_FALSE(std::filesystem::exists(dir / "overflow.las"));
   options.las_scale = 0.0;
   expect_error<UsageError>([&] { write_point_cloud(dir / "zero.las", cloud, options); }, "must be a positive number");
+
+  // An offset far from georeferenced data would coarsen the default scale 1e-4 to 1e-3: refused,
+  // with the scale it needs; given that scale explicitly, it is written.
+  PointCloud tile;
+  tile.positions = {Vector3d(590'000.25, 4'500.5, 10.0), Vector3d(590'500.75, 4'900.25, 30.0)};
+  WriteOptions zero_offset;
+  zero_offset.las_offset = Vector3d::Zero();
+  expect_error<UsageError>([&] { write_point_cloud(dir / "far.las", tile, zero_offset); },
+                           "LAS offset x = 0 is too far from the data (590000.25 up to 590500.75) for the default scale 1e-4: it would need 0.001");
+  EXPECT_FALSE(std::filesystem::exists(dir / "far.las"));
+  zero_offset.las_scale = 1e-3;
+  write_point_cloud(dir / "far.las", tile, zero_offset);
+  EXPECT_DOUBLE_EQ(get<double>(read_bytes(dir / "far.las"), 131), 1e-3);
+  zero_offset = {};
+  zero_offset.las_offset = Vector3d(590'000, 0, 0);  // near the data: the default scale holds
+  write_point_cloud(dir / "near.las", tile, zero_offset);
+  EXPECT_DOUBLE_EQ(get<double>(read_bytes(dir / "near.las"), 131), 1e-4);
 }
 
 TEST(Las, EmptyCloudRoundTrips) {

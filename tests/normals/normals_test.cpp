@@ -453,6 +453,51 @@ TEST(OrientNormals, BadParametersThrowUsageError) {
   expect_usage_error([&] { orient_normals(s.cloud); }, "orient_normals: the cloud has 99 normals for 100 points");
 }
 
+TEST(OrientToReference, SphereFlippedAtRandomAgreesWithTheInputEverywhere) {
+  // The exact outward normals are the input; the new ones are flipped at random (seeded): after
+  // orient_to_reference they all agree with the input, and compare_normals says 100 %.
+  Shape s = make(test::sample_sphere(4000));
+  s.cloud.normals = s.exact;
+  std::mt19937_64 rng(11);
+  std::size_t reversed = 0;
+  for (Vector3d& n : s.cloud.normals)
+    if (rng() % 2 == 0) {
+      n = -n;
+      ++reversed;
+    }
+  const NormalAgreement before = compare_normals(s.exact, s.cloud.normals);
+  EXPECT_EQ(before.compared, 4000u);
+  EXPECT_EQ(before.agreeing, 4000u - reversed);
+  const OrientResult r = orient_to_reference(s.cloud, s.exact);
+  EXPECT_EQ(r.flipped, reversed);
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
+  const NormalAgreement after = compare_normals(s.exact, s.cloud.normals);
+  EXPECT_EQ(after.agreeing, 4000u);
+  EXPECT_DOUBLE_EQ(after.share, 1.0);
+  EXPECT_NEAR(after.mean_angle_deg, 0.0, 1e-6);
+}
+
+TEST(OrientToReference, ZeroNormalsAreLeftOutAndSizesChecked) {
+  Shape s = make(test::sample_sphere(100));
+  s.cloud.normals = s.exact;
+  std::vector<Vector3d> reference = s.exact;
+  for (std::size_t i = 0; i < 100; i += 2) reference[i] = -reference[i];
+  reference[1] = Vector3d::Zero();
+  s.cloud.normals[3] = Vector3d::Zero();
+  const NormalAgreement a = compare_normals(reference, s.cloud.normals);
+  EXPECT_EQ(a.compared, 98u);
+  EXPECT_EQ(a.agreeing, 48u);
+  EXPECT_EQ(orient_to_reference(s.cloud, reference).flipped, 50u);
+  EXPECT_EQ(s.cloud.normals[3], Vector3d::Zero());
+  EXPECT_EQ(s.cloud.normals[1], s.exact[1]);
+  EXPECT_EQ(compare_normals({}, s.cloud.normals).compared, 0u);
+  reference.pop_back();
+  expect_usage_error([&] { orient_to_reference(s.cloud, reference); },
+                     "orient_to_reference: 100 normals and 99 reference normals for 100 points");
+  s.cloud.normals.clear();
+  expect_usage_error([&] { orient_to_reference(s.cloud, s.exact); }, "orient_to_reference: the cloud has no normals (estimate them first)");
+}
+
 TEST(OrientNormals, ProgressCanCancel) {
   Shape s = make(test::sample_sphere(20000));
   s.cloud.normals = s.exact;

@@ -76,6 +76,7 @@ std::vector<Expected> library_defaults() {
   const OrientParams o;
   const CurvatureParams c;
   const FeatureParams f;
+  const LocalOutlierParams loc;
   const StatisticalOutlierParams sor;
   const RadiusOutlierParams rad;
   const RansacOutlierParams ran;
@@ -117,6 +118,10 @@ std::vector<Expected> library_defaults() {
       {"features", "", "dn_deg", f.dn_deg},
       {"features", "", "dd_in_spacings", f.dd_in_spacings},
       {"features", "", "min_cluster_points", I{f.min_cluster_points}},
+      {"clean", "local", "k", I{loc.k}},
+      {"clean", "local", "min_ratio", loc.min_ratio},
+      {"clean", "local", "mad_sigmas", loc.mad_sigmas},
+      {"clean", "local", "far_ratio", loc.far_ratio},
       {"clean", "sor", "k", I{sor.k}},
       {"clean", "sor", "std_ratio", sor.std_ratio},
       {"clean", "radius", "min_neighbours", I{rad.min_neighbours}},
@@ -220,7 +225,7 @@ TEST(Registry, RangesAndChoicesAreEnforcedAtTheirBounds) {
       }
     }
   const ParamSpec& orient = *find_stage("normals")->find_param("orient");
-  test::expect_error<UsageError>([&] { parse_param_text(orient, "msst"); }, "orient: \"msst\" is not one of mst, viewpoint, direction or none; did you mean \"mst\"?");
+  test::expect_error<UsageError>([&] { parse_param_text(orient, "msst"); }, "orient: \"msst\" is not one of mst, viewpoint, direction, none, input or keep; did you mean \"mst\"?");
   const ParamSpec& k = *find_stage("normals")->find_param("k");
   test::expect_error<UsageError>([&] { parse_param_text(k, "3.5"); }, "k: \"3.5\" is not an integer");
   test::expect_error<UsageError>([&] { parse_param_text(k, "abc"); }, "k: \"abc\" is not an integer");
@@ -251,7 +256,7 @@ namespace {
 TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
   const std::map<std::string, std::vector<std::string>> validated = {
       {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "cocone", "crust", "ball-pivot"}},
-      {"clean", {"sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"}},
+      {"clean", {"local", "sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"}},
       {"simplify", {"curvature", "regional", "curvature-distance", "lfs"}}};
   std::size_t checked = 0;
   for (const auto& [stage, methods] : validated) {

@@ -52,7 +52,7 @@ TEST_F(RunCli, MalformedPipelinesFailBeforeAnyWorkNamingStageAndKey) {
        "stage 2 (normals): k: expected an integer, got a number"},
       {"out_of_range", "[" + in + ", {\"type\": \"normals\", \"k\": 2}, " + out + "]", "", "stage 2 (normals): k: 2 is out of range [3, inf)"},
       {"bad_choice", "[" + in + ", {\"type\": \"normals\", \"orient\": \"sideways\"}, " + out + "]", "",
-       "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction or none"},
+       "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction, none, input or keep"},
       {"other_method", "[" + in + ", {\"type\": \"simplify\", \"method\": \"grid\", \"region_angle_deg\": 20}, " + out + "]", "",
        "stage 2 (simplify): key \"region_angle_deg\" belongs to method regional, not to method grid"},
       {"ignored_option", "[" + in + ", {\"type\": \"normals\", \"viewpoint\": [0, 0, 5]}, " + out + "]", "",
@@ -176,7 +176,7 @@ TEST_F(RunCli, CommandLineFindsOutputProblemsBeforeTheWorkAndRefusesIgnoredOptio
   r = test::run_cli("info " + path("words.txt"), dir_);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
-  r = test::run_cli("clean " + in + " " + path("o.ply") + " --std-ratio 3 --quiet", dir_);
+  r = test::run_cli("clean " + in + " " + path("o.ply") + " --method sor --std-ratio 3 --quiet", dir_);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(r.err.empty()) << r.err;
 }

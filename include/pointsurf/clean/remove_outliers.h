@@ -55,6 +55,39 @@ OutlierResult remove_statistical_outliers(const PointCloud& cloud, const Statist
 /// std_ratio <= 0 or fewer than 2 distances.
 OutlierResult statistical_outliers_from_distances(std::span<const double> mean_distances, double std_ratio);
 
+struct LocalOutlierParams {
+  int k = 16;                // neighbours per point, the point itself excluded, >= 2
+  double min_ratio = 3.0;    // a point is dropped only when its mean neighbour distance is above
+                             // this many times its neighbourhood's (density-relative), > 1; 3
+                             // catches points about 10 spacings or more off the surface
+  double mad_sigmas = 10.0;  // ... and above the median ratio by this many robust standard
+                             // deviations (1.4826 x MAD) of the ratios, > 0
+  double far_ratio = 12.0;   // also dropped: a point whose mean neighbour distance is above this
+                             // many times the median over the cloud (groups of far outliers that
+                             // are each other's neighbours), > 1
+  /// Throws UsageError naming the first value out of range: the one place the values are
+  /// checked (the algorithm and the pipeline call it before any work).
+  void validate() const;
+};
+
+/// Density-relative outlier removal, the default of the clean stage: a point is an outlier when
+/// it lies far from the surface compared with the spacing around it, so sparse and dense parts
+/// of one scan are judged alike (statistical removal, which compares every point with the
+/// global mean, removes the sparse parts of a scan of varying density).
+///   d_i = mean distance from p_i to its k nearest other points;
+///   r_i = d_i / median of d_j over those k neighbours (1 on any evenly sampled surface,
+///         whatever its density; large for a point far from the surface its neighbours lie on);
+///   p_i is dropped iff r_i > max(min_ratio, median(r) + mad_sigmas * 1.4826 * MAD(r)), or
+///   d_i > far_ratio * median(d) (far outliers whose nearest points are other outliers, where
+///   r_i is about 1).
+/// In the spirit of the local outlier factor (Breunig et al. 2000) with a robust cut. A point
+/// whose neighbours all coincide with it (r undefined) is kept. `threshold` in the result is
+/// the ratio cut used (mean spacings of the neighbourhood, dimensionless). Memory O(k N) (the
+/// neighbour lists); two parallel passes (oneTBB). Throws UsageError for k < 2, min_ratio <= 1,
+/// mad_sigmas <= 0, far_ratio <= 1, fewer than k + 1 points; CancelledError when `progress` returns false.
+OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierParams& params = {}, const KdTree* tree = nullptr,
+                                    const ProgressCallback& progress = {});
+
 struct RadiusOutlierParams {
   int min_neighbours = 4;           // keep a point with at least this many other points
                                     // within the radius, >= 1

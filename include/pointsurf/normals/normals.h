@@ -2,6 +2,7 @@
 #pragma once
 // Normal estimation by PCA of local neighbourhoods and consistent orientation.
 #include <optional>
+#include <span>
 
 #include <Eigen/Core>
 
@@ -82,5 +83,22 @@ struct OrientResult {
 /// CancelledError when `progress` returns false.
 OrientResult orient_normals(PointCloud& cloud, const OrientParams& params = {}, const KdTree* tree = nullptr,
                             const ProgressCallback& progress = {});
+
+/// How far `normals` agree with `reference`, one of each per point (sizes may differ: the
+/// first min(sizes) points are compared). Points where either normal is zero or not finite are
+/// left out. Thread-safe (reads only).
+struct NormalAgreement {
+  std::size_t compared = 0;     // points where both normals have a direction
+  std::size_t agreeing = 0;     // of those, the ones with a positive dot product (larger is better)
+  double share = 0.0;           // agreeing / compared, in [0, 1] (1 when compared == 0; larger is better)
+  double mean_angle_deg = 0.0;  // mean angle between the two lines, sign ignored, in [0, 90] degrees (smaller is better)
+};
+NormalAgreement compare_normals(std::span<const Eigen::Vector3d> reference, std::span<const Eigen::Vector3d> normals);
+
+/// Flips each normal of `cloud.normals` whose dot product with `reference[i]` is negative, so
+/// that every new normal keeps the side of the one it replaces (a scan's own normals, for
+/// instance). Zero normals on either side are left as they are. `reference` must hold one
+/// normal per point; throws UsageError otherwise or when the cloud has no normals. O(N).
+OrientResult orient_to_reference(PointCloud& cloud, std::span<const Eigen::Vector3d> reference);
 
 }  // namespace pointsurf

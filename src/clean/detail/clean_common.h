@@ -4,9 +4,16 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <span>
+#include <vector>
 #include <string_view>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "core/detail/progress_reporter.h"
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/point_cloud.h"
@@ -44,6 +51,22 @@ inline double resolve_length(double length, double in_spacings, const KdTree& tr
 /// The caller's tree, or one built into `own` over `cloud`.
 inline const KdTree& tree_for(const PointCloud& cloud, const KdTree* tree, std::optional<KdTree>& own) {
   return tree != nullptr ? *tree : own.emplace(cloud.positions);
+}
+
+/// Runs `visit(i, buffer)` for every point in the tree's spatial order, in parallel, with a
+/// thread-local neighbour buffer, advancing `reporter` by one a point; throws CancelledError
+/// when it was cancelled.
+template <typename Visit>
+void for_each_point(const KdTree& tree, ProgressReporter& reporter, Visit&& visit) {
+  const std::span<const std::uint32_t> order = tree.spatial_order();
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
+    std::vector<Neighbor>& buffer = buffers.local();
+    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) visit(order[pos], buffer);
+    reporter.advance(r.size());
+  });
+  reporter.throw_if_cancelled();
 }
 
 }  // namespace pointsurf::detail

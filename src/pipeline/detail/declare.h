@@ -88,4 +88,9 @@ namespace pointsurf::detail {
 /// PCA normals over `k` neighbours, MST-oriented, for a stage whose input has none (said in
 /// its record's warnings); uses the context's tree of run.output.
 void estimate_missing_normals(StageRun& run, int k, const ProgressCallback& progress);
+/// For a stage that uses the normals the input came with: throws InputError when every one of
+/// them is (0,0,0) or not finite (an estimate whose neighbourhoods were too small), and warns
+/// with the count and share of such points otherwise, saying what the stage does with them
+/// (`skipped`, e.g. "not moved"). Returns that count.
+std::size_t check_input_normals(StageRun& run, const std::string& skipped);
 }  // namespace pointsurf::detail

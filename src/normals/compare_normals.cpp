@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+
+namespace pointsurf {
+namespace {
+
+// Zero (degenerate) or NaN (from a file) normals carry no side to agree with.
+bool usable(const Eigen::Vector3d& n) { return n.allFinite() && n.squaredNorm() > 0.0; }
+
+}  // namespace
+
+NormalAgreement compare_normals(std::span<const Eigen::Vector3d> reference, std::span<const Eigen::Vector3d> normals) {
+  NormalAgreement out;
+  double angle_sum = 0.0;
+  const std::size_t n = std::min(reference.size(), normals.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!usable(reference[i]) || !usable(normals[i])) continue;
+    const double c = reference[i].dot(normals[i]) / (reference[i].norm() * normals[i].norm());
+    angle_sum += std::acos(std::min(1.0, std::abs(c))) * 180.0 / std::numbers::pi;
+    out.agreeing += c > 0.0;
+    ++out.compared;
+  }
+  out.share = out.compared == 0 ? 1.0 : double(out.agreeing) / double(out.compared);
+  out.mean_angle_deg = out.compared == 0 ? 0.0 : angle_sum / double(out.compared);
+  return out;
+}
+
+OrientResult orient_to_reference(PointCloud& cloud, std::span<const Eigen::Vector3d> reference) {
+  if (!cloud.has_normals()) throw UsageError("orient_to_reference: the cloud has no normals (estimate them first)");
+  if (cloud.normals.size() != cloud.size() || reference.size() != cloud.size())
+    throw UsageError(fmt::format("orient_to_reference: {} normals and {} reference normals for {} points", cloud.normals.size(),
+                                 reference.size(), cloud.size()));
+  OrientResult result;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!usable(reference[i]) || !usable(cloud.normals[i]) || cloud.normals[i].dot(reference[i]) >= 0.0) continue;
+    cloud.normals[i] = -cloud.normals[i];
+    ++result.flipped;
+  }
+  return result;
+}
+
+}  // namespace pointsurf
