@@ -51,35 +51,18 @@ done
 
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 git -C "$ROOT" diff --quiet HEAD -- src include 2>/dev/null || COMMIT="$COMMIT+dirty"
-"$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_ball_pivot.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/ball_pivot.md"
-import csv, datetime, json, os, statistics, sys
-rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+PYTHONPATH="$ROOT/bench/reconstruct" "$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_ball_pivot.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/ball_pivot.md"
+import sys
+from tables import find, load, median, metrics, ratio, results_csv
+from tables import fmt as f
+rows = load(sys.argv[1])
 mesh = sys.argv[2]
 csv_path, commit = sys.argv[3], sys.argv[4]
-new_file = not os.path.exists(csv_path)
-out = csv.writer(open(csv_path, "a", newline=""))
-if new_file:
-    out.writerow(["commit", "date", "machine", "mesh", "points", "cloud", "tool", "runs", "seconds_median", "seconds_min", "seconds_max",
+out, date, machine = results_csv(csv_path, ["commit", "date", "machine", "mesh", "points", "cloud", "tool", "runs", "seconds_median", "seconds_min", "seconds_max",
                   "pointsurf_time_ratio", "peak_rss_mb_median", "triangles", "holes", "boundary_edges", "non_manifold_edges",
                   "non_manifold_vertices", "components", "chamfer", "hausdorff"])
-date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-machine = f"{os.uname().nodename} {os.cpu_count()} cores"
-def med(tool, kind, n, key):
-    v = [r[key] for r in rows if r["tool"] == tool and r["kind"] == kind and r["points"] == n and key in r]
-    return statistics.median(v) if v else None
-def metric(tool, kind, n):
-    for r in rows:
-        if r["tool"] == tool and r["kind"] == kind and r["points"] == n and "metrics" in r:
-            return r["metrics"]
-    return {}
-def find(d, *names):
-    for name in names:
-        if name in d: return d[name]
-        for v in d.values():
-            if isinstance(v, dict) and name in v: return v[name]
-    return None
-f = lambda v, d=3: "-" if v is None else (f"{v:.{d}f}" if isinstance(v, float) else str(v))
-ratio = lambda a, b: "-" if a is None or b is None or b == 0 else f"{a/b:.3f}"
+med = lambda tool, kind, n, key: median(rows, key, tool=tool, kind=kind, points=n)
+metric = lambda tool, kind, n: metrics(rows, tool=tool, kind=kind, points=n)
 print(f"Ball pivoting on area-uniform samples of CGAL's {mesh}.off (seed 1) with true normals; noisy: Gaussian")
 print("noise of 0.2 mean spacings. Radii {1.5, 3, 6} x mean spacing for both tools. Medians; ratio = pointsurf / Open3D.")
 print("Timing taken on a shared 2-core machine under load (other engineers compiling).\n")

@@ -47,40 +47,23 @@ for n in $SIZES; do
 done
 
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-"$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_delaunay.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/cocone.md"
-import csv, datetime, json, os, statistics, sys
-rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+PYTHONPATH="$ROOT/bench/reconstruct" "$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_delaunay.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/cocone.md"
+import sys
+from tables import find, load, median, metrics, ratio, results_csv
+from tables import fmt as f
+rows = load(sys.argv[1])
 mesh = sys.argv[2]
 csv_path, commit = sys.argv[3], sys.argv[4]
-def med(tool, n, key):
-    v = [r[key] for r in rows if r["tool"] == tool and r["points"] == n and key in r]
-    return statistics.median(v) if v else None
-def metric(tool, n):
-    for r in rows:
-        if r["tool"] == tool and r["points"] == n and "metrics" in r:
-            return r["metrics"]
-    return {}
-def find(d, *names):
-    for name in names:
-        if name in d: return d[name]
-        for v in d.values():
-            if isinstance(v, dict) and name in v: return v[name]
-    return None
-f = lambda v, d=3: "-" if v is None else (f"{v:.{d}f}" if isinstance(v, float) else str(v))
-ratio = lambda a, b: "-" if a is None or b is None or b == 0 else f"{a/b:.3f}"
+med = lambda tool, n, key: median(rows, key, tool=tool, points=n)
+metric = lambda tool, n: metrics(rows, tool=tool, points=n)
 print(f"Cocone and Crust (defaults) vs CGAL 5.5 advancing front (defaults) on area-uniform samples of CGAL's {mesh}.off")
 print("(seed 1, normals dropped). Medians; ratio = pointsurf / CGAL. Chamfer and Hausdorff to the true mesh in cloud units")
 print("and (in brackets) in mean spacings. Timing taken on a shared 2-core machine under load (other engineers compiling).\n")
 print("| points | tool | seconds | time ratio | peak MB | memory ratio | triangles | unused points | boundary edges | non-manifold edges | non-manifold vertices | inconsistent edges | components | Chamfer | Hausdorff |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-new_file = not os.path.exists(csv_path)
-out = csv.writer(open(csv_path, "a", newline=""))
-if new_file:
-    out.writerow(["commit", "date", "machine", "mesh", "points", "tool", "seconds_median", "peak_rss_mb_median", "runs", "triangles",
+out, date, machine = results_csv(csv_path, ["commit", "date", "machine", "mesh", "points", "tool", "seconds_median", "peak_rss_mb_median", "runs", "triangles",
                   "boundary_edges", "boundary_edges_per_face", "non_manifold_edges", "non_manifold_vertices", "components", "chamfer", "hausdorff",
                   "mean_spacing"])
-date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-machine = f"{os.uname().nodename} {os.cpu_count()} cores"
 for n in sorted({r["points"] for r in rows}):
     cs, cm = med("cgal_aft", n, "seconds"), med("cgal_aft", n, "peak_rss_mb")
     spacing = med("pointsurf_cocone", n, "mean_spacing")

@@ -56,27 +56,15 @@ done
 
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 git -C "$ROOT" diff --quiet HEAD -- src include 2>/dev/null || COMMIT="$COMMIT+dirty"
-"$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_region_growing.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/triangulate.md"
-import csv, datetime, json, os, statistics, sys
-rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+PYTHONPATH="$ROOT/bench/reconstruct" "$PY" - "$RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_region_growing.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/triangulate.md"
+import sys
+from tables import find, load, median, metrics, ratio, results_csv
+from tables import fmt as f
+rows = load(sys.argv[1])
 mesh = sys.argv[2]
 csv_path, commit = sys.argv[3], sys.argv[4]
-def med(tool, n, key, sub=None):
-    v = [(r[key][sub] if sub else r[key]) for r in rows if r["tool"] == tool and r["points"] == n and key in r]
-    return statistics.median(v) if v else None
-def metric(tool, n):
-    for r in rows:
-        if r["tool"] == tool and r["points"] == n and "metrics" in r:
-            return r["metrics"]
-    return {}
-def find(d, *names):
-    for name in names:
-        if name in d: return d[name]
-        for v in d.values():
-            if isinstance(v, dict) and name in v: return v[name]
-    return None
-f = lambda v, d=3: "-" if v is None else (f"{v:.{d}f}" if isinstance(v, float) else str(v))
-ratio = lambda a, b: "-" if a is None or b is None or b == 0 else f"{a/b:.3f}"
+med = lambda tool, n, key, sub=None: median(rows, key, sub, tool=tool, points=n)
+metric = lambda tool, n: metrics(rows, tool=tool, points=n)
 tools = ["pointsurf"] + [t for t in ("pcl_gp3", "open3d") if any(r["tool"] == t for r in rows)]
 print(f"Region growing (defaults) vs PCL GP3 (pcl_gp3_surface, radius 6 mean spacings, mu 2.5) and Open3D 0.16 ball")
 print(f"pivoting (radii 1.5, 3, 6 mean spacings) on area-uniform samples of CGAL's {mesh}.off (seed 1, true normals).")
@@ -84,16 +72,11 @@ print("Medians; ratio = pointsurf / peer. Chamfer and Hausdorff to the true mesh
 print("spacings. Timing taken on a shared 2-core machine under load.\n")
 print("| points | tool | runs | seconds | pointsurf / this | peak MB | triangles | unused points | boundary edges | holes | non-manifold edges | non-manifold vertices | inconsistent edges | components | Chamfer | Hausdorff |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-new_file = not os.path.exists(csv_path)
-out = csv.writer(open(csv_path, "a", newline=""))
 stages = ["tree_and_spacing", "umbrellas", "merge_candidates", "grow", "close_holes"]
-if new_file:
-    out.writerow(["commit", "date", "machine", "mesh", "points", "tool", "runs", "seconds_median", "seconds_min", "seconds_max",
+out, date, machine = results_csv(csv_path, ["commit", "date", "machine", "mesh", "points", "tool", "runs", "seconds_median", "seconds_min", "seconds_max",
                   "pointsurf_time_ratio", "peak_rss_mb_median", "triangles", "boundary_edges", "holes", "non_manifold_edges",
                   "non_manifold_vertices", "inconsistent_edges", "components", "chamfer", "hausdorff", "mean_spacing"] +
                  [f"stage_{s}_median" for s in stages])
-date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-machine = f"{os.uname().nodename} {os.cpu_count()} cores"
 for n in sorted({r["points"] for r in rows}):
     ps = med("pointsurf", n, "seconds")
     spacing = med("pointsurf", n, "mean_spacing")
