@@ -256,8 +256,8 @@ void run_curvature(StageRun& run) {
     rec.metric("scale_capped", scale->capped);
     if (scale->capped)
       rec.warnings.push_back(fmt::format("the noise ({:.3g}) needs a neighbourhood radius of {:.3g} ({} times it), but k stopped at {} "
-                                         "(radius {:.3g}; max_k {}, {}): the curvature is noise-dominated; raise max_k or smooth "
-                                         "the points first",
+                                         "(radius {:.3g}; max_k {}, {}): the curvature may be noise-dominated (check the share "
+                                         "of flat points); raise max_k or smooth the points first",
                                          scale->noise, params.scale_in_noise * scale->noise, params.scale_in_noise, scale->k,
                                          scale->radius, params.max_k, plural(cloud.size(), "point")));
   }

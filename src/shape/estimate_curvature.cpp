@@ -29,6 +29,10 @@ constexpr double kPivotTolerance = 1e-12;
 constexpr double kFloorRadii = 1e4;
 // The fit cylinder when the noise widened the neighbourhood (see choose_curvature_scale).
 constexpr double kNoiseCylinder = 0.8;
+// The scale choice stops at the k where this share of the samples has a curvature beyond
+// zero_in_noise standard errors, or where the residual rises by this factor over the noise floor's.
+constexpr double kResolvedShare = 0.9;
+constexpr double kBiasRise = 1.2;
 
 struct PointShape {
   double k1 = 0.0, k2 = 0.0;
@@ -246,41 +250,70 @@ CurvatureScale choose_curvature_scale(const PointCloud& cloud, const CurvaturePa
   const std::size_t samples = std::min(n, kMaxSamples);
   const std::span<const std::uint32_t> order = tree.spatial_order();
 
-  CurvatureScale scale;
-  std::vector<double> residual(samples), radius(samples);
-  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  for (std::size_t k = std::size_t(params.neighborhood_settings().k);; k *= 2) {
-    const std::size_t used = std::min(k, n);
+  // One level per k: the medians over the samples of the fit's residual and radius, and the
+  // share of samples whose curvature stands out of its own noise.
+  struct Level {
+    CurvatureScale scale;
+    double resolved = 0.0;
+  };
+  const std::size_t start = std::size_t(params.neighborhood_settings().k);
+  const auto level_at = [&](std::size_t k) {
+    std::vector<double> residual(samples), radius(samples);
+    std::vector<char> resolved(samples);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples, 16), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<Neighbor>& neighbors = buffers.local();
       for (std::size_t s = r.begin(); s != r.end(); ++s) {
         const Vector3d& p = cloud.positions[order[s * n / samples]];
-        tree.knn(p, used, neighbors);
-        // The side only sets the sign, which the residual and the radius do not depend on.
-        const PointShape shape = params.degree == 2 ? fit_jet<6>(tree, p, Vector3d::UnitZ(), neighbors)
-                                                    : fit_jet<10>(tree, p, Vector3d::UnitZ(), neighbors);
+        tree.knn(p, k, neighbors);
+        // The side only sets the sign, which none of these depend on; the cylinder is the one
+        // the final fit will use at this k.
+        const double cylinder = k > start ? kNoiseCylinder : 1.0;
+        const PointShape shape = params.degree == 2 ? fit_jet<6>(tree, p, Vector3d::UnitZ(), neighbors, cylinder)
+                                                    : fit_jet<10>(tree, p, Vector3d::UnitZ(), neighbors, cylinder);
         const std::size_t m = neighbors.size();
-        residual[s] = shape.degenerate || m <= coefficients ? std::nan("") : shape.rms * std::sqrt(double(m) / double(m - coefficients));
-        radius[s] = shape.degenerate ? std::nan("") : shape.radius;
+        const bool fitted = !shape.degenerate && m > coefficients;
+        residual[s] = fitted ? shape.rms * std::sqrt(double(m) / double(m - coefficients)) : std::nan("");
+        radius[s] = fitted ? shape.radius : std::nan("");
+        resolved[s] = fitted && std::max(std::abs(shape.k1), std::abs(shape.k2)) > params.zero_in_noise * shape.noise_curvature;
       }
     });
     std::vector<double> fitted_residual, fitted_radius;
+    std::size_t count = 0;
     for (std::size_t s = 0; s < samples; ++s)
       if (!std::isnan(residual[s])) {
         fitted_residual.push_back(residual[s]);
         fitted_radius.push_back(radius[s]);
+        count += resolved[s] ? 1 : 0;
       }
-    scale.k = int(used);
-    scale.noise = median_of(fitted_residual);
-    scale.radius = median_of(fitted_radius);
-    scale.cylinder = used > std::size_t(params.neighborhood_settings().k) ? kNoiseCylinder : 1.0;
-    if (scale.radius >= params.scale_in_noise * scale.noise) break;
-    if (used == n || 2 * k > std::size_t(params.max_k)) {
-      scale.capped = true;
-      break;
+    Level level;
+    level.scale.k = int(k);
+    level.scale.noise = median_of(fitted_residual);
+    level.scale.radius = median_of(fitted_radius);
+    level.scale.cylinder = k > start ? kNoiseCylinder : 1.0;
+    level.resolved = fitted_residual.empty() ? 0.0 : double(count) / double(fitted_residual.size());
+    return level;
+  };
+
+  // First the noise floor: the smallest k whose radius is scale_in_noise times its residual.
+  // Then, while over a tenth of the samples' curvature is within zero_in_noise standard errors of zero, wider
+  // until it is not (a noisy curved surface resolves), or the residual rises 20 % above the
+  // floor's (the jet no longer fits: planes meeting, a curved surface bending away from the
+  // quadric), or max_k: those keep the floor (a flat surface stays flat at any k).
+  std::optional<Level> floor;
+  Level level;
+  for (std::size_t k = start;; k *= 2) {
+    level = level_at(std::min(k, n));
+    if (!floor && level.scale.radius >= params.scale_in_noise * level.scale.noise) floor = level;
+    if (floor) {
+      if (level.resolved >= kResolvedShare) return level.scale;
+      if (level.scale.noise > kBiasRise * floor->scale.noise) return floor->scale;
     }
+    if (std::size_t(level.scale.k) == n || 2 * k > std::size_t(params.max_k)) break;
   }
-  return scale;
+  if (floor) return floor->scale;
+  level.scale.capped = true;
+  return level.scale;
 }
 
 CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params_in, const KdTree* tree,

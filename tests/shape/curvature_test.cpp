@@ -222,6 +222,15 @@ TEST(EstimateCurvature, DefaultScaleFollowsTheNoise) {
   estimate_curvature(narrow, {.k = 24});
   EXPECT_LT(fraction_of_type(narrow, SurfaceType::Peak), 0.5);
 
+  // A quarter of that noise: the noise floor alone (k 48) leaves the curvature within its
+  // standard error, so the choice widens on until nine tenths of the samples stand out of it.
+  PointCloud quiet = test::sample_sphere(20000, 1.0, Vector3d::Zero(), 18);
+  test::add_noise(quiet, 0.01, 19);
+  const CurvatureResult resolved = estimate_curvature(quiet);
+  EXPECT_GE(resolved.k_used, 192);
+  EXPECT_LT(quantile_error(field(quiet, "mean"), 1.0, 1.0, 0.5), 0.1);
+  EXPECT_GE(fraction_of_type(quiet, SurfaceType::Peak), 0.9);
+
   PointCloud clean = test::sample_sphere(20000, r, Vector3d::Zero(), 13);
   const CurvatureResult start = estimate_curvature(clean);
   EXPECT_EQ(start.k_used, 24);

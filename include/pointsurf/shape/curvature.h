@@ -106,15 +106,20 @@ struct CurvatureScale {
   double cylinder = 1.0;   // the fit cylinder that goes with it (CurvatureParams::cylinder): 0.8 when k grew,
                            // 1 (the whole ball) when the start sufficed
   bool capped = false;     // the radius never reached scale_in_noise * noise: k is max_k or the largest power
-                           // of two times the start that the cloud holds; the curvature is then noise-dominated
+                           // of two times the start that the cloud holds; the curvature may be noise-dominated
 };
 
 /// Chooses the jet neighbourhood from the noise. Fitting a jet over a neighbourhood narrower than
 /// a few noise amplitudes fits the noise: on a noisy sphere the curvature comes out as noise about
-/// zero and every point flat. Starting at k = 24 (degree 2) or 40 (degree 3), k doubles until the
-/// median neighbourhood radius is at least `scale_in_noise` times the median fit residual, the
-/// residual being the noise once the neighbourhood is wider than it (a noise-free or slightly noisy
-/// scan keeps the start), and at most `max_k` (and the cloud's size). The curvature's standard error
+/// zero and every point flat. Starting at k = 24 (degree 2) or 40 (degree 3), k doubles
+///  1. until the median neighbourhood radius is at least `scale_in_noise` times the median fit
+///     residual (the noise floor: the residual is the noise once the neighbourhood is wider than it);
+///  2. then on while fewer than 90 % of the samples have a principal curvature beyond
+///     `zero_in_noise` of its standard errors, unless the median residual rises 20 % above the
+///     floor's (the jet no longer fits: planes meeting, clean curved data) or max_k comes first,
+///     which keep the floor's k (a flat surface stays flat at any k).
+/// A clean scan keeps the start (its curvature stands out, or widening raises the residual);
+/// at most `max_k` (and the cloud's size). The curvature's standard error
 /// then falls as noise / radius^2 / sqrt(k): at 8 times the noise and k ~ 800 it is about 0.1 / r on
 /// a sphere of radius r = 25 noise amplitudes. A ball around a noisy point truncates the noise at its rim, where
 /// only points near the ball's equator are inside: that pulls the rim towards the tangent plane
