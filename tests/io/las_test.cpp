@@ -399,6 +399,53 @@ TEST(Las, ReadsLas14Format6WithOnlyThe64BitCount) {
   EXPECT_EQ(field(c, "gps_time"), (std::vector<double>{1e9, 1e9 + 1}));
 }
 
+// Extra bytes as another writer lays them out: an undefined 2-byte run (type 0) to skip, a
+// scaled and offset uint16 and a float, after a projection VLR.
+TEST(Las, ReadsExtraBytesByTheirDescriptors) {
+  const auto dir = test::temp_dir("las_extra_descriptors");
+  std::string vlr(54 + 3 * 192, '\0');
+  std::memcpy(vlr.data() + 2, "LASF_Spec", 9);
+  put<std::uint16_t>(vlr, 18, 4);
+  put<std::uint16_t>(vlr, 20, 3 * 192);
+  const auto descriptor = [&](int d, int type, int options, const char* name) {
+    const std::size_t at = 54 + 192 * std::size_t(d);
+    vlr[at + 2] = static_cast<char>(type);
+    vlr[at + 3] = static_cast<char>(options);
+    std::memcpy(vlr.data() + at + 4, name, std::strlen(name));
+    return at;
+  };
+  descriptor(0, 0, 2, "padding");
+  const std::size_t height = descriptor(1, 3, 0x18, "Height Above Ground");  // scale and offset
+  put<double>(vlr, height + 112, 0.01);
+  put<double>(vlr, height + 136, -5.0);
+  descriptor(2, 9, 0, "reflectance");
+  LasFile las;
+  las.minor = 4;
+  las.format = 6;
+  las.record_length = 30 + 2 + 2 + 4;
+  las.count64 = 2;
+  las.vlrs = projection_vlr() + vlr;
+  for (int i = 0; i < 2; ++i) {
+    std::string r(las.record_length, '\0');
+    put<std::int32_t>(r, 0, i);
+    put<std::uint16_t>(r, 32, static_cast<std::uint16_t>(1000 + i));
+    put<float>(r, 34, 0.5f * static_cast<float>(i + 1));
+    las.points += r;
+  }
+  std::string bytes = las.bytes();
+  put<std::uint32_t>(bytes, 100, 2);  // two VLRs
+  const CloudReadResult result = read_point_cloud(write_bytes(dir / "extra.las", bytes));
+  const PointCloud& c = result.cloud;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.fields.size(), 2u);  // no unset slots, the padding skipped
+  EXPECT_EQ(field(c, "Height Above Ground"), (std::vector<double>{1000 * 0.01 - 5.0, 1001 * 0.01 - 5.0}));
+  EXPECT_EQ(c.fields.find("Height Above Ground")->type, ScalarType::Float64);
+  EXPECT_EQ(field(c, "reflectance"), (std::vector<double>{0.5, 1.0}));
+  EXPECT_EQ(c.fields.find("reflectance")->type, ScalarType::Float32);
+  ASSERT_EQ(result.warnings.size(), 1u);
+  EXPECT_TRUE(test::contains(result.warnings[0], "extra bytes 'padding' of data type 0 skipped")) << result.warnings[0];
+}
+
 TEST(Las, EightBitColoursStoredUnscaledAreReadAsEightBit) {
   const auto dir = test::temp_dir("las_rgb8");
   LasFile las;
