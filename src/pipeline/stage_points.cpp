@@ -403,8 +403,8 @@ StageSpec curvature_stage() {
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = neighborhood_params(c.k, c.radius, c.radius_in_spacings, "");
-  s.params.push_back(P::integer("degree", c.degree, "Jet degree, 2 or 3").range(2, 3));
   s.params[1] = P::integer("k", c.k, "Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid)").at_least(0);
+  s.params.push_back(P::integer("degree", c.degree, "Jet degree, 2 or 3").range(2, 3));
   s.params.push_back(P::number("scale_in_noise", c.scale_in_noise, "k = 0: the neighbourhood radius grows to this many times the noise (the jet's residual)").positive());
   s.params.push_back(P::integer("max_k", c.max_k, "k = 0: the most neighbours the noise may call for").at_least(6));
   s.params.push_back(P::number("zero_curvature", c.zero_curvature,
