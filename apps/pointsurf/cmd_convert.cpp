@@ -12,7 +12,7 @@ namespace {
 
 std::string convert_help() {
   std::string out = "pointsurf convert IN OUT [options]\nConvert between formats; the output format follows OUT's extension.\n\n";
-  out += "Input and output options: those of 'pointsurf normals --help' (--columns, --input-format, --strict, --ascii, --float,\n"
+  out += "Input and output options: those of 'pointsurf normals --help' (--columns, --input-format, --strict, --ascii, --float, --double,\n"
          "--big-endian, --compressed, --las-offset, --las-scale, --output-format).\n\n";
   out += common_options_help();
   out += "\nExample:\n  pointsurf convert scan.pcd scan.ply --ascii\n";

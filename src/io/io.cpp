@@ -302,8 +302,9 @@ private:
   bool committed_ = false;
 };
 
-void write_any(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
-               const FieldSet& face_fields, const WriteOptions& options) {
+WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
+                      const FieldSet& face_fields, const WriteOptions& options) {
+  WriteResult result;
   cloud.validate();
   const std::string format = options.format.empty() ? format_from_extension(path) : lower(options.format);
   TemporaryOutput out(path);
@@ -317,26 +318,27 @@ void write_any(const std::filesystem::path& path, const PointCloud& cloud, const
     }
     io::detail::write_xyz(out.path(), cloud, xyz_options);
   }
-  else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options);
+  else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options, result.notes);
   else if (format == "las") io::detail::write_las(out.path(), cloud, options);
   else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);
   else if (format == "obj") io::detail::write_obj(out.path(), cloud, triangles, options);
   else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
   else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
   out.commit();
+  return result;
 }
 
 }  // namespace
 
-void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
-  write_any(path, cloud, {}, {}, options);
+WriteResult write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
+  return write_any(path, cloud, {}, {}, options);
 }
 
-void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
+WriteResult write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options) {
   mesh.validate();
   // The vertex attributes travel as a cloud; this copies the vertices once, which is small
   // next to the file I/O.
-  write_any(path, mesh.vertex_cloud(), mesh.triangles, mesh.face_fields, options);
+  return write_any(path, mesh.vertex_cloud(), mesh.triangles, mesh.face_fields, options);
 }
 
 }  // namespace pointsurf

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// LAS 1.0-1.4 reader (point data record formats 0-10) and LAS 1.4 writer (format 6, or 7 with
-// colours), following the ASPRS LAS 1.4 R15 specification. All values are little endian.
+// LAS 1.0-1.4 reader (point data record formats 0-10, extra bytes of types 1-10) and LAS 1.4
+// writer (format 6, or 7 with colours, plus extra bytes for normals and other fields), following
+// the ASPRS LAS 1.4 R15 specification. All values are little endian.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -59,6 +60,96 @@ PointLayout point_layout(int format) {
 
 // The extended formats store the scan angle in steps of 0.006 degrees.
 constexpr double kScanAngleStepDeg = 0.006;
+
+// LAS 1.4 extra bytes: a VLR "LASF_Spec" / 4 of 192-byte descriptors, one per value appended
+// to each point record after the format's own bytes.
+constexpr std::size_t kVlrHeaderSize = 54;
+constexpr std::size_t kExtraBytesDescriptor = 192;
+constexpr std::uint16_t kExtraBytesRecordId = 4;
+constexpr std::size_t kExtraNameSize = 32;
+
+// Extra bytes data types 1..10 (LAS 1.4 R15, table 24) are ScalarTypes in this order.
+constexpr ScalarType kExtraTypes[] = {ScalarType::UInt8, ScalarType::Int8,  ScalarType::UInt16, ScalarType::Int16,   ScalarType::UInt32,
+                                      ScalarType::Int32, ScalarType::UInt64, ScalarType::Int64, ScalarType::Float32, ScalarType::Float64};
+
+int extra_bytes_code(ScalarType type) {
+  for (int c = 0; c < 10; ++c)
+    if (kExtraTypes[c] == type) return c + 1;
+  return 10;
+}
+
+double load_extra(const char* p, ScalarType type) {
+  switch (type) {
+    case ScalarType::UInt8: return static_cast<unsigned char>(*p);
+    case ScalarType::Int8: return static_cast<signed char>(*p);
+    case ScalarType::UInt16: return load_value<std::uint16_t>(p);
+    case ScalarType::Int16: return load_value<std::int16_t>(p);
+    case ScalarType::UInt32: return load_value<std::uint32_t>(p);
+    case ScalarType::Int32: return load_value<std::int32_t>(p);
+    case ScalarType::UInt64: return static_cast<double>(load_value<std::uint64_t>(p));
+    case ScalarType::Int64: return static_cast<double>(load_value<std::int64_t>(p));
+    case ScalarType::Float32: return load_value<float>(p);
+    case ScalarType::Float64: return load_value<double>(p);
+  }
+  return 0.0;
+}
+
+struct ExtraField {
+  std::string name;
+  ScalarType type = ScalarType::Float64;  // as stored
+  std::size_t offset = 0;                 // bytes after the format's own record
+  double scale = 1.0, shift = 0.0;        // applied when the descriptor's options say so
+  bool scaled = false;
+};
+
+// The extra bytes descriptors of the VLRs between the header and the points; warnings for
+// those skipped (undefined or array types).
+std::vector<ExtraField> read_extra_bytes(std::string_view bytes, std::size_t header_size, std::size_t point_offset, std::uint32_t vlrs,
+                                         std::size_t extra_room, const std::string& name, std::vector<std::string>& warnings) {
+  std::vector<ExtraField> fields;
+  std::size_t at = header_size;
+  for (std::uint32_t v = 0; v < vlrs && at + kVlrHeaderSize <= point_offset; ++v) {
+    const char* h = bytes.data() + at;
+    const std::string_view user(h + 2, 16);
+    const auto record_id = load_value<std::uint16_t>(h + 18);
+    const std::size_t length = load_value<std::uint16_t>(h + 20);
+    const std::size_t body = at + kVlrHeaderSize;
+    if (body + length > point_offset) break;
+    if (user.substr(0, user.find('\0')) == "LASF_Spec" && record_id == kExtraBytesRecordId) {
+      std::size_t offset = 0;
+      for (std::size_t d = 0; d + kExtraBytesDescriptor <= length; d += kExtraBytesDescriptor) {
+        const char* e = bytes.data() + body + d;
+        const int code = static_cast<unsigned char>(e[2]);
+        const int options = static_cast<unsigned char>(e[3]);
+        std::string field(e + 4, kExtraNameSize);
+        field.resize(field.find('\0') == std::string::npos ? kExtraNameSize : field.find('\0'));
+        if (code < 1 || code > 10) {
+          // Undefined bytes (0: `options` is their count) and the deprecated arrays are skipped.
+          const std::size_t size = code == 0 ? std::size_t(options) : 0;
+          warnings.push_back(fmt::format("{}: extra bytes '{}' of data type {} skipped (only types 1-10 are read)", name, field, code));
+          if (code != 0) return fields;  // an array's size is unknown here: later offsets would be wrong
+          offset += size;
+          continue;
+        }
+        ExtraField f;
+        f.name = field.empty() ? fmt::format("extra_{}", fields.size()) : field;
+        f.type = kExtraTypes[code - 1];
+        f.offset = offset;
+        if (options & 0x08) f.scale = load_value<double>(e + 112);  // bit 3: scale, bit 4: offset
+        if (options & 0x10) f.shift = load_value<double>(e + 136);
+        f.scaled = (options & 0x18) != 0;
+        offset += std::size_t(scalar_type_size(f.type));
+        if (offset > extra_room) {
+          warnings.push_back(fmt::format("{}: extra bytes '{}' lie beyond the {}-byte point record; skipped", name, f.name, extra_room));
+          return fields;
+        }
+        fields.push_back(std::move(f));
+      }
+    }
+    at = body + length;
+  }
+  return fields;
+}
 
 }  // namespace
 
@@ -138,8 +229,16 @@ RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
   std::vector<std::array<std::uint16_t, 3>> rgb;
   if (layout.rgb >= 0) rgb.resize(n);
 
+  const std::vector<ExtraField> extras = read_extra_bytes(bytes, header_size, point_offset, load_value<std::uint32_t>(data + 100),
+                                                         record_length - layout.size, name, raw.warnings);
+  std::vector<std::vector<double>> extra_values(extras.size(), std::vector<double>(n));
+
   const char* record = data + point_offset;
   for (std::size_t i = 0; i < n; ++i, record += record_length) {
+    for (std::size_t e = 0; e < extras.size(); ++e) {
+      const double v = load_extra(record + layout.size + extras[e].offset, extras[e].type);
+      extra_values[e][i] = extras[e].scaled ? v * extras[e].scale + extras[e].shift : v;
+    }
     const auto x = load_value<std::int32_t>(record);
     const auto y = load_value<std::int32_t>(record + 4);
     const auto z = load_value<std::int32_t>(record + 8);
@@ -167,21 +266,50 @@ RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
     if (layout.nir >= 0) nir[i] = load_value<std::uint16_t>(record + layout.nir);
   }
 
-  // Scan angle, user data, point source id and NIR are usually constant zero; they become
-  // fields only when some point has another value, which keeps memory down for big clouds.
-  auto add = [&](const char* field, std::vector<double>& values, ScalarType type, bool always) {
-    if (!always && std::all_of(values.begin(), values.end(), [](double v) { return v == 0.0; })) return;
+  // A slot every point leaves unset (zero; returns 1 of 1) says nothing: it becomes a field only
+  // when some point has another value, so a cloud written and read back gains no fields. An
+  // extra bytes field of the same name (a value the slot could not hold) takes its place.
+  const auto named_extra = [&](std::string_view field) {
+    return std::any_of(extras.begin(), extras.end(), [&](const ExtraField& e) { return e.name == field; });
+  };
+  auto add = [&](const char* field, std::vector<double>& values, ScalarType type, double unset) {
+    if (named_extra(field) || std::all_of(values.begin(), values.end(), [&](double v) { return v == unset || v == 0.0; })) return;
     cloud.fields.add(field, 0, type).values = std::move(values);
   };
-  add("intensity", intensity, ScalarType::UInt16, true);
-  add("return_number", return_number, ScalarType::UInt8, true);
-  add("number_of_returns", number_of_returns, ScalarType::UInt8, true);
-  add("classification", classification, ScalarType::UInt8, true);
-  if (layout.gps_time >= 0) add("gps_time", gps_time, ScalarType::Float64, true);
-  add("scan_angle", scan_angle, ScalarType::Float32, false);
-  add("user_data", user_data, ScalarType::UInt8, false);
-  add("point_source_id", point_source_id, ScalarType::UInt16, false);
-  if (layout.nir >= 0) add("nir", nir, ScalarType::UInt16, false);
+  add("intensity", intensity, ScalarType::UInt16, 0.0);
+  // Return numbers go together: both when any point is not a single return.
+  const bool single_returns = std::all_of(return_number.begin(), return_number.end(), [](double v) { return v <= 1.0; }) &&
+                              std::all_of(number_of_returns.begin(), number_of_returns.end(), [](double v) { return v <= 1.0; });
+  if (!single_returns) {
+    add("return_number", return_number, ScalarType::UInt8, -1.0);
+    add("number_of_returns", number_of_returns, ScalarType::UInt8, -1.0);
+  }
+  add("classification", classification, ScalarType::UInt8, 0.0);
+  if (layout.gps_time >= 0) add("gps_time", gps_time, ScalarType::Float64, 0.0);
+  add("scan_angle", scan_angle, ScalarType::Float32, 0.0);
+  add("user_data", user_data, ScalarType::UInt8, 0.0);
+  add("point_source_id", point_source_id, ScalarType::UInt16, 0.0);
+  if (layout.nir >= 0) add("nir", nir, ScalarType::UInt16, 0.0);
+
+  // Extra bytes nx, ny, nz are the normals (pointsurf writes them so); the rest keep their names.
+  const auto find_extra = [&](std::string_view field) {
+    return static_cast<std::size_t>(std::find_if(extras.begin(), extras.end(), [&](const ExtraField& e) { return e.name == field; }) - extras.begin());
+  };
+  const std::array<std::size_t, 3> normal_columns{find_extra("nx"), find_extra("ny"), find_extra("nz")};
+  const bool has_normals = std::all_of(normal_columns.begin(), normal_columns.end(), [&](std::size_t c) { return c < extras.size(); });
+  if (has_normals) {
+    cloud.normals.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      cloud.normals[i] = Vector3d(extra_values[normal_columns[0]][i], extra_values[normal_columns[1]][i], extra_values[normal_columns[2]][i]);
+  }
+  for (std::size_t e = 0; e < extras.size(); ++e) {
+    if (has_normals && std::find(normal_columns.begin(), normal_columns.end(), e) != normal_columns.end()) continue;
+    if (cloud.fields.contains(extras[e].name)) {
+      raw.warnings.push_back(fmt::format("{}: extra bytes '{}' appear twice; the second is skipped", name, extras[e].name));
+      continue;
+    }
+    cloud.fields.add(extras[e].name, 0, extras[e].scaled ? ScalarType::Float64 : extras[e].type).values = std::move(extra_values[e]);
+  }
 
   if (layout.rgb >= 0) {
     // The standard says 16-bit colour, but many writers store 8-bit values unscaled; when no
@@ -232,13 +360,99 @@ void put_text(char* p, std::string_view text, std::size_t width) {
 
 }  // namespace
 
-// Fields kept in a LAS point record: intensity, return_number, number_of_returns,
-// classification, user_data, scan_angle (degrees), point_source_id, gps_time. LAS has no slot
-// for any other field (nor for normals), so those are dropped; values outside a slot's range
-// are clamped. Points without a return_number field are written as return 1 of 1.
+namespace {
+
+// A point record slot: the field written there, its range (integers only unless `real`).
+struct Slot {
+  const char* name;
+  double lo, hi;
+  bool real;
+};
+constexpr Slot kSlots[] = {{"intensity", 0, 65535, false},      {"return_number", 0, 15, false},
+                           {"number_of_returns", 0, 15, false}, {"classification", 0, 255, false},
+                           {"user_data", 0, 255, false},        {"scan_angle", -32768 * kScanAngleStepDeg, 32767 * kScanAngleStepDeg, true},
+                           {"point_source_id", 0, 65535, false}, {"gps_time", -1e300, 1e300, true}};
+
+// Whether every value of `field` fits its slot (finite, in range, whole where the slot is).
+bool fits_slot(const ScalarField& field, const Slot& slot) {
+  return std::all_of(field.values.begin(), field.values.end(), [&](double v) {
+    return std::isfinite(v) && v >= slot.lo && v <= slot.hi && (slot.real || v == std::round(v));
+  });
+}
+
+// One value appended to each record as LAS 1.4 extra bytes.
+struct ExtraOut {
+  std::string name;
+  ScalarType type;
+  const std::vector<double>* values = nullptr;  // a field's, or null for a normal component
+  int normal = -1;
+};
+
+// The extra bytes VLR describing `extras` (no_data, min, max, scale and offset unset).
+std::string extra_bytes_vlr(const std::vector<ExtraOut>& extras) {
+  std::string vlr(kVlrHeaderSize + kExtraBytesDescriptor * extras.size(), '\0');
+  char* h = vlr.data();
+  std::memcpy(h + 2, "LASF_Spec", 9);
+  put<std::uint16_t>(h + 18, kExtraBytesRecordId);
+  put<std::uint16_t>(h + 20, static_cast<std::uint16_t>(kExtraBytesDescriptor * extras.size()));
+  std::memcpy(h + 22, "pointsurf fields", 16);
+  for (std::size_t e = 0; e < extras.size(); ++e) {
+    char* d = h + kVlrHeaderSize + kExtraBytesDescriptor * e;
+    d[2] = static_cast<char>(extra_bytes_code(extras[e].type));
+    std::memcpy(d + 4, extras[e].name.data(), extras[e].name.size());
+  }
+  return vlr;
+}
+
+void store_extra(char* p, ScalarType type, double v) {
+  switch (type) {
+    case ScalarType::UInt8: put(p, to_stored<std::uint8_t>(v)); break;
+    case ScalarType::Int8: put(p, to_stored<std::int8_t>(v)); break;
+    case ScalarType::UInt16: put(p, to_stored<std::uint16_t>(v)); break;
+    case ScalarType::Int16: put(p, to_stored<std::int16_t>(v)); break;
+    case ScalarType::UInt32: put(p, to_stored<std::uint32_t>(v)); break;
+    case ScalarType::Int32: put(p, to_stored<std::int32_t>(v)); break;
+    case ScalarType::UInt64: put(p, to_stored<std::uint64_t>(v)); break;
+    case ScalarType::Int64: put(p, to_stored<std::int64_t>(v)); break;
+    case ScalarType::Float32: put(p, static_cast<float>(v)); break;
+    case ScalarType::Float64: put(p, v); break;
+  }
+}
+
+}  // namespace
+
+// A point record's slots hold intensity, return_number, number_of_returns, classification,
+// user_data, scan_angle (degrees), point_source_id and gps_time when every value fits the slot;
+// the normals (as nx, ny, nz, float32) and every other field, or a standard one that does not
+// fit, follow as LAS 1.4 extra bytes under their own name (at most 32 characters) and type, so
+// the round trip keeps every field by name. Points without a return_number field are written
+// as return 1 of 1.
 void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
   const std::string name = display_name(path);
   const std::size_t n = cloud.size();
+  std::vector<ExtraOut> extras;
+  std::vector<std::string> in_slots;
+  if (cloud.has_normals())
+    for (int a = 0; a < 3; ++a) extras.push_back({std::string("n") + "xyz"[a], ScalarType::Float32, nullptr, a});
+  for (const ScalarField& f : cloud.fields) {
+    const auto slot = std::find_if(std::begin(kSlots), std::end(kSlots), [&](const Slot& s) { return f.name == s.name; });
+    if (slot != std::end(kSlots) && fits_slot(f, *slot)) {
+      in_slots.push_back(f.name);
+      continue;
+    }
+    if (f.name.empty() || f.name.size() > kExtraNameSize || (cloud.has_normals() && (f.name == "nx" || f.name == "ny" || f.name == "nz")))
+      throw UsageError(fmt::format("{}: field '{}' cannot be LAS extra bytes: {}; rename it", name, f.name,
+                                   f.name.empty() ? "the name is empty"
+                                   : f.name.size() > kExtraNameSize ? "names hold at most 32 characters"
+                                                                    : "the normals are written as nx, ny, nz"));
+    extras.push_back({f.name, f.type, &f.values});
+  }
+  std::size_t extra_size = 0;
+  for (const ExtraOut& e : extras) extra_size += std::size_t(scalar_type_size(e.type));
+  const auto slot_reader = [&](const char* field, double fallback) {
+    return std::find(in_slots.begin(), in_slots.end(), field) != in_slots.end() ? FieldReader(cloud, field, fallback)
+                                                                                 : FieldReader(cloud, "", fallback);
+  };
   for (std::size_t i = 0; i < n; ++i)
     if (!cloud.positions[i].allFinite())
       throw UsageError(fmt::format("{}: point {} has a non-finite coordinate; LAS stores integers and cannot hold it", name, i));
@@ -279,11 +493,16 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
 
   const bool colors = cloud.has_colors();
   const int format = colors ? 7 : 6;
-  const std::size_t record_length = colors ? 36 : 30;
+  const std::size_t core_length = colors ? 36 : 30;
+  const std::size_t record_length = core_length + extra_size;
+  if (record_length > 65535)
+    throw UsageError(fmt::format("{}: {} extra bytes per point make a record longer than LAS's 65535 bytes", name, extra_size));
+  const std::string vlr = extras.empty() ? std::string() : extra_bytes_vlr(extras);
 
-  const FieldReader intensity(cloud, "intensity", 0), return_number(cloud, "return_number", 1),
-      number_of_returns(cloud, "number_of_returns", 1), classification(cloud, "classification", 0), user_data(cloud, "user_data", 0),
-      scan_angle(cloud, "scan_angle", 0), point_source_id(cloud, "point_source_id", 0), gps_time(cloud, "gps_time", 0);
+  const FieldReader intensity = slot_reader("intensity", 0), return_number = slot_reader("return_number", 1),
+                    number_of_returns = slot_reader("number_of_returns", 1), classification = slot_reader("classification", 0),
+                    user_data = slot_reader("user_data", 0), scan_angle = slot_reader("scan_angle", 0),
+                    point_source_id = slot_reader("point_source_id", 0), gps_time = slot_reader("gps_time", 0);
 
   auto quantise = [&](std::size_t i, int a) {
     return static_cast<std::int32_t>(std::llround((cloud.positions[i][a] - offset[a]) / scale[a]));
@@ -324,8 +543,8 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
     put<std::uint16_t>(h + 92, static_cast<std::uint16_t>(static_cast<int>(ymd.year())));
   }
   put<std::uint16_t>(h + kHeaderSize, static_cast<std::uint16_t>(kHeaderSize14));
-  put<std::uint32_t>(h + kOffsetToPoints, static_cast<std::uint32_t>(kHeaderSize14));
-  put<std::uint32_t>(h + 100, 0);  // no VLRs
+  put<std::uint32_t>(h + kOffsetToPoints, static_cast<std::uint32_t>(kHeaderSize14 + vlr.size()));
+  put<std::uint32_t>(h + 100, vlr.empty() ? 0 : 1);  // the extra bytes VLR
   h[kPointFormat] = static_cast<char>(format);
   put<std::uint16_t>(h + kRecordLength, static_cast<std::uint16_t>(record_length));
   // Legacy counts (bytes 107-130) stay 0: LAS 1.4 requires that for formats 6-10.
@@ -343,7 +562,8 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
 
   FileWriter out(path);
   out.write(header);
-  std::array<char, 36> r{};
+  out.write(vlr);
+  std::vector<char> r(record_length);
   for (std::size_t i = 0; i < n; ++i) {
     for (int a = 0; a < 3; ++a) put<std::int32_t>(r.data() + 4 * a, quantise(i, a));
     put<std::uint16_t>(r.data() + 12, static_cast<std::uint16_t>(intensity.integer(i, 0, 65535)));
@@ -361,6 +581,11 @@ void write_las(const std::filesystem::path& path, const PointCloud& cloud, const
       for (int c = 0; c < 3; ++c)
         put<std::uint16_t>(r.data() + 30 + 2 * c,
                            static_cast<std::uint16_t>(std::lround(std::clamp(cloud.colors[i][c], 0.0f, 1.0f) * 65535.0f)));
+    char* extra = r.data() + core_length;
+    for (const ExtraOut& e : extras) {
+      store_extra(extra, e.type, e.values ? (*e.values)[i] : cloud.normals[i][e.normal]);
+      extra += scalar_type_size(e.type);
+    }
     out.write(r.data(), record_length);
   }
   out.close();

@@ -9,7 +9,9 @@
 // Organized clouds (HEIGHT > 1) are flattened and their NaN points dropped here, counted in
 // RawData::dropped_nonfinite with a warning.
 //
-// Writing: x y z as F8 (F4 with single_precision when float32 is precise enough), normal_x..
+// Writing: x y z as F4 when float32 moves no point by more than 1e-4 of the spacing (PCL's tools
+// and Open3D 0.16 read F8 positions as zeros), else F8 with a note; single_precision forces F4
+// (refused beyond 1e-5 of the diagonal), double_precision F8. normal_x..
 // as F4, rgb packed into an F4 (U4 in ascii files, as PCL writes it), fields with their own
 // type. PCL reads all three encodings back (checked with pcl_convert_pcd_ascii_binary 1.13).
 #include <algorithm>
@@ -462,6 +464,9 @@ namespace {
 
 enum class Source : std::uint8_t { Position, Normal, Rgb, Field };
 
+// Default positions are float32 when no coordinate moves by more than this share of the spacing.
+constexpr double kFloatTolerance = 1e-4;
+
 struct OutColumn {
   std::string name;
   char type;
@@ -542,12 +547,26 @@ void write_text_value(FileWriter& out, const OutColumn& col, const PointCloud& c
 
 }  // namespace
 
-void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
+void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes) {
   const std::string name = display_name(path);
   const std::size_t n = cloud.size();
 
   bool single = options.single_precision;
-  if (single && n > 0) {
+  if (!single && !options.double_precision && n > 0) {
+    // PCL's tools and Open3D 0.16 read F8 positions as zeros: float32 unless it would move a
+    // point by more than 1e-4 of a spacing, estimated from the box (diagonal / sqrt(N), which
+    // errs small for a surface sample) as io/ has no neighbour search.
+    const double spacing = bounding_box(cloud.positions).diagonal() / std::sqrt(double(n));
+    double worst = 0.0;
+    for (const Vector3d& p : cloud.positions)
+      for (int a = 0; a < 3; ++a) worst = std::max(worst, std::abs(double(float(p[a])) - p[a]));
+    single = worst <= kFloatTolerance * spacing;
+    if (!single)
+      notes.push_back(fmt::format("{}: positions written as double (F8): float32 would move points by up to {:.3g}, more than {:g} of "
+                                  "the spacing (about {:.3g}); PCL's tools and Open3D 0.16 read F8 positions as zeros, so for them "
+                                  "move the cloud near the origin first",
+                                  name, worst, kFloatTolerance, spacing));
+  } else if (single && n > 0) {
     const BoundingBox box = bounding_box(cloud.positions);
     const double largest = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
     const float f = static_cast<float>(largest);

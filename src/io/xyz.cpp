@@ -15,13 +15,17 @@
 // field, any other count xyz + fields "field3", "field4", ... (named by 0-based column).
 // Colours are [0,1] when every colour value is <= 1, else 0..255, else 0..65535.
 //
-// Writing. .xyz/.txt/.pts/.asc are plain numbers without a header (what readers everywhere
-// expect; .pts adds the PTS count line): x y z [nx ny nz] [r g b as 0..255] [fields]. Field
-// names cannot travel without a header, so the round trip of such a file keeps positions,
-// normals and colours; the layouts the column-count defaults read back exactly are xyz,
-// xyz+fields1 (read as "intensity"), xyz+normals, xyz+rgb, xyz+field+rgb (written in the PTS
-// order x y z i r g b), xyz+normals+rgb and xyz+normals+rgb+1 field ("field9"). .csv writes a
-// header line of names and keeps every field with its name (as Float64: text has no types).
+// A first line "# x y z ..." naming the columns is a header too (pointsurf writes it; other
+// readers skip it as a comment).
+//
+// Writing. .xyz/.txt/.asc are x y z [nx ny nz] [r g b as 0..255] [fields]; with fields, a first
+// line "# x y z [nx ny nz] [r g b] name..." names the columns, so the round trip keeps every field
+// by name (as Float64: text has no types); without fields, plain numbers (what readers
+// everywhere expect). .pts has the PTS count line and no names: the layouts the column-count
+// defaults read back exactly are xyz, xyz+fields1 (read as "intensity"), xyz+normals, xyz+rgb,
+// xyz+field+rgb (written in the PTS order x y z i r g b), xyz+normals+rgb and
+// xyz+normals+rgb+1 field ("field9"). .csv writes a header line of names and keeps every field
+// with its name.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -242,9 +246,10 @@ RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options) 
     if (t.empty()) continue;
     const bool first = !seen_content;
     seen_content = true;
-    if (first && t.front() != '#') {
-      const bool slashes = t.starts_with("//");
-      split_tokens(slashes ? t.substr(2) : t, tokens, true);
+    if (first) {
+      // "//x y z" (CloudCompare) and "# x y z" (pointsurf) headers are comments to other readers.
+      const bool slashes = t.starts_with("//") || t.front() == '#';
+      split_tokens(t.substr(t.starts_with("//") ? 2 : t.front() == '#' ? 1 : 0), tokens, true);
       if (!tokens.empty() && std::none_of(tokens.begin(), tokens.end(), is_number)) {
         header.emplace();
         for (std::string_view tok : tokens) header->emplace_back(unquote(tok));
@@ -401,24 +406,33 @@ void write_xyz(const std::filesystem::path& path, const PointCloud& cloud, const
   // 7-column default reads back.
   const bool pts_order = !csv && !normals && colours && fields.size() == 1;
 
+  const auto header_name = [](const std::string& name) {
+    const bool bad_char = std::any_of(name.begin(), name.end(), [](char c) {
+      return c == ',' || c == ';' || c == '"' || std::isspace(static_cast<unsigned char>(c)) || c == '#';
+    });
+    return !(name.empty() || bad_char || is_number(name) || classify(name) != Column::Field || name.starts_with("//"));
+  };
   if (csv) {
-    for (const ScalarField* f : fields) {
-      const bool bad_char = std::any_of(f->name.begin(), f->name.end(), [](char c) {
-        return c == ',' || c == ';' || c == '"' || std::isspace(static_cast<unsigned char>(c)) || c == '#';
-      });
-      if (f->name.empty() || bad_char || is_number(f->name) || classify(f->name) != Column::Field || f->name.starts_with("//"))
+    for (const ScalarField* f : fields)
+      if (!header_name(f->name))
         throw UsageError(fmt::format("{}: field '{}' cannot be a CSV column name (it would not read back as that field); rename it",
                                      display_name(path), f->name));
-    }
   }
+  // .xyz/.txt with fields: a "# x y z ... name" line, a comment to other readers, names the
+  // columns for ours (a name that could not read back leaves the file headerless, as before).
+  const bool comment_header = kind == "xyz" && !fields.empty() &&
+                              std::all_of(fields.begin(), fields.end(), [&](const ScalarField* f) { return header_name(f->name); });
 
   FileWriter out(path);
   if (kind == "pts") out.write(fmt::format("{}\n", cloud.size()));
-  if (csv) {
-    std::string header = "x,y,z";
-    if (normals) header += ",nx,ny,nz";
-    if (colours) header += ",r,g,b";
-    for (const ScalarField* f : fields) header += "," + f->name;
+  if (csv || comment_header) {
+    const char* sep = csv ? "," : " ";
+    std::string header = fmt::format("{}x{}y{}z", csv ? "" : "# ", sep, sep);
+    if (normals) header += fmt::format("{0}nx{0}ny{0}nz", sep);
+    if (pts_order) header += sep + fields[0]->name;
+    if (colours) header += fmt::format("{0}r{0}g{0}b", sep);
+    if (!pts_order)
+      for (const ScalarField* f : fields) header += sep + f->name;
     header += '\n';
     out.write(header);
   }

@@ -90,18 +90,10 @@ std::vector<std::string> lost_attributes(const std::string& path, const std::str
     if (c.has_normals()) lost.push_back("normals");
     if (c.has_colors()) lost.push_back("colours");
   }
-  if (format == "las" && c.has_normals()) lost.push_back("normals");
   const std::string ext = lower(std::filesystem::path(path).extension().string());
-  if (format == "xyz" && ext != ".csv" && !c.fields.empty()) lost.push_back("field names (values are kept as columns)");
-  if (format == "off" || format == "obj" || format == "stl") {
+  if (format == "xyz" && ext == ".pts" && !c.fields.empty()) lost.push_back("field names (values are kept as columns)");
+  if (format == "off" || format == "obj" || format == "stl")
     for (const ScalarField& f : c.fields) lost.push_back(fmt::format("field '{}'", f.name));
-  } else if (format == "las") {
-    static const char* const las_fields[] = {"intensity", "return_number", "number_of_returns", "classification",
-                                             "gps_time",  "user_data",     "scan_angle",        "point_source_id"};
-    for (const ScalarField& f : c.fields)
-      if (std::none_of(std::begin(las_fields), std::end(las_fields), [&](const char* n) { return f.name == n; }))
-        lost.push_back(fmt::format("field '{}'", f.name));
-  }
   return lost;
 }
 
@@ -114,6 +106,7 @@ void run_write(StageRun& run) {
   if (w.ascii) w.ply_encoding = PlyEncoding::Ascii;
   else if (run.args.boolean("big_endian")) w.ply_encoding = PlyEncoding::BinaryBigEndian;
   w.single_precision = run.args.boolean("float");
+  w.double_precision = run.args.boolean("double");
   w.pcd_compressed = run.args.boolean("compressed");
   const std::vector<double>& offset = run.args.numbers("las_offset");
   if (offset.size() == 3) w.las_offset = Vector3d(offset[0], offset[1], offset[2]);
@@ -127,12 +120,10 @@ void run_write(StageRun& run) {
     for (const std::string& l : lost) list += (list.empty() ? "" : ", ") + l;
     rec.warnings.push_back(fmt::format("{}: the {} format cannot hold: {}", file, format, list));
   }
-  if (item.triangles.empty()) {
-    write_point_cloud(file, item.cloud, w);
-  } else {
-    TriangleMesh mesh = TriangleMesh::from_cloud(item.cloud, item.triangles, item.face_fields);
-    write_mesh(file, mesh, w);
-  }
+  const WriteResult written = item.triangles.empty()
+                                  ? write_point_cloud(file, item.cloud, w)
+                                  : write_mesh(file, TriangleMesh::from_cloud(item.cloud, item.triangles, item.face_fields), w);
+  for (const std::string& note : written.notes) rec.warnings.push_back(note);
   const std::size_t faces = holds_faces(format) ? item.triangles.size() : 0;
   rec.count("points", as_count(item.cloud.size()));
   rec.count("faces", as_count(faces));
@@ -178,6 +169,7 @@ StageSpec write_stage() {
       P::choice("format", w.format, kFormats, "Write this format whatever the extension").meta("FORMAT"),
       P::boolean("ascii", w.ascii, "Write ascii PLY/PCD/STL instead of binary"),
       P::boolean("float", w.single_precision, "Write float32 positions (PLY, PCD); refused where float32 loses precision"),
+      P::boolean("double", w.double_precision, "Write double PCD positions even where float32 keeps them (PCL and Open3D 0.16 read them as zeros)"),
       P::boolean("big_endian", w.ply_encoding == PlyEncoding::BinaryBigEndian, "Write binary big-endian PLY"),
       P::boolean("compressed", w.pcd_compressed, "Write PCD as binary_compressed (LZF)"),
       P::vector3("las_offset", {}, "LAS offset (default: near the data's minimum)").unit("cloud units"),
@@ -189,6 +181,7 @@ StageSpec write_stage() {
   s.run = run_write;
   s.check = [](const StageArgs& a) {
     if (a.text("filename").empty()) throw UsageError("filename: missing (the file to write)");
+    if (a.boolean("float") && a.boolean("double")) throw UsageError("float and double: give only one");
     if (a.boolean("ascii") && a.boolean("big_endian")) throw UsageError("ascii and big_endian: give only one (big_endian is a binary encoding)");
   };
   return s;

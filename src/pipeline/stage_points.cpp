@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -108,6 +109,8 @@ CurvatureParams curvature_params(const StageArgs& a) {
   params.k = a.int32("k");
   params.radius = a.number("radius");
   params.radius_in_spacings = a.number("radius_in_spacings");
+  params.scale_in_noise = a.number("scale_in_noise");
+  params.max_k = a.int32("max_k");
   params.zero_curvature = a.number("zero_curvature");
   params.zero_in_noise = a.number("zero_in_noise");
   params.update_normals = a.boolean("update_normals");
@@ -230,15 +233,34 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
 void run_curvature(StageRun& run) {
   const StageArgs& a = run.args;
   PointCloud& cloud = run.context.item(run.output).cloud;
-  const CurvatureParams params = curvature_params(a);
+  CurvatureParams params = curvature_params(a);
   const std::size_t needed = params.degree == 2 ? 6 : 10;
   if (cloud.size() < needed) throw InputError(fmt::format("{}; a degree-{} jet needs at least {}", plural(cloud.size(), "point"), params.degree, needed));
+  // The scale comes first: normals estimated here need it too, or on noisy input their signs
+  // (hence the curvature's) are as noisy as their directions.
+  std::optional<CurvatureScale> scale;
+  if (params.k == 0 && params.neighborhood == NeighborhoodKind::Knn) {
+    scale = choose_curvature_scale(cloud, params, run.context.tree(run.output));
+    params.k = scale->k;
+    params.cylinder = scale->cylinder;
+  }
   const bool estimated = !cloud.has_normals();
-  if (estimated) estimate_missing_normals_impl(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.3));
+  if (estimated) estimate_missing_normals_impl(run, std::max(a.int32("normals_k"), scale ? scale->k : 0), sub_progress(run.progress, 0.0, 0.3));
   else check_input_normals(run, "curvature 0, surface_type 0 (undefined)");
   const KdTree& tree = run.context.tree(run.output);
   const CurvatureResult r = estimate_curvature(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
   StageRecord& rec = run.record;
+  if (scale) {
+    rec.metric("noise", scale->noise);
+    rec.metric("radius_in_noise", scale->noise > 0.0 ? scale->radius / scale->noise : 0.0);
+    rec.metric("scale_capped", scale->capped);
+    if (scale->capped)
+      rec.warnings.push_back(fmt::format("the noise ({:.3g}) needs a neighbourhood radius of {:.3g} ({} times it), but k stopped at {} "
+                                         "(radius {:.3g}; max_k {}, {}): the curvature may be noise-dominated (check the share "
+                                         "of flat points); raise max_k or smooth the points first",
+                                         scale->noise, params.scale_in_noise * scale->noise, params.scale_in_noise, scale->k,
+                                         scale->radius, params.max_k, plural(cloud.size(), "point")));
+  }
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
   if (params.neighborhood != NeighborhoodKind::Radius) rec.set_used("k", std::int64_t{r.k_used});
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", r.radius_used);
@@ -381,8 +403,10 @@ StageSpec curvature_stage() {
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = neighborhood_params(c.k, c.radius, c.radius_in_spacings, "");
-  s.params[1] = P::integer("k", c.k, "Neighbours per point; 0: 24 for degree 2, 40 for degree 3 (at least 6 or 10)").at_least(0);
+  s.params[1] = P::integer("k", c.k, "Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid)").at_least(0);
   s.params.push_back(P::integer("degree", c.degree, "Jet degree, 2 or 3").range(2, 3));
+  s.params.push_back(P::number("scale_in_noise", c.scale_in_noise, "k = 0: the neighbourhood radius grows to this many times the noise (the jet's residual)").positive());
+  s.params.push_back(P::integer("max_k", c.max_k, "k = 0: the most neighbours the noise may call for").at_least(6));
   s.params.push_back(P::number("zero_curvature", c.zero_curvature,
                                "Curvature below which H or a principal curvature counts as zero; 0: derived from the fit residuals")
                          .unit("1/cloud units")

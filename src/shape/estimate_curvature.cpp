@@ -27,6 +27,12 @@ constexpr double kPivotTolerance = 1e-12;
 // The derived zero threshold never goes below a radius of curvature of this many neighbourhood
 // radii (noise-free data have a residual of zero on planes).
 constexpr double kFloorRadii = 1e4;
+// The fit cylinder when the noise widened the neighbourhood (see choose_curvature_scale).
+constexpr double kNoiseCylinder = 0.8;
+// The scale choice stops at the k where this share of the samples has a curvature beyond
+// zero_in_noise standard errors, or where the residual rises by this factor over the noise floor's.
+constexpr double kResolvedShare = 0.9;
+constexpr double kBiasRise = 1.2;
 
 struct PointShape {
   double k1 = 0.0, k2 = 0.0;
@@ -58,19 +64,20 @@ Eigen::Matrix<double, C, 1> monomials(double u, double v) {
 }
 
 // Jet fit of `neighbors` around `center` with C coefficients (6: degree 2, 10: degree 3).
-// `side` is the input normal; the result's sign follows it.
+// `side` is the input normal; the result's sign follows it. With `cylinder` < 1 only the
+// neighbours within cylinder * h of the normal axis enter the fit (h: the neighbourhood radius).
 template <int C>
-PointShape fit_jet(const KdTree& tree, const Vector3d& center, const Vector3d& side, std::span<const Neighbor> neighbors) {
+PointShape fit_jet(const KdTree& tree, const Vector3d& center, const Vector3d& side, std::span<const Neighbor> neighbors,
+                   double cylinder = 1.0) {
   PointShape out;
-  const std::size_t m = neighbors.size();
-  if (m < std::size_t(C) || !(side.squaredNorm() > 0.0)) return out;
+  if (neighbors.size() < std::size_t(C) || !(side.squaredNorm() > 0.0)) return out;
 
   // PCA frame, in offsets from the query point (georeferenced coordinates stay small).
   double h2 = 0.0;
   for (const Neighbor& nb : neighbors) h2 = std::max(h2, (tree.point(nb.index) - center).squaredNorm());
   if (!(h2 > 0.0)) return out;
   const detail::LocalPca pca =
-      detail::local_pca([&](std::size_t j) { return Vector3d(tree.point(neighbors[j].index) - center); }, m);
+      detail::local_pca([&](std::size_t j) { return Vector3d(tree.point(neighbors[j].index) - center); }, neighbors.size());
   if (!pca.valid) return out;
   Vector3d e3 = pca.normal();
   if (e3.dot(side) < 0.0) e3 = -e3;
@@ -82,10 +89,15 @@ PointShape fit_jet(const KdTree& tree, const Vector3d& center, const Vector3d& s
   // are well conditioned whatever the cloud's units.
   const double h = std::sqrt(h2);
   const double inv_h = 1.0 / h;
+  const double cylinder2 = cylinder * cylinder;
+  const auto outside = [&](const Vector3d& d) { return cylinder < 1.0 && d.squaredNorm() - d.dot(e3) * d.dot(e3) > cylinder2; };
   Eigen::Matrix<double, C, C> normal_matrix = Eigen::Matrix<double, C, C>::Zero();
   Eigen::Matrix<double, C, 1> rhs = Eigen::Matrix<double, C, 1>::Zero();
+  std::size_t m = 0;
   for (const Neighbor& nb : neighbors) {
     const Vector3d d = (tree.point(nb.index) - center) * inv_h;
+    if (outside(d)) continue;
+    ++m;
     const Eigen::Matrix<double, C, 1> a = monomials<C>(d.dot(e1), d.dot(e2));
     normal_matrix.template selfadjointView<Eigen::Lower>().rankUpdate(a);
     rhs.noalias() += d.dot(e3) * a;
@@ -98,9 +110,11 @@ PointShape fit_jet(const KdTree& tree, const Vector3d& center, const Vector3d& s
   const Eigen::Matrix<double, C, 1> c = ldlt.solve(rhs);
   if (!c.allFinite()) return out;
 
+  if (m < std::size_t(C)) return out;
   double residual2 = 0.0;
   for (const Neighbor& nb : neighbors) {
     const Vector3d d = (tree.point(nb.index) - center) * inv_h;
+    if (outside(d)) continue;
     const double r = d.dot(e3) - monomials<C>(d.dot(e1), d.dot(e2)).dot(c);
     residual2 += r * r;
   }
@@ -194,20 +208,119 @@ void CurvatureParams::validate() const {
   settings.validate("estimate_curvature", 0);
   if (!(params.zero_curvature >= 0.0 && std::isfinite(params.zero_curvature)))
     throw UsageError(fmt::format("estimate_curvature: zero_curvature must be >= 0 (1/cloud units), got {}", params.zero_curvature));
+  if (params.k == 0 && params.neighborhood == NeighborhoodKind::Knn) {
+    if (!(params.scale_in_noise > 0.0 && std::isfinite(params.scale_in_noise)))
+      throw UsageError(fmt::format("estimate_curvature: scale_in_noise must be > 0, got {}", params.scale_in_noise));
+    if (params.max_k < settings.k)
+      throw UsageError(fmt::format("estimate_curvature: max_k must be at least the starting k {} for degree {}, got {}", settings.k,
+                                   params.degree, params.max_k));
+  }
+  if (!(params.cylinder >= 0.0 && params.cylinder <= 1.0))
+    throw UsageError(fmt::format("estimate_curvature: cylinder must be in (0, 1] (0: automatic), got {}", params.cylinder));
   if (params.zero_curvature == 0.0 && !(params.zero_in_noise > 0.0 && std::isfinite(params.zero_in_noise)))
     throw UsageError(fmt::format("estimate_curvature: zero_in_noise must be > 0, got {}", params.zero_in_noise));
 }
 
-CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params, const KdTree* tree,
-                                   const ProgressCallback& progress) {
-  const std::size_t n = cloud.size();
-  params.validate();
+namespace {
+
+void check_point_count(std::size_t n, const CurvatureParams& params) {
   const int coefficients = params.degree == 2 ? 6 : 10;
-  const Neighborhood settings = params.neighborhood_settings();
-  const int k = settings.k;
   if (n < std::size_t(coefficients))
     throw UsageError(fmt::format("estimate_curvature: needs at least {} points for degree {}, got {}", coefficients,
                                  params.degree, n));
+}
+
+double median_of(std::vector<double>& v) {
+  if (v.empty()) return 0.0;
+  auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+CurvatureScale choose_curvature_scale(const PointCloud& cloud, const CurvatureParams& params, const KdTree& tree) {
+  params.validate();
+  const std::size_t n = cloud.size();
+  check_point_count(n, params);
+  if (tree.size() != n)
+    throw UsageError(fmt::format("choose_curvature_scale: the kd-tree holds {} points but the cloud has {}", tree.size(), n));
+  const std::size_t coefficients = params.degree == 2 ? 6 : 10;
+  constexpr std::size_t kMaxSamples = 1000;
+  const std::size_t samples = std::min(n, kMaxSamples);
+  const std::span<const std::uint32_t> order = tree.spatial_order();
+
+  // One level per k: the medians over the samples of the fit's residual and radius, and the
+  // share of samples whose curvature stands out of its own noise.
+  struct Level {
+    CurvatureScale scale;
+    double resolved = 0.0;
+  };
+  const std::size_t start = std::size_t(params.neighborhood_settings().k);
+  const auto level_at = [&](std::size_t k) {
+    std::vector<double> residual(samples), radius(samples);
+    std::vector<char> resolved(samples);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t s = r.begin(); s != r.end(); ++s) {
+        const Vector3d& p = cloud.positions[order[s * n / samples]];
+        tree.knn(p, k, neighbors);
+        // The side only sets the sign, which none of these depend on; the cylinder is the one
+        // the final fit will use at this k.
+        const double cylinder = k > start ? kNoiseCylinder : 1.0;
+        const PointShape shape = params.degree == 2 ? fit_jet<6>(tree, p, Vector3d::UnitZ(), neighbors, cylinder)
+                                                    : fit_jet<10>(tree, p, Vector3d::UnitZ(), neighbors, cylinder);
+        const std::size_t m = neighbors.size();
+        const bool fitted = !shape.degenerate && m > coefficients;
+        residual[s] = fitted ? shape.rms * std::sqrt(double(m) / double(m - coefficients)) : std::nan("");
+        radius[s] = fitted ? shape.radius : std::nan("");
+        resolved[s] = fitted && std::max(std::abs(shape.k1), std::abs(shape.k2)) > params.zero_in_noise * shape.noise_curvature;
+      }
+    });
+    std::vector<double> fitted_residual, fitted_radius;
+    std::size_t count = 0;
+    for (std::size_t s = 0; s < samples; ++s)
+      if (!std::isnan(residual[s])) {
+        fitted_residual.push_back(residual[s]);
+        fitted_radius.push_back(radius[s]);
+        count += resolved[s] ? 1 : 0;
+      }
+    Level level;
+    level.scale.k = int(k);
+    level.scale.noise = median_of(fitted_residual);
+    level.scale.radius = median_of(fitted_radius);
+    level.scale.cylinder = k > start ? kNoiseCylinder : 1.0;
+    level.resolved = fitted_residual.empty() ? 0.0 : double(count) / double(fitted_residual.size());
+    return level;
+  };
+
+  // First the noise floor: the smallest k whose radius is scale_in_noise times its residual.
+  // Then, while over a tenth of the samples' curvature is within zero_in_noise standard errors of zero, wider
+  // until it is not (a noisy curved surface resolves), or the residual rises 20 % above the
+  // floor's (the jet no longer fits: planes meeting, a curved surface bending away from the
+  // quadric), or max_k: those keep the floor (a flat surface stays flat at any k).
+  std::optional<Level> floor;
+  Level level;
+  for (std::size_t k = start;; k *= 2) {
+    level = level_at(std::min(k, n));
+    if (!floor && level.scale.radius >= params.scale_in_noise * level.scale.noise) floor = level;
+    if (floor) {
+      if (level.resolved >= kResolvedShare) return level.scale;
+      if (level.scale.noise > kBiasRise * floor->scale.noise) return floor->scale;
+    }
+    if (std::size_t(level.scale.k) == n || 2 * k > std::size_t(params.max_k)) break;
+  }
+  if (floor) return floor->scale;
+  level.scale.capped = true;
+  return level.scale;
+}
+
+CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& params_in, const KdTree* tree,
+                                   const ProgressCallback& progress) {
+  const std::size_t n = cloud.size();
+  params_in.validate();
+  check_point_count(n, params_in);
   if (cloud.normals.size() != n)
     throw UsageError(fmt::format("estimate_curvature: needs oriented normals (one per point), the cloud has {} for {} points; "
                                  "estimate and orient them first",
@@ -220,6 +333,18 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
 
   CurvatureResult result;
+  CurvatureParams params = params_in;
+  if (params.k == 0 && params.neighborhood == NeighborhoodKind::Knn) {
+    const CurvatureScale scale = choose_curvature_scale(cloud, params, *tree);
+    params.k = scale.k;
+    if (params.cylinder == 0.0) params.cylinder = scale.cylinder;
+    result.scale_chosen = true;
+    result.noise = scale.noise;
+    result.scale_capped = scale.capped;
+  }
+  const double cylinder = params.cylinder == 0.0 ? 1.0 : params.cylinder;
+  const Neighborhood settings = params.neighborhood_settings();
+  const int k = settings.k;
   if (settings.uses_k()) result.k_used = k;
   result.radius_used = settings.resolve_radius(*tree);
 
@@ -238,8 +363,8 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
       const std::uint32_t i = order[pos];
       const Vector3d& p = cloud.positions[i];
       settings.query(*tree, p, std::size_t(k), result.radius_used, neighbors);
-      const PointShape s = params.degree == 2 ? fit_jet<6>(*tree, p, cloud.normals[i], neighbors)
-                                              : fit_jet<10>(*tree, p, cloud.normals[i], neighbors);
+      const PointShape s = params.degree == 2 ? fit_jet<6>(*tree, p, cloud.normals[i], neighbors, cylinder)
+                                              : fit_jet<10>(*tree, p, cloud.normals[i], neighbors, cylinder);
       k1[i] = s.k1;
       k2[i] = s.k2;
       variation[i] = s.variation;
@@ -268,15 +393,9 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
       fitted_rms.push_back(rms[i]);
     }
   result.degenerate = n - fitted_noise.size();
-  const auto median = [](std::vector<double>& v) {
-    if (v.empty()) return 0.0;
-    auto mid = v.begin() + std::ptrdiff_t(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    return *mid;
-  };
-  const double median_noise = median(fitted_noise);
-  const double median_radius = median(fitted_radius);
-  result.median_residual = median(fitted_rms);
+  const double median_noise = median_of(fitted_noise);
+  const double median_radius = median_of(fitted_radius);
+  result.median_residual = median_of(fitted_rms);
   double zero = params.zero_curvature;
   if (zero == 0.0 && median_radius > 0.0)
     zero = std::max(params.zero_in_noise * median_noise, 1.0 / (kFloorRadii * median_radius));

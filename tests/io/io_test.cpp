@@ -288,5 +288,47 @@ TEST(Io, TruncatedBinaryStlSaysWhereItEnds) {
   std::filesystem::remove_all(dir);
 }
 
+// Every point format keeps every field by name, with nothing added (b9_training.ply's "label"
+// used to be dropped by LAS and read back from XYZ as "intensity"). Text has no types: fields
+// come back as Float64 there, and PCD positions as float32 (the default near the origin).
+TEST(Io, EveryPointFormatKeepsEveryFieldByName) {
+  const fs::path dir = test::temp_dir("io_fields_by_name");
+  PointCloud cloud = test::sample_sphere(400, 3.0, Vector3d(1.0, 2.0, -4.0), 21);
+  const std::size_t n = cloud.size();
+  std::vector<double> label(n), deviation(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    label[i] = static_cast<double>(i % 8);
+    deviation[i] = 0.25 - 0.001 * static_cast<double>(i);
+  }
+  cloud.fields.add("label", 0, ScalarType::UInt8).values = label;
+  cloud.fields.add("deviation", 0, ScalarType::Float64).values = deviation;
+  for (const char* file : {"a.ply", "a.xyz", "a.txt", "a.csv", "a.pcd", "a.las"}) {
+    SCOPED_TRACE(file);
+    write_point_cloud(dir / file, cloud);
+    const CloudReadResult r = read_point_cloud(dir / file);
+    const PointCloud& back = r.cloud;
+    ASSERT_EQ(back.size(), n);
+    EXPECT_TRUE(r.warnings.empty());
+    ASSERT_EQ(back.fields.size(), 2u);
+    EXPECT_EQ(back.fields[0].name, "label");
+    EXPECT_EQ(back.fields[1].name, "deviation");
+    EXPECT_EQ(back.fields[0].values, label);
+    EXPECT_EQ(back.fields[1].values, deviation);
+    ASSERT_TRUE(back.has_normals());
+    double worst = 0.0, worst_normal = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      worst = std::max(worst, (back.positions[i] - cloud.positions[i]).cwiseAbs().maxCoeff());
+      worst_normal = std::max(worst_normal, (back.normals[i] - cloud.normals[i]).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LE(worst, 5.0001e-5);      // LAS's 1e-4 quantum; float32 at 7 is 4.8e-7
+    EXPECT_LE(worst_normal, 1e-7);   // float32 normals (PCD, LAS)
+  }
+  // Text keeps no types; the binary formats do.
+  EXPECT_EQ(read_point_cloud(dir / "a.xyz").cloud.fields[0].type, ScalarType::Float64);
+  for (const char* file : {"a.ply", "a.pcd", "a.las"}) EXPECT_EQ(read_point_cloud(dir / file).cloud.fields[0].type, ScalarType::UInt8) << file;
+  // The XYZ header is a comment line other readers skip.
+  EXPECT_EQ(test::read_bytes(dir / "a.xyz").substr(0, 31), "# x y z nx ny nz label deviatio");
+}
+
 }  // namespace
 }  // namespace pointsurf

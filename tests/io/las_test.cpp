@@ -128,7 +128,7 @@ TEST(Las, WriteThenReadKeepsGeoreferencedPositionsAndFields) {
   cloud.fields.add("number_of_returns", 0, ScalarType::UInt8).values = returns;
   cloud.fields.add("return_number", 0, ScalarType::UInt8).values = return_number;
   cloud.fields.add("gps_time", 0, ScalarType::Float64).values = gps_time;
-  cloud.fields.add("curvature", n, ScalarType::Float32);  // LAS has no slot for it
+  cloud.fields.add("curvature", n, ScalarType::Float32);  // no slot for it: extra bytes
   cloud.colors.resize(n);
   for (auto& c : cloud.colors) c = Vector3f(unit(rng), unit(rng), unit(rng));
 
@@ -149,22 +149,31 @@ TEST(Las, WriteThenReadKeepsGeoreferencedPositionsAndFields) {
   EXPECT_EQ(back.fields.find("intensity")->type, ScalarType::UInt16);
   EXPECT_EQ(back.fields.find("classification")->type, ScalarType::UInt8);
   EXPECT_EQ(back.fields.find("gps_time")->type, ScalarType::Float64);
-  EXPECT_FALSE(back.fields.contains("curvature"));
-  EXPECT_FALSE(back.has_normals());
+  EXPECT_EQ(field(back, "curvature"), std::vector<double>(n, 0.0));
+  EXPECT_EQ(back.fields.find("curvature")->type, ScalarType::Float32);
+  EXPECT_EQ(back.fields.size(), cloud.fields.size());
+  ASSERT_TRUE(back.has_normals());  // nx, ny, nz extra bytes (float32)
+  for (std::size_t i = 0; i < n; ++i) EXPECT_LE((back.normals[i] - cloud.normals[i]).cwiseAbs().maxCoeff(), 1e-7);
   ASSERT_TRUE(back.has_colors());
   for (std::size_t i = 0; i < n; ++i) EXPECT_LE((back.colors[i] - cloud.colors[i]).cwiseAbs().maxCoeff(), 0.51f / 65535.0f);
 
   // The header: LAS 1.4, format 7 (colours), legacy counts 0 as formats 6-10 require, the
-  // 64-bit count and the counts per return number.
+  // 64-bit count and the counts per return number; one extra bytes VLR of 4 descriptors (nx, ny,
+  // nz, curvature: 16 bytes more per record).
   const std::string bytes = read_bytes(path);
-  EXPECT_EQ(bytes.size(), 375 + 36 * n);
+  EXPECT_EQ(bytes.size(), 375 + 54 + 4 * 192 + 52 * n);
   EXPECT_EQ(bytes[24], 1);
   EXPECT_EQ(bytes[25], 4);
   EXPECT_EQ(get<std::uint16_t>(bytes, 6) & 0x10, 0x10);  // WKT bit, required for formats 6-10
   EXPECT_EQ(get<std::uint16_t>(bytes, 94), 375);
-  EXPECT_EQ(get<std::uint32_t>(bytes, 96), 375u);
+  EXPECT_EQ(get<std::uint32_t>(bytes, 96), 375u + 54u + 4u * 192u);
+  EXPECT_EQ(get<std::uint32_t>(bytes, 100), 1u);
+  EXPECT_EQ(bytes.substr(375 + 2, 9), "LASF_Spec");
+  EXPECT_EQ(get<std::uint16_t>(bytes, 375 + 18), 4);
+  EXPECT_EQ(bytes.substr(375 + 54 + 3 * 192 + 4, 9), std::string("curvature"));
+  EXPECT_EQ(bytes[375 + 54 + 3 * 192 + 2], 9);  // float
   EXPECT_EQ(bytes[104], 7);
-  EXPECT_EQ(get<std::uint16_t>(bytes, 105), 36);
+  EXPECT_EQ(get<std::uint16_t>(bytes, 105), 52);
   EXPECT_EQ(get<std::uint32_t>(bytes, 107), 0u);
   EXPECT_EQ(get<std::uint64_t>(bytes, 247), n);
   for (int r = 1; r <= 5; ++r)
@@ -177,19 +186,56 @@ TEST(Las, WriteThenReadKeepsGeoreferencedPositionsAndFields) {
   EXPECT_EQ(get<double>(bytes, 219), box.min.z());
 }
 
-TEST(Las, WriteWithoutColoursUsesFormat6AndDefaultsToSingleReturns) {
+TEST(Las, WriteWithoutColoursUsesFormat6AndAddsNoUnsetFields) {
   const auto dir = test::temp_dir("las_format6");
   PointCloud cloud = test::sample_plane(10, 2.0, 4);
+  cloud.normals.clear();
   write_point_cloud(dir / "plain.las", cloud);
   const std::string bytes = read_bytes(dir / "plain.las");
   EXPECT_EQ(bytes[104], 6);
   EXPECT_EQ(bytes.size(), 375u + 30u * 10u);
   EXPECT_EQ(get<std::uint64_t>(bytes, 255), 10u);  // every point is return 1
+  // The slots the cloud did not have (zero intensity, class 0, GPS time 0, return 1 of 1) do
+  // not come back as fields.
   const PointCloud back = read_point_cloud(dir / "plain.las").cloud;
   EXPECT_FALSE(back.has_colors());
-  EXPECT_EQ(field(back, "return_number"), std::vector<double>(10, 1.0));
-  EXPECT_EQ(field(back, "number_of_returns"), std::vector<double>(10, 1.0));
-  EXPECT_EQ(field(back, "intensity"), std::vector<double>(10, 0.0));
+  EXPECT_FALSE(back.has_normals());
+  EXPECT_EQ(back.fields.size(), 0u);
+}
+
+// b9_training.ply's "label" (and any field LAS has no slot for) travels as extra bytes under
+// its name and type; a standard field whose values do not fit its slot does too.
+TEST(Las, EveryFieldKeepsItsNameAndType) {
+  const auto dir = test::temp_dir("las_extra_bytes");
+  PointCloud cloud = test::sample_sphere(300, 5.0, Vector3d(596'000.0, 4'800'000.0, 20.0), 8);
+  const std::size_t n = cloud.size();
+  std::vector<double> label(n), deviation(n), classification(n), code(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    label[i] = static_cast<double>(i % 9);
+    deviation[i] = -0.125 + 1e-9 * static_cast<double>(i);
+    classification[i] = 250.0 + static_cast<double>(i % 20);  // 250..269: beyond the slot's 255
+    code[i] = -70000.0 + static_cast<double>(i);
+  }
+  cloud.fields.add("label", 0, ScalarType::Int32).values = label;
+  cloud.fields.add("deviation", 0, ScalarType::Float64).values = deviation;
+  cloud.fields.add("classification", 0, ScalarType::UInt16).values = classification;
+  cloud.fields.add("code", 0, ScalarType::Int64).values = code;
+  write_point_cloud(dir / "fields.las", cloud);
+  const PointCloud back = read_point_cloud(dir / "fields.las").cloud;
+  ASSERT_EQ(back.size(), n);
+  ASSERT_EQ(back.fields.size(), 4u);
+  EXPECT_EQ(field(back, "label"), label);
+  EXPECT_EQ(back.fields.find("label")->type, ScalarType::Int32);
+  EXPECT_EQ(field(back, "deviation"), deviation);
+  EXPECT_EQ(back.fields.find("deviation")->type, ScalarType::Float64);
+  EXPECT_EQ(field(back, "classification"), classification);
+  EXPECT_EQ(field(back, "code"), code);
+  ASSERT_TRUE(back.has_normals());
+
+  PointCloud long_name = test::sample_plane(5, 1.0, 2);
+  long_name.fields.add(std::string(33, 'a'), 5, ScalarType::Float32);
+  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { write_point_cloud(dir / "long.las", long_name); }),
+                             "names hold at most 32 characters"));
 }
 
 TEST(Las, WriteHonoursScaleAndOffsetAndWidensTheDefaultScaleForHugeExtents) {
@@ -351,6 +397,53 @@ TEST(Las, ReadsLas14Format6WithOnlyThe64BitCount) {
   EXPECT_NEAR(field(c, "scan_angle")[0], -15.0, 1e-12);
   EXPECT_EQ(field(c, "point_source_id"), (std::vector<double>{3, 3}));
   EXPECT_EQ(field(c, "gps_time"), (std::vector<double>{1e9, 1e9 + 1}));
+}
+
+// Extra bytes as another writer lays them out: an undefined 2-byte run (type 0) to skip, a
+// scaled and offset uint16 and a float, after a projection VLR.
+TEST(Las, ReadsExtraBytesByTheirDescriptors) {
+  const auto dir = test::temp_dir("las_extra_descriptors");
+  std::string vlr(54 + 3 * 192, '\0');
+  std::memcpy(vlr.data() + 2, "LASF_Spec", 9);
+  put<std::uint16_t>(vlr, 18, 4);
+  put<std::uint16_t>(vlr, 20, 3 * 192);
+  const auto descriptor = [&](int d, int type, int options, const char* name) {
+    const std::size_t at = 54 + 192 * std::size_t(d);
+    vlr[at + 2] = static_cast<char>(type);
+    vlr[at + 3] = static_cast<char>(options);
+    std::memcpy(vlr.data() + at + 4, name, std::strlen(name));
+    return at;
+  };
+  descriptor(0, 0, 2, "padding");
+  const std::size_t height = descriptor(1, 3, 0x18, "Height Above Ground");  // scale and offset
+  put<double>(vlr, height + 112, 0.01);
+  put<double>(vlr, height + 136, -5.0);
+  descriptor(2, 9, 0, "reflectance");
+  LasFile las;
+  las.minor = 4;
+  las.format = 6;
+  las.record_length = 30 + 2 + 2 + 4;
+  las.count64 = 2;
+  las.vlrs = projection_vlr() + vlr;
+  for (int i = 0; i < 2; ++i) {
+    std::string r(las.record_length, '\0');
+    put<std::int32_t>(r, 0, i);
+    put<std::uint16_t>(r, 32, static_cast<std::uint16_t>(1000 + i));
+    put<float>(r, 34, 0.5f * static_cast<float>(i + 1));
+    las.points += r;
+  }
+  std::string bytes = las.bytes();
+  put<std::uint32_t>(bytes, 100, 2);  // two VLRs
+  const CloudReadResult result = read_point_cloud(write_bytes(dir / "extra.las", bytes));
+  const PointCloud& c = result.cloud;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.fields.size(), 2u);  // no unset slots, the padding skipped
+  EXPECT_EQ(field(c, "Height Above Ground"), (std::vector<double>{1000 * 0.01 - 5.0, 1001 * 0.01 - 5.0}));
+  EXPECT_EQ(c.fields.find("Height Above Ground")->type, ScalarType::Float64);
+  EXPECT_EQ(field(c, "reflectance"), (std::vector<double>{0.5, 1.0}));
+  EXPECT_EQ(c.fields.find("reflectance")->type, ScalarType::Float32);
+  ASSERT_EQ(result.warnings.size(), 1u);
+  EXPECT_TRUE(test::contains(result.warnings[0], "extra bytes 'padding' of data type 0 skipped")) << result.warnings[0];
 }
 
 TEST(Las, EightBitColoursStoredUnscaledAreReadAsEightBit) {

@@ -81,6 +81,7 @@ TEST(Pcd, EveryEncodingRoundTripsNormalsColoursAndTypedFields) {
     WriteOptions options;
     options.ascii = c.ascii;
     options.pcd_compressed = c.compressed;
+    options.double_precision = true;
     const fs::path path = dir / (std::string(c.encoding) + ".pcd");
     write_point_cloud(path, cloud, options);
     const std::string bytes = read_bytes(path);
@@ -104,7 +105,7 @@ TEST(Pcd, CompressedIsSmallerForRepetitiveData) {
   options.pcd_compressed = true;
   write_point_cloud(dir / "c.pcd", cloud, options);
   EXPECT_LT(fs::file_size(dir / "c.pcd"), fs::file_size(dir / "b.pcd"));
-  expect_same(cloud, read_point_cloud(dir / "c.pcd").cloud, 0.0);
+  expect_same(cloud, read_point_cloud(dir / "c.pcd").cloud, 1e-7);  // float32 positions (the default here)
 }
 
 TEST(Pcd, EmptyCloudRoundTripsInEveryEncoding) {
@@ -213,8 +214,12 @@ TEST(Pcd, BinaryWithPaddingMultiCountFieldsAndRgba) {
 TEST(Pcd, GeoreferencedOffsetsRoundTripAndSinglePrecisionIsRefused) {
   const fs::path dir = test::temp_dir("pcd_geo");
   const PointCloud cloud = rich_cloud(200, Vector3d(6.5e6, 6.5e6, 120.0));
-  write_point_cloud(dir / "geo.pcd", cloud);
-  expect_same(cloud, read_point_cloud(dir / "geo.pcd").cloud, 1e-4);
+  // The default falls back on double here, and says so.
+  const WriteResult written = write_point_cloud(dir / "geo.pcd", cloud);
+  ASSERT_EQ(written.notes.size(), 1u);
+  EXPECT_TRUE(contains(written.notes[0], "geo.pcd: positions written as double (F8)")) << written.notes[0];
+  EXPECT_TRUE(contains(read_bytes(dir / "geo.pcd"), "\nSIZE 8 8 8 "));
+  expect_same(cloud, read_point_cloud(dir / "geo.pcd").cloud, 0.0);
   WriteOptions single;
   single.single_precision = true;
   EXPECT_TRUE(contains(error_of<UsageError>([&] { write_point_cloud(dir / "geo32.pcd", cloud, single); }),
@@ -228,6 +233,22 @@ TEST(Pcd, GeoreferencedOffsetsRoundTripAndSinglePrecisionIsRefused) {
   expect_same(local, read_point_cloud(dir / "local32.pcd").cloud, 1e-6);
 }
 
+// PCL's tools and Open3D 0.16 read F8 positions as zeros: the default is F4 wherever float32
+// moves no point by more than 1e-4 of the spacing, with no note.
+TEST(Pcd, DefaultPositionsAreFloatWhereFloatKeepsThem) {
+  const fs::path dir = test::temp_dir("pcd_float_default");
+  const PointCloud cloud = rich_cloud(700);
+  const WriteResult written = write_point_cloud(dir / "a.pcd", cloud);
+  EXPECT_TRUE(written.notes.empty());
+  EXPECT_TRUE(contains(read_bytes(dir / "a.pcd"), "\nSIZE 4 4 4 4 4 4 4 "));
+  const BoundingBox box = bounding_box(cloud.positions);
+  expect_same(cloud, read_point_cloud(dir / "a.pcd").cloud, 1e-4 * box.diagonal() / std::sqrt(700.0));
+  WriteOptions wide;
+  wide.double_precision = true;
+  EXPECT_TRUE(write_point_cloud(dir / "b.pcd", cloud, wide).notes.empty());
+  EXPECT_TRUE(contains(read_bytes(dir / "b.pcd"), "\nSIZE 8 8 8 4 "));
+}
+
 TEST(Pcd, TruncatedBinaryIsAnInputError) {
   const fs::path dir = test::temp_dir("pcd_truncated");
   write_point_cloud(dir / "a.pcd", test::sample_sphere(100));
@@ -236,7 +257,7 @@ TEST(Pcd, TruncatedBinaryIsAnInputError) {
   write_bytes(dir / "a.pcd", bytes);
   const std::string message = error_of<InputError>([&] { read_point_cloud(dir / "a.pcd"); });
   EXPECT_TRUE(contains(message, "a.pcd: byte ")) << message;
-  EXPECT_TRUE(contains(message, "header says 100 points of 36 bytes but only 3590 bytes follow (file truncated?)")) << message;
+  EXPECT_TRUE(contains(message, "header says 100 points of 24 bytes but only 2390 bytes follow (file truncated?)")) << message;
 }
 
 TEST(Pcd, CorruptedCompressedBlockIsAnInputError) {
@@ -257,7 +278,7 @@ TEST(Pcd, CorruptedCompressedBlockIsAnInputError) {
   bad = good;
   bad[data + 4] = static_cast<char>(bad[data + 4] + 1);
   write_bytes(dir / "c.pcd", bad);
-  EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "c.pcd"); }), "differs from POINTS 300 times 36 bytes per point"));
+  EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "c.pcd"); }), "differs from POINTS 300 times 24 bytes per point"));
 
   // The block cut short.
   write_bytes(dir / "d.pcd", good.substr(0, good.size() - 5));

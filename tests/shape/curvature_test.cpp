@@ -17,6 +17,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
+#include "pointsurf/spatial/kd_tree.h"
 #include "support/files.h"
 #include "support/shape_samplers.h"
 #include "support/shapes.h"
@@ -200,6 +201,57 @@ TEST(EstimateCurvature, ZeroThresholdFollowsTheNoise) {
   EXPECT_LT(quantile_error(field(sphere, "mean"), 1.0, 1.0, 0.5), 0.05);
 }
 
+// A noise of 4 % of the radius (CGAL's sphere_20k.xyz has about that) is several spacings: at the
+// starting k = 24 the jet fits the noise and calls every point flat. The default scale widens
+// the neighbourhood until it is 8 noise amplitudes across; a clean sphere keeps the start.
+TEST(EstimateCurvature, DefaultScaleFollowsTheNoise) {
+  const double r = 2.0;
+  PointCloud noisy = test::sample_sphere(20000, r, Vector3d(1.0, -2.0, 0.5), 11);
+  test::add_noise(noisy, 0.04 * r, 12);
+  const CurvatureResult wide = estimate_curvature(noisy);
+  EXPECT_TRUE(wide.scale_chosen);
+  EXPECT_FALSE(wide.scale_capped);
+  EXPECT_GE(wide.k_used, 384);
+  EXPECT_LE(wide.k_used, 1536);
+  EXPECT_NEAR(wide.noise, 0.04 * r, 0.3 * 0.04 * r);  // add_noise's sigma is per axis: radial sigma
+  EXPECT_LT(quantile_error(field(noisy, "mean"), 1.0 / r, 1.0 / r, 0.5), 0.1);
+  EXPECT_GE(fraction_of_type(noisy, SurfaceType::Peak), 0.9);
+
+  // What the fixed start gives on the same points: the failure this default removes.
+  PointCloud narrow = noisy;
+  estimate_curvature(narrow, {.k = 24});
+  EXPECT_LT(fraction_of_type(narrow, SurfaceType::Peak), 0.5);
+
+  // A quarter of that noise: the noise floor alone (k 48) leaves the curvature within its
+  // standard error, so the choice widens on until nine tenths of the samples stand out of it.
+  PointCloud quiet = test::sample_sphere(20000, 1.0, Vector3d::Zero(), 18);
+  test::add_noise(quiet, 0.01, 19);
+  const CurvatureResult resolved = estimate_curvature(quiet);
+  EXPECT_GE(resolved.k_used, 192);
+  EXPECT_LT(quantile_error(field(quiet, "mean"), 1.0, 1.0, 0.5), 0.1);
+  EXPECT_GE(fraction_of_type(quiet, SurfaceType::Peak), 0.9);
+
+  PointCloud clean = test::sample_sphere(20000, r, Vector3d::Zero(), 13);
+  const CurvatureResult start = estimate_curvature(clean);
+  EXPECT_EQ(start.k_used, 24);
+  EXPECT_FALSE(start.scale_capped);
+  EXPECT_LT(quantile_error(field(clean, "mean"), 1.0 / r, 1.0 / r, 0.95), 0.02);
+}
+
+// A cap below what the noise needs stops the choice and says so.
+TEST(EstimateCurvature, CappedScaleIsReported) {
+  PointCloud noisy = test::sample_sphere(5000, 1.0, Vector3d::Zero(), 14);
+  test::add_noise(noisy, 0.04, 15);
+  const KdTree tree(noisy.positions);
+  const CurvatureScale scale = choose_curvature_scale(noisy, {.max_k = 48}, tree);
+  EXPECT_TRUE(scale.capped);
+  EXPECT_EQ(scale.k, 48);
+  EXPECT_LT(scale.radius, 8.0 * scale.noise);
+  const CurvatureResult r = estimate_curvature(noisy, {.max_k = 48}, &tree);
+  EXPECT_TRUE(r.scale_capped);
+  EXPECT_EQ(r.k_used, 48);
+}
+
 TEST(EstimateCurvature, InwardNormalsFlipTheSign) {
   PointCloud out = test::sample_sphere(5000, 1.0, Vector3d::Zero(), 9);
   PointCloud in = out;
@@ -327,6 +379,9 @@ TEST(EstimateCurvature, BadParametersAreUsageErrors) {
          "estimate_curvature: radius_in_spacings must be > 0, got 0");
   expect({.zero_curvature = -0.5}, "estimate_curvature: zero_curvature must be >= 0 (1/cloud units), got -0.5");
   expect({.zero_in_noise = 0.0}, "estimate_curvature: zero_in_noise must be > 0, got 0");
+  expect({.scale_in_noise = 0.0}, "estimate_curvature: scale_in_noise must be > 0, got 0");
+  expect({.max_k = 12}, "estimate_curvature: max_k must be at least the starting k 24 for degree 2, got 12");
+  expect({.cylinder = 1.5}, "estimate_curvature: cylinder must be in (0, 1] (0: automatic), got 1.5");
   // k is not used by radius neighbourhoods, nor the radius by kNN.
   EXPECT_NO_THROW(estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Radius, .k = 1}));
   EXPECT_NO_THROW(estimate_curvature(cloud, {.radius = -1.0}));
@@ -403,6 +458,34 @@ TEST(CurvatureCli, EstimatesNormalsWhenMissingAndWritesTheFields) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--zero-curvature")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "o2.ply"));
+  std::filesystem::remove_all(dir);
+}
+
+// The stage on a noisy sphere without normals: it chooses the scale first and estimates the
+// normals at it, so their signs (hence H's) are right; the report says the noise.
+TEST(CurvatureCli, NoisySphereWithoutNormalsIsAPeak) {
+  const std::filesystem::path dir = test::temp_dir("curvature_cli_noisy");
+  PointCloud sphere = test::sample_sphere(20000, 1.0, Vector3d(0.5, 0.0, 2.0), 16);
+  test::add_noise(sphere, 0.04, 17);
+  sphere.normals.clear();
+  write_point_cloud(dir / "in.ply", sphere);
+  const RunResult r = run_cli("curvature " + (dir / "in.ply").string() + " " + (dir / "out.ply").string() + " --report " +
+                                  (dir / "report.json").string(),
+                              dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud out = read_point_cloud(dir / "out.ply").cloud;
+  EXPECT_LT(quantile_error(field(out, "mean"), 1.0, 1.0, 0.5), 0.1);
+  EXPECT_GE(fraction_of_type(out, SurfaceType::Peak), 0.9);
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(dir / "report.json"));
+  bool has_stage = false;
+  for (const auto& stage : report["stages"])
+    if (stage["type"] == "curvature") {
+      has_stage = true;
+      EXPECT_NEAR(stage["metrics"]["noise"].get<double>(), 0.04, 0.012);
+      EXPECT_GE(stage["metrics"]["radius_in_noise"].get<double>(), 8.0);
+      EXPECT_GE(stage["parameters"]["k"].get<int>(), 384);
+    }
+  EXPECT_TRUE(has_stage);
   std::filesystem::remove_all(dir);
 }
 

@@ -94,18 +94,27 @@ struct WriteOptions {
   bool single_precision = false;          // float32 positions (PLY, PCD); refused with a
                                           // UsageError when the float32 step at the largest
                                           // coordinate exceeds 1e-5 of the bounding-box diagonal
-                                          // (georeferenced data: keep double)
+                                          // (georeferenced data: keep double). PCD without either
+                                          // flag: float32 when it moves no coordinate by more than
+                                          // 1e-4 of the spacing (diagonal / sqrt(N)), else double
+                                          // with a note in WriteResult (PCL and Open3D 0.16 read
+                                          // double PCD positions as zeros)
+  bool double_precision = false;          // PCD: double positions even where float32 would do
   bool pcd_compressed = false;            // PCD binary_compressed (LZF) instead of binary
   std::optional<Vector3d> las_offset;     // LAS offset; default near the data's minimum
   std::optional<double> las_scale;        // LAS scale (cloud units per count); default <= 1e-4
   int precision = 17;                     // significant digits of text coordinates (XYZ, OBJ, ...)
 };
 
+struct WriteResult {
+  std::vector<std::string> notes;  // choices the writer made that the user should know (PCD written as double)
+};
+
 /// Writes a cloud; formats that hold faces get none. Throws UsageError for a format that
 /// cannot hold the data as asked and Error on an I/O failure.
-void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options = {});
+WriteResult write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options = {});
 /// Writes a mesh (PLY, OFF, OBJ, STL; XYZ/PCD/LAS get its vertices only). Face fields go to
 /// PLY only, as extra `element face` properties of their own type; other formats drop them.
-void write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options = {});
+WriteResult write_mesh(const std::filesystem::path& path, const TriangleMesh& mesh, const WriteOptions& options = {});
 
 }  // namespace pointsurf

@@ -45,10 +45,17 @@ SurfaceType classify_surface_type(double H, double K, double h_zero, double k_ze
 struct CurvatureParams {
   NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
   int degree = 2;                   // jet degree, 2 or 3
-  int k = 0;                        // neighbours per point (Knn, Hybrid); 0: 24 for degree 2, 40 for
-                                    // degree 3; at least 6 (degree 2) or 10 (degree 3)
+  int k = 0;                        // neighbours per point (Knn, Hybrid), at least 6 (degree 2) or 10
+                                    // (degree 3); 0: Knn chooses it from the noise (choose_curvature_scale),
+                                    // starting at 24 for degree 2, 40 for degree 3; Hybrid takes 24 / 40
   double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
   double radius_in_spacings = 6.0;  // used when radius == 0
+  double scale_in_noise = 8.0;      // k = 0 (Knn): the neighbourhood radius must reach this many times
+                                    // the noise (the jet fit's residual), > 0
+  int max_k = 1536;                 // k = 0 (Knn): the most neighbours the choice may reach, >= the start
+  double cylinder = 0.0;            // fit only the neighbours within this fraction of the neighbourhood radius
+                                    // of the normal axis, in (0, 1]; 0: 1 (all), or the chosen scale's
+                                    // (CurvatureScale::cylinder) when k = 0 chose it
   double zero_curvature = 0.0;      // 1/cloud units: a principal curvature, or H, of magnitude at most
                                     // this counts as zero in the surface type; 0: derived from the
                                     // data (see estimate_curvature)
@@ -70,15 +77,58 @@ struct CurvatureResult {
   std::array<std::size_t, kSurfaceTypeCount> type_counts{};  // points per SurfaceType code
   std::size_t degenerate = 0;          // points with no curvature: zero normal, too few neighbours for
                                        // the jet or a singular fit; fields 0, type Undefined (smaller is better)
+  double scale_in_noise = 8.0;      // k = 0 (Knn): the neighbourhood radius must reach this many times
+                                    // the noise (the jet fit's residual), > 0
+  int max_k = 1536;                 // k = 0 (Knn): the most neighbours the choice may reach, >= the start
+  double cylinder = 0.0;            // fit only the neighbours within this fraction of the neighbourhood radius
+                                    // of the normal axis, in (0, 1]; 0: 1 (all), or the chosen scale's
+                                    // (CurvatureScale::cylinder) when k = 0 chose it
   double zero_curvature = 0.0;         // zero threshold used for the surface type, 1/cloud units
   double radius_used = 0.0;            // search radius used (Radius, Hybrid), cloud units
   double median_residual = 0.0;        // median over points of the RMS distance of the neighbours to the
                                        // fitted jet, cloud units (smaller: the jet fits better)
   int k_used = 0;                      // neighbours per point (Knn, Hybrid)
+  bool scale_chosen = false;           // k came from choose_curvature_scale (Knn, k = 0); the next two are set
+  double noise = 0.0;                  // the noise the scale followed, cloud units (see CurvatureScale)
+  bool scale_capped = false;           // max_k or the cloud's size stopped the choice short of scale_in_noise
   std::vector<Vector3d> d1, d2;        // N unit principal directions of k1 and k2 (empty unless keep_directions;
                                        // zero where degenerate)
   std::vector<Vector3d> normals;       // N unit jet normals on the side of the input normals (same condition)
 };
+
+/// The neighbourhood size the default curvature (Knn, k = 0) uses.
+struct CurvatureScale {
+  int k = 0;               // neighbours per point chosen
+  double noise = 0.0;      // median over the sampled points of the jet fit's RMS residual at k (unbiased:
+                           // divided by k - coefficients), cloud units: the noise once the fit is wide enough
+  double radius = 0.0;     // median neighbourhood radius at k, cloud units (larger than scale_in_noise * noise
+                           // unless capped)
+  double cylinder = 1.0;   // the fit cylinder that goes with it (CurvatureParams::cylinder): 0.8 when k grew,
+                           // 1 (the whole ball) when the start sufficed
+  bool capped = false;     // the radius never reached scale_in_noise * noise: k is max_k or the largest power
+                           // of two times the start that the cloud holds; the curvature may be noise-dominated
+};
+
+/// Chooses the jet neighbourhood from the noise. Fitting a jet over a neighbourhood narrower than
+/// a few noise amplitudes fits the noise: on a noisy sphere the curvature comes out as noise about
+/// zero and every point flat. Starting at k = 24 (degree 2) or 40 (degree 3), k doubles
+///  1. until the median neighbourhood radius is at least `scale_in_noise` times the median fit
+///     residual (the noise floor: the residual is the noise once the neighbourhood is wider than it);
+///  2. then on while fewer than 90 % of the samples have a principal curvature beyond
+///     `zero_in_noise` of its standard errors, unless the median residual rises 20 % above the
+///     floor's (the jet no longer fits: planes meeting, clean curved data) or max_k comes first,
+///     which keep the floor's k (a flat surface stays flat at any k).
+/// A clean scan keeps the start (its curvature stands out, or widening raises the residual);
+/// at most `max_k` (and the cloud's size). The curvature's standard error
+/// then falls as noise / radius^2 / sqrt(k): at 8 times the noise and k ~ 800 it is about 0.1 / r on
+/// a sphere of radius r = 25 noise amplitudes. A ball around a noisy point truncates the noise at its rim, where
+/// only points near the ball's equator are inside: that pulls the rim towards the tangent plane
+/// and the curvature towards zero (measured: H 11 % low on sphere_20k.xyz at k = 768). So when k
+/// grew, the fit keeps the cylinder of radius 0.8 h about the normal axis, whose height inside
+/// the ball (+-0.6 h, about 5 noise amplitudes) holds the noise whole. Medians over up to 1000 points spread evenly in the
+/// tree's spatial order (deterministic). `tree` is built over cloud.positions; normals are not needed.
+/// Parallel (oneTBB). Throws UsageError for bad parameters or fewer points than the jet needs.
+CurvatureScale choose_curvature_scale(const PointCloud& cloud, const CurvatureParams& params, const KdTree& tree);
 
 /// Estimates curvature by fitting a jet (a polynomial height function of degree 2 or 3, the
 /// Monge form) to each point's neighbourhood in a local frame, after Cazals and Pouget,
@@ -102,6 +152,8 @@ struct CurvatureResult {
 /// i.e. the curvature the fit cannot tell from noise, with a floor at a radius of curvature of
 /// 10^4 neighbourhood radii for noise-free data. So K counts as zero when the smaller principal
 /// curvature is below z in magnitude.
+///
+/// With neighborhood Knn and k = 0 the neighbourhood size comes from choose_curvature_scale.
 ///
 /// Requires oriented normals (`cloud.normals`, N×3): they give the sign. Reuses `tree` if given
 /// (built over `cloud.positions`). Parallel (oneTBB) in the tree's spatial order; no per-point

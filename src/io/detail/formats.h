@@ -42,7 +42,8 @@ RawData read_stl(const std::filesystem::path& path, const ReadOptions& options);
 void write_ply(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
                const FieldSet& face_fields, const WriteOptions& options);
 void write_xyz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
-void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
+// `notes` gets what the user should know about a choice the writer made (PCD: double positions).
+void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
 void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 void write_off(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_obj(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
