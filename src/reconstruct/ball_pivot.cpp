@@ -24,6 +24,7 @@
 
 #include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
+#include "reconstruct/detail/hole_filling.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 
@@ -535,8 +536,16 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   // Small holes (where the ball could not rest on a hole's corners, typically at a sharp edge):
   // the hole filler every reconstruction shares.
   result.stats.candidate_triangles = result.mesh.triangles.size();
-  const HoleFillStats filled = fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
+  // fill_holes() less its own topology passes: one before (which is the result when nothing
+  // changes) and one after.
+  const HoleFillParams fill_params{params.max_hole_perimeter_in_spacings};
+  fill_params.validate();
   result.topology = analyze_topology(result.mesh);
+  HoleFillStats filled;
+  if (!result.topology.boundary_loops.empty() && fill_params.max_perimeter_in_spacings > 0.0) {
+    filled = detail::fill_mesh_holes(result.mesh, fill_params);
+    if (filled.triangles_added > 0 || filled.triangles_removed > 0) result.topology = analyze_topology(result.mesh);
+  }
   result.unused_points = result.topology.isolated_vertices;
   ReconstructionStats& stats = result.stats;
   stats.input_points = n;

@@ -441,48 +441,38 @@ void HoleFillParams::validate() const {
                                  max_perimeter_in_spacings));
 }
 
-HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
-  params.validate();
-  mesh.validate();
+namespace detail {
+
+HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params) {
   HoleFillStats stats;
   const std::size_t n = mesh.vertices.size();
-  stats.holes_before = analyze_topology(mesh).boundary_loops.size();
-  stats.holes_after = stats.holes_before;
-  if (stats.holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) return stats;
+  if (!(params.max_perimeter_in_spacings > 0.0) || mesh.triangles.empty()) return stats;
   // Local origin: georeferenced coordinates keep their precision in the cross products.
   const Vector3d origin = bounding_box(mesh.vertices).center();
   std::vector<Vector3d> p(n);
   for (std::size_t v = 0; v < n; ++v) p[v] = mesh.vertices[v] - origin;
   // Degenerate triangles (a repeated index) stay as they are, outside the filler.
-  std::vector<Triangle> kept_aside, proper;
-  proper.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles)
-    (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ? kept_aside : proper).push_back(t);
+  std::vector<Triangle> kept_aside;
   // Vertices on an edge with more than two triangles, or traversed twice the same way, are
-  // blocked: no loop through them is filled.
+  // blocked: no loop through them is filled. Three triangles on one edge traverse it twice the
+  // same way, so a directed edge already in the map when its triangle is added finds both.
   std::vector<std::uint8_t> blocked(n, 0);
-  {
-    std::vector<std::uint64_t> directed;
-    directed.reserve(3 * proper.size());
-    for (const Triangle& t : proper)
-      for (int c = 0; c < 3; ++c) directed.push_back((std::uint64_t(std::uint32_t(t[c])) << 32) | std::uint32_t(t[(c + 1) % 3]));
-    std::sort(directed.begin(), directed.end());
-    std::vector<std::uint64_t> undirected(directed.size());
-    for (std::size_t i = 0; i < directed.size(); ++i) {
-      const std::uint32_t a = std::uint32_t(directed[i] >> 32), b = std::uint32_t(directed[i]);
-      undirected[i] = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-      if (i > 0 && directed[i] == directed[i - 1]) blocked[a] = blocked[b] = 1;
-    }
-    std::sort(undirected.begin(), undirected.end());
-    for (std::size_t i = 2; i < undirected.size(); ++i)
-      if (undirected[i] == undirected[i - 2]) blocked[undirected[i] >> 32] = blocked[std::uint32_t(undirected[i])] = 1;
-  }
   // Corner normals and local spacings (mean length of the edges at a vertex).
   std::vector<Vector3d> normals(n, Vector3d::Zero()), face_sum(n, Vector3d::Zero());
   std::vector<double> spacing(n, 0.0);
   std::vector<std::uint32_t> degree(n, 0);
-  detail::Selection sel(proper.size() + 64);
-  for (const Triangle& t : proper) {
+  detail::Selection sel(mesh.triangles.size() + 64);
+  sel.triangles.reserve(mesh.triangles.size() + 64);
+  sel.normals.reserve(mesh.triangles.size() + 64);
+  for (const Triangle& t : mesh.triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      kept_aside.push_back(t);
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) {
+      const auto a = std::uint32_t(t[c]), b = std::uint32_t(t[(c + 1) % 3]);
+      if (sel.edges.contains(a, b)) blocked[a] = blocked[b] = 1;
+    }
     const Vector3d face = (p[std::size_t(t[1])] - p[std::size_t(t[0])]).cross(p[std::size_t(t[2])] - p[std::size_t(t[0])]);
     const double len = face.norm();
     sel.add(std::uint32_t(t[0]), std::uint32_t(t[1]), std::uint32_t(t[2]), len > 0.0 ? Vector3d(face / len) : Vector3d::Zero());
@@ -516,7 +506,24 @@ HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
     mesh.face_fields = FieldSet{};  // a new triangle has no value
     stats.face_fields_dropped = true;
   }
-  stats.holes_after = analyze_topology(mesh).boundary_loops.size();
+  return stats;
+}
+
+}  // namespace detail
+
+HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
+  params.validate();
+  mesh.validate();
+  const std::size_t holes_before = analyze_topology(mesh).boundary_loops.size();
+  if (holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) {
+    HoleFillStats stats;
+    stats.holes_before = stats.holes_after = holes_before;
+    return stats;
+  }
+  HoleFillStats stats = detail::fill_mesh_holes(mesh, params);
+  stats.holes_before = holes_before;
+  const bool changed = stats.triangles_added > 0 || stats.triangles_removed > 0;
+  stats.holes_after = changed ? analyze_topology(mesh).boundary_loops.size() : holes_before;
   return stats;
 }
 

@@ -10,6 +10,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/triangle_mesh.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 #include "reconstruct/detail/triangulate_half_edges.h"
 
 namespace pointsurf::detail {
@@ -83,5 +84,11 @@ struct HoleClosing {
 void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                  const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
                  const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round = {});
+
+/// fill_holes() (reconstruct/fill_holes.h) without its two topology passes: holes_before and
+/// holes_after stay 0, and it runs even where the mesh has no boundary loop (fill_holes() then
+/// returns at once, leaving pinched vertices of a closed mesh alone). For callers that analyse
+/// the mesh themselves before and after.
+HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params);
 
 }  // namespace pointsurf::detail
