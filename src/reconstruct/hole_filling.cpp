@@ -176,7 +176,8 @@ bool piece_at_most(const Selection& sel, std::uint32_t t, std::size_t triangle_t
 std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                              const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
                              LoopFiller& filler, const std::vector<HoleEdge>& hole, const std::vector<std::uint8_t>& repaired,
-                             const std::vector<std::uint8_t>& blocked, std::vector<std::uint8_t>& reopen, std::size_t& added) {
+                             const std::vector<std::uint8_t>& blocked, std::vector<std::uint8_t>& reopen, std::size_t& added,
+                             const LoopLimitFactor& limit_factor) {
   const std::size_t n = positions.size();
   // The rim of a tiny isolated piece is not a hole: its size is counted among the triangles
   // there were before this pass.
@@ -254,14 +255,22 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
           grown = grown || repaired[cycle[i]];
         }
         // A hole that the repair grew from a small one keeps being closed up to twice the limit.
-        const double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        // A loop within its limit only by limit_factor is left as it is when it has no valid
+        // filling, unless the factor says otherwise.
+        bool leave_if_unfilled = false;
+        if (perimeter > limit * spacing_sum / double(cycle.size()) && limit_factor) {
+          const LoopLimit given = limit_factor(cycle);
+          limit *= given.factor;
+          leave_if_unfilled = !given.open_if_unfilled;
+        }
         if (perimeter > limit * spacing_sum / double(cycle.size())) continue;
         const std::size_t before = sel.triangles.size();
         if (filler.fill(cycle, positions, normals, sel)) ++filled;
         else {
           const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
           const bool tiny_piece = beside < triangle_total && piece_at_most(sel, beside, triangle_total, 2 * cycle.size(), seen);
-          if (!tiny_piece)
+          if (!tiny_piece && !leave_if_unfilled)
             for (std::uint32_t x : cycle) reopen[x] = 1;
         }
         added += sel.triangles.size() - before;
@@ -415,7 +424,8 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
 
 void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                  const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
-                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round) {
+                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round,
+                 const LoopLimitFactor& limit_factor) {
   if (!(max_perimeter_in_spacings > 0.0)) return;
   const std::size_t n = positions.size();
   LoopFiller filler;
@@ -424,7 +434,7 @@ void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vecto
   std::vector<HoleEdge> hole = all_hole_edges(sel);
   for (int round = 0;; ++round) {
     counts.holes_filled += fill_small_holes(positions, normals, local_spacing, max_perimeter_in_spacings, sel, filler, hole, repaired,
-                                            blocked, reopen, counts.fill_triangles);
+                                            blocked, reopen, counts.fill_triangles, limit_factor);
     if (on_round) on_round(round);
     if (round == kRepairRounds) break;
     const std::size_t removed = open_pinches(positions, reopen, repaired, sel, hole);
