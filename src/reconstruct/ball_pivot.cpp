@@ -24,6 +24,7 @@
 
 #include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/exact_copies.h"
+#include "reconstruct/detail/hole_filling.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 
@@ -78,6 +79,9 @@ constexpr double kOppositeNormalsDeg = 120.0;
 // Neighbour lists are precomputed (in parallel) when the first radius is at most this many mean
 // spacings.
 constexpr double kPrecomputeInSpacings = 3.0;
+// Front edges whose neighbourhoods look_ahead() finds at once, and per parallel task.
+constexpr std::size_t kPivotWindow = 16384;
+constexpr std::size_t kAheadChunk = 512;
 
 class BallPivoter {
 public:
@@ -128,8 +132,16 @@ public:
     // where the larger ball can rest on the edge's triangle without holding another point
     // (Bernardini et al. 1999, section 4.3): a larger ball whose starting position already
     // reaches through a nearby sheet would bridge to it.
+    // No triangle is made meanwhile, so the edges are tested in parallel.
+    std::vector<std::uint8_t> fits(edges_.size(), 0);
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<Neighbor>& nbs = buffers.local();
+      for (std::size_t e = r.begin(); e != r.end(); ++e)
+        fits[e] = std::uint8_t(edges_[e].state == EdgeState::Boundary && larger_ball_fits(edges_[e], nbs));
+    });
     for (std::size_t e = 0; e < edges_.size(); ++e)
-      if (edges_[e].state == EdgeState::Boundary && larger_ball_fits(edges_[e])) {
+      if (fits[e]) {
         edges_[e].state = EdgeState::Front;
         front_.push_back(int(e));
       }
@@ -269,10 +281,10 @@ private:
   // the surface around a hole the ball is closing. Farther ones do. A point on another sheet
   // than all three corners (other_sheet) does not count either: a ball wider than the gap
   // between two parallel sheets may reach through one while it rolls on the other.
-  bool ball_empty(const Eigen::Vector3d& center, int a, int b, int c) const {
+  bool ball_empty(const Eigen::Vector3d& center, int a, int b, int c, const std::vector<Neighbor>& neighbors) const {
     const double limit = squared_radius_ * (1.0 - kInsideTolerance);
     const std::optional<Eigen::Vector3d> n = triangle_normal(a, b, c);
-    for (const Neighbor& nb : neighbors_) {
+    for (const Neighbor& nb : neighbors) {
       const int q = int(nb.index);
       if (q == a || q == b || q == c || skip_[q]) continue;
       if ((local_[q] - center).squaredNorm() >= limit) continue;
@@ -284,11 +296,43 @@ private:
   }
 
   // The ball of the current radius rests on the edge's triangle and holds no other point.
-  bool larger_ball_fits(const Edge& edge) {
+  // Reads the state only (several edges are tested at once); `buffer` holds the neighbours.
+  bool larger_ball_fits(const Edge& edge, std::vector<Neighbor>& buffer) const {
     const std::optional<Eigen::Vector3d> center = ball_center(edge.v0, edge.v1, edge.opposite);
     if (!center) return false;
-    tree_.radius(global(*center), radius_, neighbors_);
-    return ball_empty(*center, edge.v0, edge.v1, edge.opposite);
+    tree_.radius(global(*center), radius_, buffer);
+    return ball_empty(*center, edge.v0, edge.v1, edge.opposite, buffer);
+  }
+
+  // Before the front edges front_[front_head_ ..] are pivoted in turn, the points around their
+  // midpoints (which do not depend on the triangles made meanwhile) are looked up in parallel,
+  // a window of kPivotWindow edges at a time: pivot() then takes them from ahead_.
+  void look_ahead() {
+    const std::size_t begin = front_head_, end = std::min(front_.size(), begin + kPivotWindow);
+    ahead_begin_ = begin;
+    ahead_offsets_.assign(end - begin + 1, 0);
+    const std::size_t chunks = (end - begin + kAheadChunk - 1) / kAheadChunk;
+    ahead_chunks_.resize(std::max(ahead_chunks_.size(), chunks));
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      std::vector<Neighbor>& nbs = buffers.local();
+      std::vector<std::uint32_t>& out = ahead_chunks_[c];
+      out.clear();
+      for (std::size_t i = begin + c * kAheadChunk; i < std::min(end, begin + (c + 1) * kAheadChunk); ++i) {
+        const Edge& edge = edges_[std::size_t(front_[i])];
+        const std::size_t before = out.size();
+        if (edge.state == EdgeState::Front) {
+          tree_.radius(global(0.5 * (local_[edge.v0] + local_[edge.v1])), 2.0 * radius_, nbs);
+          for (const Neighbor& nb : nbs) out.push_back(nb.index);
+        }
+        ahead_offsets_[i - begin + 1] = out.size() - before;
+      }
+    });
+    for (std::size_t i = 0; i + begin < end; ++i) ahead_offsets_[i + 1] += ahead_offsets_[i];
+    ahead_index_.resize(ahead_offsets_.back());
+    for (std::size_t c = 0; c < chunks; ++c)
+      std::copy(ahead_chunks_[c].begin(), ahead_chunks_[c].end(), ahead_index_.begin() + long(ahead_offsets_[c * kAheadChunk]));
+    ahead_end_ = end;
   }
 
   // neighbors_ = the points within `reach` of `center`, which lies within reach / 2 of point
@@ -328,7 +372,7 @@ private:
         }
         if (!normals_agree(*n, v, a, b)) continue;
         const std::optional<Eigen::Vector3d> center = ball_center(v, a, b);
-        if (!center || !ball_empty(*center, v, a, b)) continue;
+        if (!center || !ball_empty(*center, v, a, b, neighbors_)) continue;
         add_triangle(v, a, b);
         return true;
       }
@@ -337,7 +381,7 @@ private:
 
   // Pivots the ball resting on the edge's triangle around the edge, away from that triangle,
   // and returns true when it makes a new triangle.
-  bool pivot(const Edge& edge) {
+  bool pivot(const Edge& edge, std::size_t front_position) {
     const int a = edge.v0;
     const int b = edge.v1;
     const int o = edge.opposite;
@@ -355,7 +399,13 @@ private:
     towards_o -= axis * axis.dot(towards_o);
     const double sign = from.cross(-towards_o).dot(axis) >= 0.0 ? 1.0 : -1.0;
 
-    gather(a, mid, 2.0 * radius_);
+    if (front_position >= ahead_begin_ && front_position < ahead_end_) {
+      neighbors_.clear();
+      for (std::size_t k = ahead_offsets_[front_position - ahead_begin_]; k < ahead_offsets_[front_position - ahead_begin_ + 1]; ++k)
+        neighbors_.emplace_back(ahead_index_[k], 0.0);
+    } else {
+      gather(a, mid, 2.0 * radius_);
+    }
     candidates_.clear();
     for (const Neighbor& nb : neighbors_) {
       const int p = int(nb.index);
@@ -374,7 +424,7 @@ private:
     std::sort(candidates_.begin(), candidates_.end(),
               [](const Candidate& x, const Candidate& y) { return x.angle < y.angle || (x.angle == y.angle && x.point < y.point); });
     for (const Candidate& c : candidates_) {
-      if (!ball_empty(c.center, a, b, c.point)) continue;
+      if (!ball_empty(c.center, a, b, c.point, neighbors_)) continue;
       // The first point the ball hits decides: if it cannot take a triangle the edge is a
       // boundary (trying farther points would let the ball pass through this one).
       const int p = c.point;
@@ -390,10 +440,13 @@ private:
   void advance_front() {
     std::size_t processed = 0;
     while (front_head_ < front_.size()) {
+      // Without the precomputed lists (passes after the first) the tree answers for each pivot.
+      if (!covered_by_near_lists() && front_head_ >= ahead_end_) look_ahead();
+      const std::size_t position = front_head_;
       const int e = front_[front_head_++];
       if (edges_[e].state != EdgeState::Front) continue;
       const Edge edge = edges_[e];
-      if (!pivot(edge)) {
+      if (!pivot(edge, position)) {
         // pivot() made no triangle, so edges_ did not move and `e` is still this edge.
         edges_[e].state = EdgeState::Boundary;
       }
@@ -401,7 +454,11 @@ private:
     }
     front_.clear();
     front_head_ = 0;
+    ahead_begin_ = ahead_end_ = 0;
   }
+
+  // gather() for a pivot at the current radius takes the precomputed neighbour lists.
+  bool covered_by_near_lists() const { return !near_offsets_.empty() && 3.0 * radius_ <= near_radius_ * (1.0 + 1e-12); }
 
   const KdTree& tree_;
   std::vector<std::size_t> near_offsets_;   // precompute_neighbours(): CSR rows per point
@@ -426,6 +483,11 @@ private:
   std::size_t front_head_ = 0;
   std::vector<Triangle> triangles_;
   std::vector<Neighbor> neighbors_;
+  // look_ahead(): the points within 2 radius_ of the midpoints of front_[ahead_begin_, ahead_end_).
+  std::size_t ahead_begin_ = 0, ahead_end_ = 0;
+  std::vector<std::size_t> ahead_offsets_;
+  std::vector<std::uint32_t> ahead_index_;
+  std::vector<std::vector<std::uint32_t>> ahead_chunks_;
   std::vector<Candidate> candidates_;
   std::vector<int> seed_candidates_;
 };
@@ -535,8 +597,16 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   // Small holes (where the ball could not rest on a hole's corners, typically at a sharp edge):
   // the hole filler every reconstruction shares.
   result.stats.candidate_triangles = result.mesh.triangles.size();
-  const HoleFillStats filled = fill_holes(result.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
+  // fill_holes() less its own topology passes: one before (which is the result when nothing
+  // changes) and one after.
+  const HoleFillParams fill_params{params.max_hole_perimeter_in_spacings};
+  fill_params.validate();
   result.topology = analyze_topology(result.mesh);
+  HoleFillStats filled;
+  if (!result.topology.boundary_loops.empty() && fill_params.max_perimeter_in_spacings > 0.0) {
+    filled = detail::fill_mesh_holes(result.mesh, fill_params);
+    if (filled.triangles_added > 0 || filled.triangles_removed > 0) result.topology = analyze_topology(result.mesh);
+  }
   result.unused_points = result.topology.isolated_vertices;
   ReconstructionStats& stats = result.stats;
   stats.input_points = n;

@@ -176,7 +176,8 @@ bool piece_at_most(const Selection& sel, std::uint32_t t, std::size_t triangle_t
 std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                              const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
                              LoopFiller& filler, const std::vector<HoleEdge>& hole, const std::vector<std::uint8_t>& repaired,
-                             const std::vector<std::uint8_t>& blocked, std::vector<std::uint8_t>& reopen, std::size_t& added) {
+                             const std::vector<std::uint8_t>& blocked, std::vector<std::uint8_t>& reopen, std::size_t& added,
+                             const LoopLimitFactor& limit_factor) {
   const std::size_t n = positions.size();
   // The rim of a tiny isolated piece is not a hole: its size is counted among the triangles
   // there were before this pass.
@@ -254,14 +255,22 @@ std::size_t fill_small_holes(const std::vector<Vector3d>& positions, const std::
           grown = grown || repaired[cycle[i]];
         }
         // A hole that the repair grew from a small one keeps being closed up to twice the limit.
-        const double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        double limit = (grown ? kRepairedPerimeterFactor : 1.0) * max_perimeter_in_spacings;
+        // A loop within its limit only by limit_factor is left as it is when it has no valid
+        // filling, unless the factor says otherwise.
+        bool leave_if_unfilled = false;
+        if (perimeter > limit * spacing_sum / double(cycle.size()) && limit_factor) {
+          const LoopLimit given = limit_factor(cycle);
+          limit *= given.factor;
+          leave_if_unfilled = !given.open_if_unfilled;
+        }
         if (perimeter > limit * spacing_sum / double(cycle.size())) continue;
         const std::size_t before = sel.triangles.size();
         if (filler.fill(cycle, positions, normals, sel)) ++filled;
         else {
           const std::uint32_t beside = sel.edges.find(cycle[1], cycle[0]);
           const bool tiny_piece = beside < triangle_total && piece_at_most(sel, beside, triangle_total, 2 * cycle.size(), seen);
-          if (!tiny_piece)
+          if (!tiny_piece && !leave_if_unfilled)
             for (std::uint32_t x : cycle) reopen[x] = 1;
         }
         added += sel.triangles.size() - before;
@@ -415,7 +424,8 @@ std::size_t open_pinches(const std::vector<Vector3d>& positions, std::vector<std
 
 void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                  const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
-                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round) {
+                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round,
+                 const LoopLimitFactor& limit_factor) {
   if (!(max_perimeter_in_spacings > 0.0)) return;
   const std::size_t n = positions.size();
   LoopFiller filler;
@@ -424,7 +434,7 @@ void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vecto
   std::vector<HoleEdge> hole = all_hole_edges(sel);
   for (int round = 0;; ++round) {
     counts.holes_filled += fill_small_holes(positions, normals, local_spacing, max_perimeter_in_spacings, sel, filler, hole, repaired,
-                                            blocked, reopen, counts.fill_triangles);
+                                            blocked, reopen, counts.fill_triangles, limit_factor);
     if (on_round) on_round(round);
     if (round == kRepairRounds) break;
     const std::size_t removed = open_pinches(positions, reopen, repaired, sel, hole);
@@ -441,48 +451,38 @@ void HoleFillParams::validate() const {
                                  max_perimeter_in_spacings));
 }
 
-HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
-  params.validate();
-  mesh.validate();
+namespace detail {
+
+HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params) {
   HoleFillStats stats;
   const std::size_t n = mesh.vertices.size();
-  stats.holes_before = analyze_topology(mesh).boundary_loops.size();
-  stats.holes_after = stats.holes_before;
-  if (stats.holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) return stats;
+  if (!(params.max_perimeter_in_spacings > 0.0) || mesh.triangles.empty()) return stats;
   // Local origin: georeferenced coordinates keep their precision in the cross products.
   const Vector3d origin = bounding_box(mesh.vertices).center();
   std::vector<Vector3d> p(n);
   for (std::size_t v = 0; v < n; ++v) p[v] = mesh.vertices[v] - origin;
   // Degenerate triangles (a repeated index) stay as they are, outside the filler.
-  std::vector<Triangle> kept_aside, proper;
-  proper.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles)
-    (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ? kept_aside : proper).push_back(t);
+  std::vector<Triangle> kept_aside;
   // Vertices on an edge with more than two triangles, or traversed twice the same way, are
-  // blocked: no loop through them is filled.
+  // blocked: no loop through them is filled. Three triangles on one edge traverse it twice the
+  // same way, so a directed edge already in the map when its triangle is added finds both.
   std::vector<std::uint8_t> blocked(n, 0);
-  {
-    std::vector<std::uint64_t> directed;
-    directed.reserve(3 * proper.size());
-    for (const Triangle& t : proper)
-      for (int c = 0; c < 3; ++c) directed.push_back((std::uint64_t(std::uint32_t(t[c])) << 32) | std::uint32_t(t[(c + 1) % 3]));
-    std::sort(directed.begin(), directed.end());
-    std::vector<std::uint64_t> undirected(directed.size());
-    for (std::size_t i = 0; i < directed.size(); ++i) {
-      const std::uint32_t a = std::uint32_t(directed[i] >> 32), b = std::uint32_t(directed[i]);
-      undirected[i] = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-      if (i > 0 && directed[i] == directed[i - 1]) blocked[a] = blocked[b] = 1;
-    }
-    std::sort(undirected.begin(), undirected.end());
-    for (std::size_t i = 2; i < undirected.size(); ++i)
-      if (undirected[i] == undirected[i - 2]) blocked[undirected[i] >> 32] = blocked[std::uint32_t(undirected[i])] = 1;
-  }
   // Corner normals and local spacings (mean length of the edges at a vertex).
   std::vector<Vector3d> normals(n, Vector3d::Zero()), face_sum(n, Vector3d::Zero());
   std::vector<double> spacing(n, 0.0);
   std::vector<std::uint32_t> degree(n, 0);
-  detail::Selection sel(proper.size() + 64);
-  for (const Triangle& t : proper) {
+  detail::Selection sel(mesh.triangles.size() + 64);
+  sel.triangles.reserve(mesh.triangles.size() + 64);
+  sel.normals.reserve(mesh.triangles.size() + 64);
+  for (const Triangle& t : mesh.triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      kept_aside.push_back(t);
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) {
+      const auto a = std::uint32_t(t[c]), b = std::uint32_t(t[(c + 1) % 3]);
+      if (sel.edges.contains(a, b)) blocked[a] = blocked[b] = 1;
+    }
     const Vector3d face = (p[std::size_t(t[1])] - p[std::size_t(t[0])]).cross(p[std::size_t(t[2])] - p[std::size_t(t[0])]);
     const double len = face.norm();
     sel.add(std::uint32_t(t[0]), std::uint32_t(t[1]), std::uint32_t(t[2]), len > 0.0 ? Vector3d(face / len) : Vector3d::Zero());
@@ -516,7 +516,24 @@ HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
     mesh.face_fields = FieldSet{};  // a new triangle has no value
     stats.face_fields_dropped = true;
   }
-  stats.holes_after = analyze_topology(mesh).boundary_loops.size();
+  return stats;
+}
+
+}  // namespace detail
+
+HoleFillStats fill_holes(TriangleMesh& mesh, const HoleFillParams& params) {
+  params.validate();
+  mesh.validate();
+  const std::size_t holes_before = analyze_topology(mesh).boundary_loops.size();
+  if (holes_before == 0 || !(params.max_perimeter_in_spacings > 0.0)) {
+    HoleFillStats stats;
+    stats.holes_before = stats.holes_after = holes_before;
+    return stats;
+  }
+  HoleFillStats stats = detail::fill_mesh_holes(mesh, params);
+  stats.holes_before = holes_before;
+  const bool changed = stats.triangles_added > 0 || stats.triangles_removed > 0;
+  stats.holes_after = changed ? analyze_topology(mesh).boundary_loops.size() : holes_before;
   return stats;
 }
 

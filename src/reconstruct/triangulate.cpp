@@ -48,6 +48,13 @@ constexpr std::size_t kInsertNeighbours = 8;
 // Neighbours whose normal agrees with the centre's may lie this many local spacings off its
 // tangent plane (plus what the turn of the normals explains).
 constexpr double kFlatOffsetInSpacings = 0.5;
+// A hole that holds a usable point no triangle uses is a gap of the reconstruction, not of the
+// data (where the sampling density changes abruptly, as in CGAL's radar.xyz): it is closed up to
+// this many times the perimeter limit, and the point is then inserted into the filling.
+constexpr double kHoldingPointFactor = 15.0;
+// A loop along which the local spacing changes abruptly (its largest is this many times its
+// mean) has its limit set by the largest; random uniform samples stay well below.
+constexpr double kAbruptDensityRatio = 3.0;
 
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
@@ -363,6 +370,50 @@ std::size_t close_front(const PointCloud& cloud, const std::vector<Vector3d>& no
     }
   }
   return added;
+}
+
+// Whether the hole loop (hole on the left of loop[i] -> loop[i+1], seen from the normals' side)
+// holds a usable point that no triangle uses: projected on the plane of the corners' mean
+// normal, the loop must run counter-clockwise (a hole, not the outer border of an open
+// surface, around which it runs the other way) and hold the point.
+bool hole_holds_unused_point(const std::vector<std::uint32_t>& loop, const std::vector<Vector3d>& positions,
+                             const std::vector<Vector3d>& normals, const std::vector<std::uint8_t>& unused, const KdTree& tree,
+                             std::vector<Vector2d>& polygon, std::vector<Neighbor>& neighbors) {
+  const std::size_t m = loop.size();
+  Vector3d normal = Vector3d::Zero(), centre = Vector3d::Zero();
+  for (std::uint32_t v : loop) {
+    normal += normals[v];
+    centre += positions[v];
+  }
+  centre /= double(m);
+  if (!(normal.norm() > 0.0)) return false;
+  normal.normalize();
+  const Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+  polygon.clear();
+  double reach2 = 0.0, twice_area = 0.0;
+  for (std::uint32_t v : loop) {
+    const Vector3d d = positions[v] - centre;
+    polygon.emplace_back(d.dot(e1), d.dot(e2));
+    reach2 = std::max(reach2, d.squaredNorm());
+  }
+  for (std::size_t i = 0; i < m; ++i) {
+    const Vector2d &a = polygon[i], &b = polygon[(i + 1) % m];
+    twice_area += a.x() * b.y() - a.y() * b.x();
+  }
+  if (!(twice_area > 0.0)) return false;
+  tree.radius(centre, std::sqrt(reach2), neighbors);
+  for (const Neighbor& nb : neighbors) {
+    if (!unused[nb.index]) continue;
+    const Vector3d d = positions[nb.index] - centre;
+    const double x = d.dot(e1), y = d.dot(e2);
+    bool inside = false;
+    for (std::size_t i = 0, j = m - 1; i < m; j = i++) {
+      const Vector2d &a = polygon[i], &b = polygon[j];
+      if ((a.y() > y) != (b.y() > y) && x < (b.x() - a.x()) * (y - a.y()) / (b.y() - a.y()) + a.x()) inside = !inside;
+    }
+    if (inside) return true;
+  }
+  return false;
 }
 
 // Inserts the usable points that no triangle uses (their umbrella triangles lost to
@@ -725,9 +776,29 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   result.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
   {
     // Fill, then open the pinches that remain (vertices where fans touch) and fill again.
+    // Points left out of the mesh so far: a hole holding one gets a larger perimeter limit.
+    std::vector<std::uint8_t> unused(usable);
+    for (const Triangle& t : sel.triangles)
+      for (int c = 0; c < 3; ++c) unused[std::size_t(t[c])] = 0;
+    std::vector<Vector2d> polygon;
+    std::vector<Neighbor> neighbors;
+    // Where the density changes abruptly along a loop, its limit follows the sparsest corner's
+    // spacing, not the mean.
+    const detail::LoopLimitFactor holding_factor = [&](const std::vector<std::uint32_t>& loop) {
+      double sum = 0.0, largest = 0.0;
+      for (std::uint32_t v : loop) {
+        sum += local_spacing[v];
+        largest = std::max(largest, local_spacing[v]);
+      }
+      double sparsest = largest * double(loop.size()) / sum;
+      if (sparsest < kAbruptDensityRatio) sparsest = 1.0;
+      if (hole_holds_unused_point(loop, cloud.positions, normals, unused, *tree, polygon, neighbors))
+        return detail::LoopLimit{std::max(sparsest, kHoldingPointFactor), true};
+      return detail::LoopLimit{sparsest, false};
+    };
     detail::HoleClosing closing;
     detail::close_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel, {}, closing,
-                        [&](int round) { reporter.report(0.9 + 0.05 * double(round + 1) / 4.0); });
+                        [&](int round) { reporter.report(0.9 + 0.05 * double(round + 1) / 4.0); }, holding_factor);
     result.holes_filled = closing.holes_filled;
     result.fill_triangles = closing.fill_triangles;
     result.pinch_triangles_removed = closing.pinch_triangles_removed;

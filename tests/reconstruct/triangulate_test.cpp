@@ -175,6 +175,23 @@ TEST(RegionGrowing, CutAwayCapIsReportedAsOneHole) {
   for (int v : t.boundary_loops[0].vertices) EXPECT_GT(r.mesh.vertices[std::size_t(v)].z(), 0.6);
 }
 
+// A sphere sampled densely above the equator and 400 times sparser below (the abrupt change of
+// density of CGAL's radar.xyz): the holes left along the change hold samples no triangle uses,
+// so they are closed with the larger limit (without it, 3 loops stay open).
+TEST(RegionGrowing, HolesAlongAnAbruptDensityChangeAreClosed) {
+  const PointCloud dense = test::sample_sphere(20000, 1.0, Vector3d::Zero(), 3);
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < dense.size(); ++i)
+    if (dense.positions[i].z() > 0.0 || i % 400 == 0) kept.push_back(i);
+  const TriangulateResult r = reconstruct_region_growing(dense.select(kept));
+  const MeshTopology& t = r.topology;
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.non_manifold_vertices, 0u);
+  EXPECT_EQ(t.inconsistent_edges, 0u);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_EQ(t.boundary_loops.size(), 0u);
+}
+
 // Two parallel sheets three mean spacings apart, facing the same way (a floor under a table)
 // and facing opposite ways (the two sides of a thin plate): no triangle joins them.
 TEST(RegionGrowing, NoTriangleBridgesParallelPlanes) {

@@ -10,6 +10,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/triangle_mesh.h"
+#include "pointsurf/reconstruct/fill_holes.h"
 #include "reconstruct/detail/triangulate_half_edges.h"
 
 namespace pointsurf::detail {
@@ -80,8 +81,23 @@ struct HoleClosing {
 /// valid filling, and closes the holes this opens (up to 3x the limit). `normals`: one unit
 /// normal per vertex (the side the triangles face). Vertices flagged in `blocked` (may be empty)
 /// are never part of a filled loop. `on_round(r)` is called after each round (r = 0..3).
+/// `limit_factor(loop)` (may be empty), asked only for a loop over its limit, returns a factor
+/// for that loop's limit (1: none) and whether the loop, when it then has no valid filling, is
+/// opened like one within the limit (else it is left as it is).
+struct LoopLimit {
+  double factor = 1.0;
+  bool open_if_unfilled = false;
+};
+using LoopLimitFactor = std::function<LoopLimit(const std::vector<std::uint32_t>& loop)>;
 void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vector3d>& normals,
                  const std::vector<double>& local_spacing, double max_perimeter_in_spacings, Selection& sel,
-                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round = {});
+                 const std::vector<std::uint8_t>& blocked, HoleClosing& counts, const std::function<void(int)>& on_round = {},
+                 const LoopLimitFactor& limit_factor = {});
+
+/// fill_holes() (reconstruct/fill_holes.h) without its two topology passes: holes_before and
+/// holes_after stay 0, and it runs even where the mesh has no boundary loop (fill_holes() then
+/// returns at once, leaving pinched vertices of a closed mesh alone). For callers that analyse
+/// the mesh themselves before and after.
+HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params);
 
 }  // namespace pointsurf::detail

@@ -2,7 +2,8 @@
 #pragma once
 // Directed edges (half-edges) of a growing triangle mesh in one open-addressing hash table:
 // (from, to) -> triangle. One flat array instead of per-vertex lists, so that a million-point
-// selection makes no per-vertex heap allocation.
+// selection makes no per-vertex heap allocation; key and triangle share a slot, so that a
+// look-up that finds its edge touches one cache line, not two.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -26,15 +27,15 @@ public:
   std::uint32_t find(std::uint32_t from, std::uint32_t to) const noexcept {
     const std::uint64_t key = make_key(from, to);
     for (std::size_t slot = hash(key) & mask_;; slot = (slot + 1) & mask_) {
-      if (keys_[slot] == key) return values_[slot];
-      if (keys_[slot] == kEmpty) return kNone;
+      if (slots_[slot].key == key) return slots_[slot].value;
+      if (slots_[slot].key == kEmpty) return kNone;
     }
   }
   bool contains(std::uint32_t from, std::uint32_t to) const noexcept { return find(from, to) != kNone; }
 
   /// Records from -> to as an edge of `triangle` (the caller checked it is not there yet).
   void insert(std::uint32_t from, std::uint32_t to, std::uint32_t triangle) {
-    if (2 * (count_ + 1) > keys_.size()) grow();
+    if (2 * (count_ + 1) > slots_.size()) grow();
     place(make_key(from, to), triangle);
     ++count_;
   }
@@ -45,32 +46,34 @@ public:
     const std::uint64_t key = make_key(from, to);
     std::size_t hole = hash(key) & mask_;
     for (;; hole = (hole + 1) & mask_) {
-      if (keys_[hole] == key && values_[hole] == triangle) break;
-      if (keys_[hole] == kEmpty) return;
+      if (slots_[hole].key == key && slots_[hole].value == triangle) break;
+      if (slots_[hole].key == kEmpty) return;
     }
-    for (std::size_t j = (hole + 1) & mask_; keys_[j] != kEmpty; j = (j + 1) & mask_) {
+    for (std::size_t j = (hole + 1) & mask_; slots_[j].key != kEmpty; j = (j + 1) & mask_) {
       // The entry at j may fill the hole unless its home slot lies cyclically in (hole, j].
-      const std::size_t home = hash(keys_[j]) & mask_;
+      const std::size_t home = hash(slots_[j].key) & mask_;
       if (((j - home) & mask_) >= ((j - hole) & mask_)) {
-        keys_[hole] = keys_[j];
-        values_[hole] = values_[j];
+        slots_[hole] = slots_[j];
         hole = j;
       }
     }
-    keys_[hole] = kEmpty;
-    values_[hole] = kNone;
+    slots_[hole] = Slot{};
     --count_;
   }
 
   /// Replaces each stored triangle t by new_id[t] (after the triangles were renumbered): one
   /// sequential pass over the table instead of inserting every edge again.
   void renumber(const std::vector<std::uint32_t>& new_id) noexcept {
-    for (std::size_t slot = 0; slot < keys_.size(); ++slot)
-      if (keys_[slot] != kEmpty) values_[slot] = new_id[values_[slot]];
+    for (Slot& slot : slots_)
+      if (slot.key != kEmpty) slot.value = new_id[slot.value];
   }
 
 private:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  struct Slot {
+    std::uint64_t key = kEmpty;
+    std::uint32_t value = kNone;
+  };
   static std::uint64_t make_key(std::uint32_t from, std::uint32_t to) noexcept {
     return (std::uint64_t{from} << 32) | std::uint64_t{to};
   }
@@ -93,24 +96,20 @@ private:
   }
   void place(std::uint64_t key, std::uint32_t value) noexcept {
     std::size_t slot = hash(key) & mask_;
-    while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
-    keys_[slot] = key;
-    values_[slot] = value;
+    while (slots_[slot].key != kEmpty) slot = (slot + 1) & mask_;
+    slots_[slot] = Slot{key, value};
   }
   void rehash(std::size_t capacity) {
-    std::vector<std::uint64_t> old_keys(capacity, kEmpty);
-    std::vector<std::uint32_t> old_values(capacity, kNone);
-    old_keys.swap(keys_);
-    old_values.swap(values_);
+    std::vector<Slot> old(capacity);
+    old.swap(slots_);
     mask_ = capacity - 1;
     if (rank_ != nullptr && !rank_->empty()) spread_ = (std::uint64_t(capacity) << 16) / rank_->size();
-    for (std::size_t i = 0; i < old_keys.size(); ++i)
-      if (old_keys[i] != kEmpty) place(old_keys[i], old_values[i]);
+    for (const Slot& slot : old)
+      if (slot.key != kEmpty) place(slot.key, slot.value);
   }
-  void grow() { rehash(keys_.size() * 2); }
+  void grow() { rehash(slots_.size() * 2); }
 
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> values_;
+  std::vector<Slot> slots_;
   std::size_t mask_ = 0;
   std::size_t count_ = 0;
   const std::vector<std::uint32_t>* rank_ = nullptr;
