@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Stage runner for bench/reconstruct/run_cocone_bench.sh.
-//   cocone_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [cocone|crust [COCONE_ANGLE_DEG]]]
+//   cocone_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [cocone|crust [COCONE_ANGLE_DEG [MAX_HOLE_PERIMETER]]]]
 //   cocone_runner xyz CLOUD.ply OUT.xyz       positions only, for the CGAL peer
 // Reads the cloud (normals dropped when the third argument is "drop_normals", so that the pole
 // vectors orient the mesh), runs reconstruct_cocone (default) or reconstruct_crust with default
-// parameters and writes the mesh.
+// parameters (or the given cocone angle and hole-perimeter limit in spacings; 0: no hole filling)
+// and writes the mesh.
 // Prints one JSON line: seconds (whole reconstruction, file reading excluded), delaunay_seconds,
 // peak_rss_mb (whole process, reading included), the stage counts and the mesh topology.
 #include <sys/resource.h>
@@ -72,6 +73,7 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
   out["rim_peeled"] = stats.rim_peeled;
   out["holes_filled"] = stats.holes_filled;
   out["cocone_angle_deg"] = params.cocone_angle_deg;
+  out["max_hole_perimeter_in_spacings"] = params.max_hole_perimeter_in_spacings;
   out["poles"] = stats.poles;
   out["second_delaunay_cells"] = stats.second_delaunay_cells;
   out["open_pieces"] = stats.open_pieces;
@@ -93,11 +95,12 @@ int run(const std::string& cloud_path, const std::string& out_path, bool drop_no
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "run" && argc >= 4 && argc <= 7) {
+    if (mode == "run" && argc >= 4 && argc <= 8) {
       CoconeParams params;
       const std::string method = argc >= 6 ? argv[5] : "cocone";
       if (method != "cocone" && method != "crust") throw UsageError("method: expected cocone or crust, got " + method);
-      if (argc == 7) params.cocone_angle_deg = std::stod(argv[6]);
+      if (argc >= 7) params.cocone_angle_deg = std::stod(argv[6]);
+      if (argc >= 8) params.max_hole_perimeter_in_spacings = std::stod(argv[7]);
       return run(argv[2], argv[3], argc >= 5 && std::string(argv[4]) == "drop_normals", method, params);
     }
     if (mode == "xyz" && argc == 4) {
@@ -107,7 +110,7 @@ int main(int argc, char** argv) {
       write_point_cloud(argv[3], positions);
       return 0;
     }
-    fmt::print(stderr, "usage: cocone_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [cocone|crust [COCONE_ANGLE_DEG]]] | xyz CLOUD.ply OUT.xyz\n");
+    fmt::print(stderr, "usage: cocone_runner run CLOUD.ply OUT.ply [drop_normals|keep_normals [cocone|crust [COCONE_ANGLE_DEG [MAX_HOLE_PERIMETER]]]] | xyz CLOUD.ply OUT.xyz\n");
     return 1;
   } catch (const Error& e) {
     fmt::print(stderr, "cocone_runner: {}\n", e.what());

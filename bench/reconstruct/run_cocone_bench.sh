@@ -9,8 +9,14 @@
 # excluded) and peak memory (getrusage, whole process), the ratio pointsurf / CGAL (below 1:
 # pointsurf is faster / smaller), and the topology and Chamfer / Hausdorff distances to the true
 # mesh (bench/reconstruct/mesh_metrics_runner), in cloud units and in mean spacings.
-# Needs: BUILD_DIR with cocone_runner, mesh_metrics_runner and pointsurf_bench built; g++ and
-# libcgal-dev (the CGAL peer bench/reconstruct/cgal_aft.cpp is compiled here).
+# Then (HOLES=1, the default) the hole counts of every pointsurf method through the CLI, with hole
+# filling on (defaults) and off (--max-hole-perimeter-in-spacings 0), next to Open3D 0.16's ball
+# pivoting (which fills none; same cloud, normals and radii {1.5, 3, 6} x mean spacing as
+# pointsurf's ball pivoting) and CGAL's advancing front, on the sample with its true normals
+# (cocone and Crust use them to orient only). One run each, no timing. Raw results:
+# bench/results/reconstruct_holes.csv.
+# Needs: BUILD_DIR with pointsurf, cocone_runner, mesh_metrics_runner and pointsurf_bench built;
+# g++ and libcgal-dev (the CGAL peer bench/reconstruct/cgal_aft.cpp is compiled here).
 set -euo pipefail
 WORK_NAME=cocone
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -84,3 +90,55 @@ for n in sorted({r["points"] for r in rows}):
                       find(m, "non_manifold_vertices"), find(m, "components"), ch, hd, spacing])
 PYEOF
 echo "results: $OUT/cocone.md, bench/results/reconstruct_delaunay.csv" >&2
+
+[ "${HOLES:-1}" = 1 ] || exit 0
+HOLE_RESULTS="$WORK/holes.jsonl"
+: > "$HOLE_RESULTS"
+for n in $SIZES; do
+  cloud=$(sample_cloud "$n")
+  xyz="$WORK/${MESH}_${n}.xyz"
+  spacing=$("$PY" -c "import open3d as o3d, numpy as np; c=o3d.io.read_point_cloud('$cloud'); print(np.mean(c.compute_nearest_neighbor_distance()))")
+  radii=$("$PY" -c "s=$spacing; print(','.join(repr(f*s) for f in (1.5, 3.0, 6.0)))")
+  for tool in triangulate ball-pivot cocone crust open3d_ball_pivot cgal_aft; do
+    for fill in on off; do
+      case $tool in open3d_ball_pivot|cgal_aft) [ $fill = off ] || continue ;; esac
+      mesh="$WORK/holes_${tool}_${fill}_${n}.ply"
+      echo "[$n] holes: $tool, filling $fill" >&2
+      case $tool in
+        open3d_ball_pivot) "$PY" "$ROOT/bench/reconstruct/ball_pivot_open3d.py" "$cloud" "$radii" "$mesh" > /dev/null ;;
+        cgal_aft) mesh="${mesh%.ply}.off"; "$AFT" "$xyz" "$mesh" > /dev/null ;;
+        *)
+          extra=(); [ $fill = off ] && extra=(--max-hole-perimeter-in-spacings 0)
+          [ $tool = ball-pivot ] && extra+=(--radii "$radii")
+          "$BUILD_DIR/pointsurf" reconstruct "$cloud" "$mesh" --method "$tool" "${extra[@]}" > /dev/null 2>&1 ;;
+      esac
+      "$METRICS" "$mesh" "$OUT/$MESH.off" | "$PY" -c "import json,sys; d={'metrics': json.loads(sys.stdin.read())}; d.update(tool='$tool', fill='$fill', points=$n, spacing=$spacing); print(json.dumps(d))" >> "$HOLE_RESULTS"
+    done
+  done
+done
+PYTHONPATH="$ROOT/bench/reconstruct" "$PY" - "$HOLE_RESULTS" "$MESH" "$ROOT/bench/results/reconstruct_holes.csv" "$COMMIT" <<'PYEOF' | tee "$OUT/holes_$MESH.md"
+import sys
+from tables import find, load, results_csv
+from tables import fmt as f
+rows = load(sys.argv[1])
+mesh, csv_path, commit = sys.argv[2], sys.argv[3], sys.argv[4]
+print(f"Holes with hole filling on (defaults) and off (--max-hole-perimeter-in-spacings 0) on an area-uniform sample of CGAL's {mesh}.off")
+print("(seed 1, true normals); Open3D's ball pivoting and CGAL's advancing front fill none. Hausdorff to the true mesh in mean spacings.\n")
+print("| points | tool | filling | triangles | holes (boundary loops) | boundary edges | boundary edges per face | largest hole (spacings round) | non-manifold edges | non-manifold vertices | components | Hausdorff |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+out, date, machine = results_csv(csv_path, ["commit", "date", "machine", "mesh", "points", "tool", "filling", "triangles", "holes", "boundary_edges",
+                                            "boundary_edges_per_face", "largest_hole_length", "non_manifold_edges", "non_manifold_vertices",
+                                            "components", "hausdorff", "mean_spacing"])
+for r in rows:
+    m, sp = r["metrics"], r["spacing"]
+    tris, be, loops = find(m, "triangles"), find(m, "boundary_edges"), find(m, "boundary_loops")
+    largest, hd = find(m, "largest_boundary_length"), find(m, "hausdorff")
+    per_face = be / tris if tris else None
+    fill = r["fill"] if r["tool"] not in ("open3d_ball_pivot", "cgal_aft") else "none"
+    print(f"| {r['points']} | {r['tool']} | {fill} | {f(tris)} | {f(loops)} | {f(be)} | {f(per_face, 5)} | "
+          f"{f(largest / sp if largest is not None else None, 0)} | {f(find(m, 'non_manifold_edges'))} | "
+          f"{f(find(m, 'non_manifold_vertices'))} | {f(find(m, 'components'))} | {f(hd / sp if hd is not None else None, 2)} |")
+    out.writerow([commit, date, machine, mesh, r["points"], r["tool"], fill, tris, loops, be, per_face, largest,
+                  find(m, "non_manifold_edges"), find(m, "non_manifold_vertices"), find(m, "components"), hd, sp])
+PYEOF
+echo "results: $OUT/holes_$MESH.md, bench/results/reconstruct_holes.csv" >&2

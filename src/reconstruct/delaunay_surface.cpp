@@ -24,6 +24,7 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 #include "pointsurf/reconstruct/fill_holes.h"
+#include "pointsurf/features/boundary_points.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -373,6 +374,7 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
     return true;
   };
 
+  const double min_turn = 2 * kPi - max_gap;
   for (int k = 0; k < piece_count; ++k) {
     // Seed: at the piece's vertex of largest x, its triangle most facing +x, turned towards +x.
     int top = -1;
@@ -426,17 +428,27 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
         std::sort(rank.begin(), rank.end(), [&](std::size_t x, std::size_t y) {
           return ang[x] < ang[y] || (ang[x] == ang[y] && live[x] < live[y]);
         });
-        for (std::size_t i : rank) {
-          const int s = live[i];
-          if (state[s] == 1) break;
-          if (state[s] == -1) continue;
-          const int d = third_vertex(cx.tris[s], a, b);
-          if (try_accept(s, {b, a, d})) {
-            bfs.push_back(s);
-            break;
+        // A fold (s turns back onto t's outer side within the wedge that makes an edge sharp)
+        // is taken only where nothing else can join, as at the tip of a spike: through a fold the
+        // walk would orient what it reaches inside out, and where that meets the rest a seam of
+        // holes opens that no filling closes (on thin parts, a few spacings across).
+        bool joined = false;
+        for (int pass = 0; pass < 2 && !joined; ++pass)
+          for (std::size_t i : rank) {
+            const int s = live[i];
+            if (state[s] == 1) {
+              joined = true;
+              break;
+            }
+            if (state[s] == -1 || (ang[i] < min_turn) != (pass == 1)) continue;
+            const int d = third_vertex(cx.tris[s], a, b);
+            if (try_accept(s, {b, a, d})) {
+              bfs.push_back(s);
+              joined = true;
+              break;
+            }
+            state[s] = -1;
           }
-          state[s] = -1;
-        }
       }
     }
   }
@@ -446,19 +458,27 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
 
   // 4c. Rim peeling. Where an open surface's rim is concave, the Delaunay triangulation fills it
   // with long thin triangles that pass the cocone test (they lie in the surface); they are peeled
-  // from the boundary inward while their boundary edge is too long. Closed pieces have no boundary
-  // edge and are untouched.
+  // from the boundary inward while their boundary edge is too long and one of its ends is on the
+  // cloud's border (the angular-gap test of features/boundary_points.h). Closed pieces have no
+  // boundary edge and are untouched; the rim of a hole in a closed surface (a thin part the
+  // candidates missed) is not on the border, and peeling it would only widen the hole.
   if (params.max_boundary_edge_in_spacings > 0.0 && !out_tris.empty()) {
     const double max_len2 = std::pow(params.max_boundary_edge_in_spacings * spacing, 2);
     std::vector<int> out_of(nt, -1);  // candidate -> output triangle
     for (std::size_t j = 0; j < out_src.size(); ++j) out_of[out_src[j]] = int(j);
     std::vector<char> keep(out_tris.size(), 1);
-    auto edge_len2 = [&](int e) { return (p[cx.edge_verts[e][0]] - p[cx.edge_verts[e][1]]).squaredNorm(); };
+    std::vector<std::uint8_t> border;  // computed when a long boundary edge is met
+    auto peelable = [&](int e) {
+      const auto [a, b] = cx.edge_verts[e];
+      if (!((p[a] - p[b]).squaredNorm() > max_len2)) return false;
+      if (border.empty()) border = detect_boundary_points(cloud).boundary;
+      return border[std::size_t(a)] != 0 || border[std::size_t(b)] != 0;
+    };
     auto other_on = [&](int e, int t) { return edge_used[e][0] == t ? edge_used[e][1] : edge_used[e][0]; };
     std::vector<int> peel;
     for (std::size_t j = 0; j < out_src.size(); ++j)
       for (int e : cx.tri_edges[out_src[j]])
-        if (edge_used[e][1] < 0 && edge_len2(e) > max_len2) {
+        if (edge_used[e][1] < 0 && peelable(e)) {
           peel.push_back(int(j));
           break;
         }
@@ -472,7 +492,7 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
       for (int e : cx.tri_edges[t]) {
         const int u = other_on(e, t);
         edge_used[e] = {u, -1};
-        if (u >= 0 && keep[out_of[u]] && edge_len2(e) > max_len2) peel.push_back(out_of[u]);
+        if (u >= 0 && keep[out_of[u]] && peelable(e)) peel.push_back(out_of[u]);
       }
     }
     std::size_t w = 0;

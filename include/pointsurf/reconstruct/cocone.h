@@ -37,8 +37,11 @@ struct CoconeStats : DelaunaySurfaceStats {};
 ///     circumcenters, or a ray for hull triangles) meets the cocone of each of its vertices;
 ///  4. manifold extraction (shared with the Crust): normal filtering, repeated pruning of triangles at sharp edges
 ///     (Amenta et al. 1998), then a walk over the outer side of each connected piece that keeps
-///     the mesh edge-manifold and consistently oriented; then triangles with a boundary edge
-///     longer than `max_boundary_edge_in_spacings` are peeled (rim slivers of open surfaces);
+///     the mesh edge-manifold and consistently oriented (a fold, a candidate turning back within
+///     the sharp-edge wedge, joins only where nothing else can: through it the walk would orient
+///     what lies beyond inside out); then triangles with a boundary edge longer than
+///     `max_boundary_edge_in_spacings` that ends on the cloud's border (angular-gap test,
+///     features/boundary_points.h) are peeled (rim slivers of open surfaces);
 ///  5. holes up to `max_hole_perimeter_in_spacings` local spacings (left by undersampling) are
 ///     closed by fill_holes() (reconstruct/fill_holes.h) with triangles of the samples.
 /// Output: `mesh.vertices` are the input points in input order with their colours and fields.

@@ -26,13 +26,17 @@ struct DelaunaySurfaceParams {
   double sharp_edge_angle_deg = 270.0;  // in [180, 360]: an edge is sharp when two consecutive
                                         // triangles around it leave a gap larger than this (all
                                         // its triangles lie in a wedge < 360 - this); triangles at
-                                        // sharp edges are pruned repeatedly; 360 disables
+                                        // sharp edges are pruned repeatedly, and the walk takes
+                                        // a triangle turning back within that wedge from its
+                                        // neighbour (a fold) only where nothing else joins; 360
+                                        // disables both
   DelaunayBoundary boundary = DelaunayBoundary::Auto;  // see DelaunayBoundary
   double max_boundary_edge_in_spacings = 4.0;  // >= 0, mean spacings: after the walk, triangles with a
-                                        // boundary edge longer than this are peeled, repeatedly
+                                        // boundary edge longer than this with an end on the cloud's
+                                        // border (features/boundary_points.h) are peeled, repeatedly
                                         // (the long thin triangles Delaunay puts along the concave
-                                        // parts of an open rim); a mesh without boundary edges is
-                                        // untouched; 0: off
+                                        // parts of an open rim); a mesh without boundary edges, and
+                                        // the rims of holes inside the cloud, are untouched; 0: off
   double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;  // >= 0:
                                         // holes up to this perimeter (local spacings) are closed by
                                         // fill_holes() with triangles of the samples; 0: off
