@@ -40,6 +40,12 @@ double crease_variation(double turn_deg) {
   const double l0 = (0.25 - 16.0 / (9.0 * std::numbers::pi * std::numbers::pi)) * s2;
   return l0 / (l0 + 0.25 * c2 + 0.25);
 }
+
+// A corner is labelled within this many dd of the meeting point of three planes; the planes'
+// normals must span space (|det| of the three unit normals at least kMinCornerDeterminant, 1 for
+// a cube's corner) so that the meeting point is well defined.
+constexpr double kCornerReach = 2.0;
+constexpr double kMinCornerDeterminant = 0.1;
 // Leader clustering keeps at most this many clusters; later neighbours join the nearest one.
 constexpr int kMaxClusters = 8;
 
@@ -131,6 +137,7 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
   std::sort(by_size.begin(), by_size.begin() + count,
             [&](int a, int c) { return b.clusters[a].members > b.clusters[c].members || (b.clusters[a].members == b.clusters[c].members && a < c); });
   std::array<Eigen::Vector3d, kMaxClusters> kept;
+  std::array<double, kMaxClusters> kept_offset{};  // n . c of every kept plane
   std::array<double, kMaxClusters> near_offset{};  // n . c of the planes within dd
   std::array<Eigen::Vector3d, kMaxClusters> near_normal;
   int kept_count = 0, near = 0;
@@ -145,13 +152,28 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
     bool duplicate = false;
     for (int q = 0; q < kept_count; ++q) duplicate = duplicate || std::abs(kept[q].dot(plane.normal)) > cos_dn;
     if (duplicate) continue;
+    kept_offset[kept_count] = plane.normal.dot(plane.centroid);
     kept[kept_count++] = plane.normal;
     // p is the origin of the offsets: its distance to the plane is |n . centroid|.
-    if (const double offset = plane.normal.dot(plane.centroid); std::abs(offset) <= dd) {
+    if (const double offset = kept_offset[kept_count - 1]; std::abs(offset) <= dd) {
       near_offset[near] = offset;
       near_normal[near++] = plane.normal;
     }
   }
+  // Corner: three planes, pairwise turning by at least min_turn, meet within kCornerReach dd
+  // of p. Only about one point lies within dd of a corner's three faces, so the plane test
+  // alone often leaves a corner without a Corner label.
+  for (int a = 0; a < kept_count; ++a)
+    for (int c = a + 1; c < kept_count; ++c)
+      for (int e = c + 1; e < kept_count; ++e) {
+        Eigen::Matrix3d normals_abc;
+        normals_abc << kept[a].transpose(), kept[c].transpose(), kept[e].transpose();
+        if (kept[a].cross(kept[c]).squaredNorm() < min_sin2 || kept[a].cross(kept[e]).squaredNorm() < min_sin2 ||
+            kept[c].cross(kept[e]).squaredNorm() < min_sin2 || std::abs(normals_abc.determinant()) < kMinCornerDeterminant)
+          continue;
+        const Eigen::Vector3d corner = normals_abc.partialPivLu().solve(Eigen::Vector3d(kept_offset[a], kept_offset[c], kept_offset[e]));
+        if (corner.norm() <= kCornerReach * dd) return 3;
+      }
   if (near < 2) return near;
   // A pair of planes makes p an edge point when they turn by at least min_turn and p lies
   // within dd of their intersection line. Near a shallow crease (turn t) a point x from the line

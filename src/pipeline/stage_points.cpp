@@ -416,7 +416,7 @@ StageSpec features_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = {P::integer("k", f.k, "Neighbours per point").at_least(6),
               P::number("variation_threshold", f.variation_threshold,
-                        "Candidate surface-variation threshold; 0: max(0.01, 4 x median variation)")
+                        "Candidate surface-variation threshold; 0: max(half a min_turn_deg crease's, 4 x median variation)")
                   .range(0.0, 1.0 / 3.0, false, true),
               P::number("dn_deg", f.dn_deg, "Normal-angle clustering threshold").unit("degrees").range(0.0, 90.0, true, true),
               P::number("min_turn_deg", f.min_turn_deg, "Smallest crease kept (angle between its two planes); sets the candidate floor").unit("degrees").range(0.0, 90.0, true, true),
