@@ -5,9 +5,11 @@
 //   clean_runner sor IN K STD_RATIO KEPT_OUT          statistical outliers, kept indices to a file
 //   clean_runner radius IN MIN_NEIGHBOURS RADIUS KEPT_OUT
 //   clean_runner smooth bilateral|trilateral IN OUT   denoise (IN needs normals)
-//   clean_runner synth sphere|cube|part N NOISE_IN_SPACINGS OUT [SEED]   noisy shape, PCA normals
-//   clean_runner score sphere|cube|part FILE          RMS distance to the true surface: all,
+//   clean_runner synth SHAPE N NOISE_IN_SPACINGS OUT [SEED]   noisy shape, PCA normals
+//   clean_runner score SHAPE FILE                     RMS distance to the true surface: all,
 //                                                     near creases (<= 2 spacings), flat (> 5)
+// SHAPE: sphere, cube, part, or a mesh file (sampled area-uniformly; creases: edges turning by
+// at least 30 degrees).
 //   clean_runner spacing IN                           mean spacing of a file
 //   clean_runner quality                              outlier precision/recall, RMS, edges
 #include <sys/resource.h>
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -24,7 +27,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "../../tests/support/features_shapes.cpp"
 #include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/triangle_bvh.h"
 #include "pointsurf/clean/remove_duplicates.h"
 #include "pointsurf/clean/remove_outliers.h"
 #include "pointsurf/clean/smooth_points.h"
@@ -160,21 +165,44 @@ void add_noise(PointCloud& cloud, double sigma, std::uint64_t seed) {
   for (Vector3d& p : cloud.positions) p += Vector3d(g(rng), g(rng), g(rng));
 }
 
+// A mesh file as the true surface: exact distances to its triangles, and to its sharp edges
+// (turning by at least 30 degrees, as issue 13's feature truth).
+struct MeshTruth {
+  TriangleMesh mesh;
+  std::unique_ptr<TriangleBvh> bvh;
+  std::unique_ptr<test::SharpEdges> sharp;
+};
+
 struct Truth {
   std::string name;
-  Shape shape;  // unused for the sphere
-  double surface(const Vector3d& p) const { return name == "sphere" ? std::abs(p.norm() - 1.0) : shape.surface_distance(p); }
-  double edge(const Vector3d& p) const { return name == "sphere" ? INFINITY : shape.edge_distance(p); }
+  Shape shape;  // unused for the sphere and meshes
+  std::shared_ptr<const MeshTruth> mesh;
+  double surface(const Vector3d& p) const {
+    if (mesh) return std::sqrt(mesh->bvh->closest(p).squared_distance);
+    return name == "sphere" ? std::abs(p.norm() - 1.0) : shape.surface_distance(p);
+  }
+  double edge(const Vector3d& p) const {
+    if (mesh) return mesh->sharp->distance(p);
+    return name == "sphere" ? INFINITY : shape.edge_distance(p);
+  }
 };
 
 Truth truth(const std::string& name) {
-  if (name == "sphere") return {name, {}};
-  if (name == "cube") return {name, cube_shape()};
-  if (name == "part") return {name, part_shape()};
-  throw UsageError(fmt::format("unknown shape '{}': expected sphere, cube or part", name));
+  if (name == "sphere") return {name, {}, {}};
+  if (name == "cube") return {name, cube_shape(), {}};
+  if (name == "part") return {name, part_shape(), {}};
+  if (name.size() > 4 && name.find('.') != std::string::npos) {
+    auto m = std::make_shared<MeshTruth>();
+    m->mesh = read_mesh(name).mesh;
+    m->bvh = std::make_unique<TriangleBvh>(m->mesh);
+    m->sharp = std::make_unique<test::SharpEdges>(m->mesh, 30.0);
+    return {name, {}, std::move(m)};
+  }
+  throw UsageError(fmt::format("unknown shape '{}': expected sphere, cube, part or a mesh file", name));
 }
 
 PointCloud sample(const Truth& t, std::size_t n, std::uint64_t seed) {
+  if (t.mesh) return test::sample_mesh_features(t.mesh->mesh, n, 30.0, seed).cloud;
   return t.name == "sphere" ? sample_sphere(n, seed) : sample_shape(t.shape, n, seed);
 }
 
@@ -320,8 +348,9 @@ int main(int argc, char** argv) {
       fmt::print("{}\n", nlohmann::json{{"stage", "synth"}, {"shape", a[1]}, {"points", cloud.size()}, {"spacing", spacing}}.dump());
     } else if (a.size() == 3 && a[0] == "score") {
       const PointCloud cloud = read_point_cloud(a[2]).cloud;
-      // Spacing of the clean sampling: the same formula on the file's own points.
-      nlohmann::json j = score(truth(a[1]), cloud.positions, mean_spacing(cloud.positions));
+      // Spacing of a clean sampling of the shape with as many points (the same for every tool).
+      const Truth t = truth(a[1]);
+      nlohmann::json j = score(t, cloud.positions, mean_spacing(sample(t, cloud.size(), 1).positions));
       j["stage"] = "score";
       j["file"] = a[2];
       fmt::print("{}\n", j.dump());

@@ -5,7 +5,8 @@
 Open3D (and PCL) have no sharp-edge screening; a curvature (surface variation) threshold is
 what users of those libraries apply. This is pointsurf's candidate step alone, done by Open3D:
 covariances of the 30 nearest neighbours (estimate_covariances), their eigenvalues (numpy),
-s = l0 / (l0 + l1 + l2) > max(0.01, 4 * median(s)) -- the same threshold pointsurf derives.
+s = l0 / (l0 + l1 + l2) > max(floor, 4 * median(s)) -- the same threshold pointsurf derives, with
+floor half the variation of a point on a 28-degree crease (detect_feature_points' min_turn_deg).
 
 usage: /usr/bin/python3 open3d_features.py CLOUD.ply DISTANCES.txt
 DISTANCES.txt: per point, the distance to the nearest sharp edge in mean spacings (written by
@@ -30,7 +31,10 @@ def main():
     eig = np.linalg.eigvalsh(cov)
     total = eig.sum(axis=1)
     s = np.where(total > 0, eig[:, 0] / np.where(total > 0, total, 1.0), 0.0)
-    threshold = min(max(0.01, 4.0 * float(np.median(s))), 0.3)
+    half = np.radians(28.0) / 2.0
+    l0 = (0.25 - 16.0 / (9.0 * np.pi ** 2)) * np.sin(half) ** 2
+    floor = 0.5 * l0 / (l0 + 0.25 * np.cos(half) ** 2 + 0.25)
+    threshold = min(max(floor, 4.0 * float(np.median(s))), 0.3)
     labels = s > threshold
     seconds = time.perf_counter() - t0
     labelled = int(labels.sum())

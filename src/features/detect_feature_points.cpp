@@ -25,9 +25,27 @@
 namespace pointsurf {
 namespace {
 
-// Floor of the derived candidate threshold and multiple of the median variation (see the header).
-constexpr double kVariationFloor = 0.01;
+// Multiple of the median variation in the derived candidate threshold, and the share of a
+// crease's own variation that the floor keeps (see the header).
 constexpr double kVariationMedianFactor = 4.0;
+constexpr double kCreaseVariationShare = 0.5;
+
+// Surface variation at a point on a straight crease of the given turn, with the neighbours
+// uniform on a disc of radius R folded along a diameter (faces tilted by +-turn/2): across the
+// crease z = |x| sin(turn/2), so l0 = (1/4 - 16/(9 pi^2)) R^2 sin^2, l1 = R^2 cos^2 / 4,
+// l2 = R^2 / 4. Scale-free; 0.0084 at 28 degrees, 0.085 at 90.
+double crease_variation(double turn_deg) {
+  const double half = 0.5 * turn_deg * std::numbers::pi / 180.0;
+  const double s2 = std::sin(half) * std::sin(half), c2 = 1.0 - s2;
+  const double l0 = (0.25 - 16.0 / (9.0 * std::numbers::pi * std::numbers::pi)) * s2;
+  return l0 / (l0 + 0.25 * c2 + 0.25);
+}
+
+// A corner is labelled within this many dd of the meeting point of three planes; the planes'
+// normals must span space (|det| of the three unit normals at least kMinCornerDeterminant, 1 for
+// a cube's corner) so that the meeting point is well defined.
+constexpr double kCornerReach = 2.0;
+constexpr double kMinCornerDeterminant = 0.1;
 // Leader clustering keeps at most this many clusters; later neighbours join the nearest one.
 constexpr int kMaxClusters = 8;
 
@@ -85,7 +103,8 @@ void add_to(Cluster& cluster, const Eigen::Vector3d& n) {
 
 // Number of distinct neighbour planes within `dd` of p (the screening of one candidate).
 int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const std::uint32_t> neighbors,
-                const std::vector<Eigen::Vector3d>& normals, double cos_dn, double dd, int min_points, ScreenBuffers& b) {
+                const std::vector<Eigen::Vector3d>& normals, double cos_dn, double dd, double min_sin2, int min_points,
+                ScreenBuffers& b) {
   const std::size_t m = neighbors.size();
   b.assignment.assign(m, -1);
   int count = 0;
@@ -118,6 +137,9 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
   std::sort(by_size.begin(), by_size.begin() + count,
             [&](int a, int c) { return b.clusters[a].members > b.clusters[c].members || (b.clusters[a].members == b.clusters[c].members && a < c); });
   std::array<Eigen::Vector3d, kMaxClusters> kept;
+  std::array<double, kMaxClusters> kept_offset{};  // n . c of every kept plane
+  std::array<double, kMaxClusters> near_offset{};  // n . c of the planes within dd
+  std::array<Eigen::Vector3d, kMaxClusters> near_normal;
   int kept_count = 0, near = 0;
   for (int r = 0; r < count; ++r) {
     const int c = by_size[r];
@@ -130,11 +152,44 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
     bool duplicate = false;
     for (int q = 0; q < kept_count; ++q) duplicate = duplicate || std::abs(kept[q].dot(plane.normal)) > cos_dn;
     if (duplicate) continue;
+    kept_offset[kept_count] = plane.normal.dot(plane.centroid);
     kept[kept_count++] = plane.normal;
     // p is the origin of the offsets: its distance to the plane is |n . centroid|.
-    if (std::abs(plane.normal.dot(plane.centroid)) <= dd) ++near;
+    if (const double offset = kept_offset[kept_count - 1]; std::abs(offset) <= dd) {
+      near_offset[near] = offset;
+      near_normal[near++] = plane.normal;
+    }
   }
-  return near;
+  // Corner: three planes, pairwise turning by at least min_turn, meet within kCornerReach dd
+  // of p. Only about one point lies within dd of a corner's three faces, so the plane test
+  // alone often leaves a corner without a Corner label.
+  for (int a = 0; a < kept_count; ++a)
+    for (int c = a + 1; c < kept_count; ++c)
+      for (int e = c + 1; e < kept_count; ++e) {
+        Eigen::Matrix3d normals_abc;
+        normals_abc << kept[a].transpose(), kept[c].transpose(), kept[e].transpose();
+        if (kept[a].cross(kept[c]).squaredNorm() < min_sin2 || kept[a].cross(kept[e]).squaredNorm() < min_sin2 ||
+            kept[c].cross(kept[e]).squaredNorm() < min_sin2 || std::abs(normals_abc.determinant()) < kMinCornerDeterminant)
+          continue;
+        const Eigen::Vector3d corner = normals_abc.partialPivLu().solve(Eigen::Vector3d(kept_offset[a], kept_offset[c], kept_offset[e]));
+        if (corner.norm() <= kCornerReach * dd) return 3;
+      }
+  if (near < 2) return near;
+  // A pair of planes makes p an edge point when they turn by at least min_turn and p lies
+  // within dd of their intersection line. Near a shallow crease (turn t) a point x from the line
+  // is only x sin(t) from the other face's plane, so the plane test alone labels a band
+  // 1 / sin(t) times wider than at a right angle.
+  int pairs = 0;
+  for (int a = 0; a < near; ++a)
+    for (int c = a + 1; c < near; ++c) {
+      const Eigen::Vector3d d = near_normal[a].cross(near_normal[c]);
+      const double d2 = d.squaredNorm();
+      if (!(d2 > 0.0) || d2 < min_sin2) continue;
+      // The point of the line nearest p (the origin) lies in the span of the two normals.
+      const Eigen::Vector3d foot = (near_offset[a] * near_normal[c].cross(d) + near_offset[c] * d.cross(near_normal[a])) / d2;
+      pairs += foot.norm() <= dd;
+    }
+  return pairs == 0 ? 1 : pairs == 1 || near == 2 ? 2 : 3;
 }
 
 }  // namespace
@@ -151,6 +206,8 @@ void FeatureParams::validate() const {
     throw UsageError(fmt::format("detect_feature_points: dd must be >= 0 (0: dd_in_spacings * mean spacing), got {}", params.dd));
   if (params.dd == 0.0 && !(params.dd_in_spacings > 0.0 && std::isfinite(params.dd_in_spacings)))
     throw UsageError(fmt::format("detect_feature_points: dd_in_spacings must be > 0, got {}", params.dd_in_spacings));
+  if (!(params.min_turn_deg > 0.0 && params.min_turn_deg < 90.0))
+    throw UsageError(fmt::format("detect_feature_points: min_turn_deg must be in (0, 90) degrees, got {}", params.min_turn_deg));
   if (params.min_cluster_points < 3 || params.min_cluster_points > params.k)
     throw UsageError(fmt::format("detect_feature_points: min_cluster_points must be in [3, k = {}], got {}", params.k,
                                  params.min_cluster_points));
@@ -214,7 +271,8 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
     std::vector<double> sorted = variation;
     auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(n / 2);
     std::nth_element(sorted.begin(), mid, sorted.end());
-    result.variation_threshold_used = std::min(std::max(kVariationFloor, kVariationMedianFactor * *mid), 0.3);
+    const double floor = kCreaseVariationShare * crease_variation(params.min_turn_deg);
+    result.variation_threshold_used = std::min(std::max(floor, kVariationMedianFactor * *mid), 0.3);
   }
   const double threshold = result.variation_threshold_used;
   std::vector<std::uint32_t> candidates;  // in spatial order
@@ -269,6 +327,7 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
   // Pass 4: screening of the candidates.
   std::vector<double> labels(n, 0.0);
   const double cos_dn = std::cos(params.dn_deg * std::numbers::pi / 180.0);
+  const double min_sin2 = std::pow(std::sin(params.min_turn_deg * std::numbers::pi / 180.0), 2);
   tbb::enumerable_thread_specific<ScreenBuffers> screen;
   tbb::enumerable_thread_specific<std::array<std::size_t, 2>> counts(std::array<std::size_t, 2>{0, 0});
   {
@@ -280,7 +339,7 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
       for (std::size_t q = r.begin(); q != r.end(); ++q) {
         const std::uint32_t i = candidates[q];
         const std::span<const std::uint32_t> neighbors(candidate_neighbors.data() + q * k, k);
-        const int planes = planes_near(*tree, cloud.positions[i], neighbors, normals, cos_dn, result.dd_used, params.min_cluster_points, b);
+        const int planes = planes_near(*tree, cloud.positions[i], neighbors, normals, cos_dn, result.dd_used, min_sin2, params.min_cluster_points, b);
         if (planes >= 3) {
           labels[i] = double(FeatureLabel::Corner);
           ++count[1];

@@ -66,6 +66,7 @@ TrilateralParams trilateral_params(const StageArgs& a) {
   p.position = bilateral_params(a);
   p.sharpness_angle_deg = a.number("sharpness_angle_deg");
   p.normal_iterations = a.int32("normal_iterations");
+  p.height_sigma_scale = a.number("height_sigma_scale");
   p.use_feature_field = a.boolean("use_feature_field");
   return p;
 }
@@ -210,7 +211,8 @@ StageSpec clean_stage() {
       P::integer("iterations", bil.iterations, "Position passes").at_least(1).only(smooth),
       P::number("sharpness_angle_deg", tri.sharpness_angle_deg, "Sigma of the angle between normals").unit("degrees").range(0.0, 90.0, true, false).only(
           {"trilateral"}),
-      P::integer("normal_iterations", tri.normal_iterations, "Passes of normal correction").at_least(1).only({"trilateral"}),
+      P::integer("normal_iterations", tri.normal_iterations, "Passes of the normal filter").at_least(1).only({"trilateral"}),
+      P::number("height_sigma_scale", tri.height_sigma_scale, "Range sigma of the position pass, times the height sigma").positive().only({"trilateral"}),
       P::boolean("use_feature_field", tri.use_feature_field, "Feature points (field \"feature\") do not lend their normals").only({"trilateral"}),
       P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only(smooth),
   };

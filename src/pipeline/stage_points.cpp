@@ -122,6 +122,7 @@ FeatureParams feature_params(const StageArgs& a) {
   params.k = a.int32("k");
   params.variation_threshold = a.number("variation_threshold");
   params.dn_deg = a.number("dn_deg");
+  params.min_turn_deg = a.number("min_turn_deg");
   params.dd = a.number("dd");
   params.dd_in_spacings = a.number("dd_in_spacings");
   params.min_cluster_points = a.int32("min_cluster_points");
@@ -439,9 +440,10 @@ StageSpec features_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = {P::integer("k", f.k, "Neighbours per point").at_least(6),
               P::number("variation_threshold", f.variation_threshold,
-                        "Candidate surface-variation threshold; 0: max(0.01, 4 x median variation)")
+                        "Candidate surface-variation threshold; 0: max(half a min_turn_deg crease's, 4 x median variation)")
                   .range(0.0, 1.0 / 3.0, false, true),
               P::number("dn_deg", f.dn_deg, "Normal-angle clustering threshold").unit("degrees").range(0.0, 90.0, true, true),
+              P::number("min_turn_deg", f.min_turn_deg, "Smallest crease kept (angle between its two planes); sets the candidate floor").unit("degrees").range(0.0, 90.0, true, true),
               P::number("dd", f.dd, "Point-to-plane distance; 0: dd_in_spacings x mean spacing").unit("cloud units").non_negative(),
               P::number("dd_in_spacings", f.dd_in_spacings, "Point-to-plane distance when dd is 0").unit("mean spacings").positive(),
               P::integer("min_cluster_points", f.min_cluster_points, "Fewest neighbours a cluster needs to give a plane, at most k").at_least(3),

@@ -1,7 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end tests of the pointsurf command line: exit codes, messages, reports, outputs.
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -11,27 +9,15 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/io/io.h"
+#include "support/cli_run.h"
 #include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-RunResult run(const std::string& args, const std::filesystem::path& dir) {
-  const std::filesystem::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = std::string(POINTSURF_CLI_PATH) + " " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(command.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = test::read_bytes(out);
-  r.err = test::read_bytes(err);
-  return r;
-}
+using test::RunResult;
+RunResult run(const std::string& args, const std::filesystem::path& dir) { return test::run_cli(args, dir); }
 
 class Cli : public ::testing::Test {
 protected:

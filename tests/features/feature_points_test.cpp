@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <string>
@@ -218,6 +219,39 @@ TEST(DetectFeaturePoints, CancelLeavesTheCloudUnchanged) {
   EXPECT_EQ(last, 1.0);
 }
 
+// A sheet folded along x = 0 by `turn_deg` (two unit-wide faces, 4 triangles), sampled by the
+// issue 13 sampler: truth is the fold when it turns by 30 degrees or more.
+test::FeatureShape folded_sheet(double turn_deg, std::size_t n) {
+  const double t = turn_deg * std::numbers::pi / 180.0;
+  TriangleMesh mesh;
+  mesh.vertices = {{-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {std::cos(t), -1, std::sin(t)}, {std::cos(t), 1, std::sin(t)}};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
+  test::FeatureShape shape = test::sample_mesh_features(mesh, n, 30.0, 5);
+  shape.cloud.normals.clear();
+  return shape;
+}
+
+TEST(DetectFeaturePoints, ObtuseCreasesAreFoundAndShallowerFoldsAreNot) {
+  // A 32-degree turn (a dihedral angle of 148 degrees): its variation, 0.0098, was under the
+  // old candidate floor 0.01, so the crease was never found (issue 13's hidden CAD part).
+  test::FeatureShape fold = folded_sheet(32.0, 20000);
+  const double spacing = mean_spacing(fold.cloud.positions);
+  const FeatureResult r = detect_feature_points(fold.cloud);
+  const test::FeatureScore s = test::score_features(fold.cloud.fields.find("feature")->values, fold.edge_distance, 0.5 * spacing, 1.5 * spacing);
+  std::printf("32-degree fold: precision %.3f recall %.3f (%zu labelled, %zu truth), threshold %.4f\n", s.precision, s.recall, s.labelled,
+              s.truth, r.variation_threshold_used);
+  EXPECT_NEAR(r.variation_threshold_used, 0.00418, 1e-4);
+  EXPECT_GT(s.recall, 0.9);
+  EXPECT_GT(s.precision, 0.95);
+  // A 20-degree fold is below min_turn_deg (28): almost nothing is labelled.
+  test::FeatureShape shallow = folded_sheet(20.0, 20000);
+  detect_feature_points(shallow.cloud);
+  const std::vector<double>& labels = shallow.cloud.fields.find("feature")->values;
+  const auto labelled = std::count_if(labels.begin(), labels.end(), [](double v) { return v != 0.0; });
+  std::printf("20-degree fold: %td of %zu labelled\n", labelled, labels.size());
+  EXPECT_LT(double(labelled), 0.002 * double(labels.size()));
+}
+
 TEST(DetectFeaturePoints, BadParametersAreUsageErrors) {
   PointCloud cloud = test::sample_cube_features(2000).cloud;
   using test::expect_error;
@@ -227,6 +261,7 @@ TEST(DetectFeaturePoints, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.variation_threshold = -0.1}); }, "got -0.1");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 0.0}); }, "dn_deg must be in (0, 90) degrees, got 0");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 95.0}); }, "dn_deg must be in (0, 90) degrees, got 95");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.min_turn_deg = 90.0}); }, "min_turn_deg must be in (0, 90) degrees, got 90");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd = -1.0}); }, "dd must be >= 0 (0: dd_in_spacings * mean spacing), got -1");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd_in_spacings = 0.0}); }, "dd_in_spacings must be > 0, got 0");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.min_cluster_points = 2}); },

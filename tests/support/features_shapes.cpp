@@ -3,14 +3,18 @@
 #include "features_shapes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <map>
+#include <optional>
 #include <utility>
 
 #include <Eigen/Geometry>
+
 
 
 namespace pointsurf::test {
@@ -118,6 +122,105 @@ FeatureShape sample_cube_features(std::size_t n, double half, std::uint64_t seed
     }
     shape.edge_distance.push_back(edge);
     shape.corner_distance.push_back(to_corner.norm());
+  }
+  return shape;
+}
+
+SharpEdges::SharpEdges(const TriangleMesh& mesh, double sharp_deg) {
+  const auto& v = mesh.vertices;
+  std::vector<Vector3d> face_normals;
+  double area = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vector3d c = (v[t[1]] - v[t[0]]).cross(v[t[2]] - v[t[0]]);
+    area += 0.5 * c.norm();
+    face_normals.push_back(c.norm() > 0.0 ? Vector3d(c.normalized()) : Vector3d::Zero());
+  }
+  std::map<std::array<double, 3>, int> first_at;
+  std::vector<int> weld(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) weld[i] = first_at.try_emplace({v[i].x(), v[i].y(), v[i].z()}, int(i)).first->second;
+  std::map<std::pair<int, int>, std::vector<std::size_t>> edge_faces;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int e = 0; e < 3; ++e) {
+      const int a = weld[mesh.triangles[f][e]], b = weld[mesh.triangles[f][(e + 1) % 3]];
+      if (a != b) edge_faces[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  const double cos_sharp = std::cos(sharp_deg * std::numbers::pi / 180.0);
+  std::map<int, int> degree;
+  for (const auto& [edge, faces] : edge_faces) {
+    if (faces.size() != 2) continue;
+    const Vector3d &na = face_normals[faces[0]], &nb = face_normals[faces[1]];
+    if (na.squaredNorm() == 0.0 || nb.squaredNorm() == 0.0 || na.dot(nb) > cos_sharp + 1e-12) continue;
+    segments_.push_back({v[edge.first], v[edge.second]});
+    turn_deg_.push_back(std::acos(std::clamp(na.dot(nb), -1.0, 1.0)) * 180.0 / std::numbers::pi);
+    ++degree[edge.first];
+    ++degree[edge.second];
+  }
+  for (const auto& [vertex, count] : degree)
+    if (count >= 3) corners_.push_back(v[vertex]);
+  // Points laid along the segments every step (about the spacing of 100k samples): the nearest
+  // segment is among those with a laid point within (nearest laid distance + step).
+  step_ = std::max(1e-12, std::sqrt(area / 1e5));
+  for (std::size_t e = 0; e < segments_.size(); ++e) {
+    const auto& [a, b] = segments_[e];
+    const int steps = std::max(1, int(std::ceil((b - a).norm() / step_)));
+    for (int k = 0; k <= steps; ++k) {
+      laid_.push_back(a + (b - a) * (double(k) / steps));
+      laid_segment_.push_back(std::uint32_t(e));
+    }
+  }
+  if (!laid_.empty()) laid_tree_ = std::make_shared<const KdTree>(laid_);
+}
+
+double SharpEdges::distance(const Vector3d& p, double* turn_deg) const {
+  double best = std::numeric_limits<double>::infinity(), turn = 0.0;
+  if (laid_tree_) {
+    std::vector<Neighbor> nb;
+    laid_tree_->knn(p, 1, nb);
+    laid_tree_->radius(p, std::sqrt(nb[0].squared_distance) + step_, nb);
+    for (const Neighbor& q : nb) {
+      const std::uint32_t e = laid_segment_[q.index];
+      if (const double d = distance_to_segment(p, {segments_[e][0], segments_[e][1]}); d < best) best = d, turn = turn_deg_[e];
+    }
+  }
+  if (turn_deg != nullptr) *turn_deg = turn;
+  return best;
+}
+
+FeatureShape sample_mesh_features(const TriangleMesh& mesh, std::size_t n, double sharp_deg, std::uint64_t seed) {
+  const auto& v = mesh.vertices;
+  std::vector<double> areas;
+  std::vector<Vector3d> face_normals;
+  for (const Triangle& t : mesh.triangles) {
+    const Vector3d c = (v[t[1]] - v[t[0]]).cross(v[t[2]] - v[t[0]]);
+    areas.push_back(0.5 * c.norm());
+    face_normals.push_back(c.norm() > 0.0 ? Vector3d(c.normalized()) : Vector3d::Zero());
+  }
+  FeatureShape shape;
+  std::discrete_distribution<std::size_t> pick(areas.begin(), areas.end());
+  Rng rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t f = pick(rng);
+    double a = u(rng), b = u(rng);
+    if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+    const Triangle& t = mesh.triangles[f];
+    shape.cloud.positions.push_back(v[t[0]] + a * (v[t[1]] - v[t[0]]) + b * (v[t[2]] - v[t[0]]));
+    shape.cloud.normals.push_back(face_normals[f]);
+  }
+  const SharpEdges sharp(mesh, sharp_deg);
+  std::optional<KdTree> corner_tree;
+  if (!sharp.corners().empty()) corner_tree.emplace(sharp.corners());
+  std::vector<Neighbor> nb;
+  for (const Vector3d& p : shape.cloud.positions) {
+    double turn = 0.0;
+    shape.edge_distance.push_back(sharp.distance(p, &turn));
+    shape.edge_turn_deg.push_back(turn);
+    double corner = std::numeric_limits<double>::infinity();
+    if (corner_tree) {
+      corner_tree->knn(p, 1, nb);
+      corner = std::sqrt(nb[0].squared_distance);
+    }
+    shape.corner_distance.push_back(corner);
   }
   return shape;
 }

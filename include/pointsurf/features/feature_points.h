@@ -30,6 +30,8 @@ struct FeatureParams {
   double variation_threshold = 0.0;  // candidates: surface variation l0/(l0+l1+l2) above this,
                                      // in (0, 1/3); 0: derived from the data (see below)
   double dn_deg = 20.0;              // normal-angle clustering threshold, degrees, in (0, 90)
+  double min_turn_deg = 28.0;        // smallest crease kept: two planes must turn by this, degrees,
+                                     // in (0, 90); also sets the candidate floor (below)
   double dd = 0.0;                   // point-to-plane distance, cloud units; 0: dd_in_spacings * spacing
   double dd_in_spacings = 1.0;       // used when dd == 0, > 0
   int min_cluster_points = 5;        // fewest neighbours a cluster needs to give a plane, in [3, k]
@@ -41,8 +43,8 @@ struct FeatureParams {
 
 struct FeatureResult {
   std::size_t candidates = 0;        // points whose variation exceeded the threshold
-  std::size_t edges = 0;             // points labelled Edge (within dd of exactly two planes)
-  std::size_t corners = 0;           // points labelled Corner (within dd of three or more)
+  std::size_t edges = 0;             // points labelled Edge (one crease through p, see below)
+  std::size_t corners = 0;           // points labelled Corner (three planes or more, see below)
   double variation_threshold_used = 0.0;  // the candidate threshold actually used
   double dd_used = 0.0;              // the plane distance actually used, cloud units
   double mean_spacing = 0.0;         // mean spacing of the cloud, cloud units
@@ -51,18 +53,23 @@ struct FeatureResult {
 /// Labels sharp-feature points (SPEC C7, after the seed paper's feature-point screening):
 ///  1. Candidates: points whose surface variation s = l0 / (l0 + l1 + l2) of the k-neighbourhood
 ///     covariance (eigenvalues l0 <= l1 <= l2, Pauly et al. 2002) exceeds the threshold. The
-///     default threshold is max(0.01, 4 * median(s)), capped at 0.3: on clouds that are mostly
+///     default threshold is max(floor, 4 * median(s)), capped at 0.3: on clouds that are mostly
 ///     smooth the median is the variation that noise and gentle curvature give ordinary points,
-///     and four times it is above them; the floor 0.01 keeps clean clouds (median near 0) from
-///     making every point a candidate. With k = 30, over 99.8 % of the points within one spacing
-///     of a right-angled or 135-degree edge pass it, clean or with noise of 0.2 spacings (the
-///     screening, not this step, sets the precision). Variation is scale-free: so is the default.
+///     and four times it is above them. The floor is half the variation a point on a straight
+///     crease of min_turn_deg has (0.0042 at 28 degrees; a neighbourhood folded along its
+///     diameter): it keeps clean clouds (median near 0) from making every point a candidate
+///     without losing the shallow creases. (The floor was 0.01 before: a 30-degree crease has
+///     0.0096, so obtuse creases of 150 degrees and more were never candidates.) The
+///     screening, not this step, sets the precision. Variation is scale-free: so is the default.
 ///  2. Screening of each candidate p: its k neighbours (p included) are clustered by normal angle
 ///     (unoriented: n and -n are the same direction; leader clustering nearest-first, then one
 ///     reassignment to the nearest cluster mean); each cluster of at least min_cluster_points
 ///     points gets a least-squares plane (PCA of the cluster's positions); planes within dn of a
-///     larger cluster's plane are dropped as duplicates. p is an Edge when it lies within dd of
-///     two of the remaining planes, a Corner when within dd of three or more.
+///     larger cluster's plane are dropped as duplicates. Of the remaining planes within dd of p,
+///     a pair counts when the planes turn by at least min_turn_deg and p lies within dd of their
+///     intersection line (near a shallow crease of turn t the plane test alone labels a band
+///     1 / sin(t) times as wide as at a right angle). p is an Edge with one such pair (or two
+///     planes), a Corner with three or more planes near and two or more pairs.
 /// Writes the field "feature" (ScalarType::UInt8, N values, FeatureLabel) into `cloud`, replacing
 /// one of that name; positions and normals are not changed. Needs `cloud.normals` (N×3, any sign)
 /// only for FeatureNormals::Input.
