@@ -13,6 +13,7 @@
 #include "core/detail/lexicographic.h"
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/features/boundary_points.h"
 #include "pointsurf/simplify/simplify.h"
 #include "simplify/detail/simplify_common.h"
 
@@ -49,6 +50,7 @@ struct CellScratch {
   std::vector<std::uint32_t> members;
   std::vector<std::uint32_t> cluster;  // per member
   std::vector<Cluster> clusters;
+  std::vector<double> sigma_sum;  // per cluster
 };
 
 // Mean normal (sign-aligned sum), centroid (relative to `origin`) and radius of each cluster
@@ -97,6 +99,8 @@ void RegionalParams::validate() const {
     throw UsageError(fmt::format("{}: spacing must be >= 0 (cloud units; 0: measured), got {}", f, p.spacing));
   if (!(p.max_feature_share > 0.0 && p.max_feature_share <= 1.0))
     throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
+  if (!(p.curved_cluster_density >= 0.0) || !std::isfinite(p.curved_cluster_density))
+    throw UsageError(fmt::format("{}: curved_cluster_density must be >= 0, got {}", f, p.curved_cluster_density));
 }
 
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
@@ -113,12 +117,12 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
     result.source_index = std::move(keep);
     return result;
   }
-  // A kd-tree only where something is missing: normals, variation or the spacing.
+  // One kd-tree for normals and variation (when missing), the spacing, the boundary test and the
+  // thinning.
   const ScalarField* given_variation = cloud.fields.find("variation");
   const bool have_surface = cloud.has_normals() && given_variation != nullptr && given_variation->values.size() == n;
   std::optional<KdTree> own;
-  const KdTree* t = nullptr;
-  if (!have_surface || params.spacing == 0.0) t = &detail::tree_or_own("simplify_regional", cloud, tree, own);
+  const KdTree* t = &detail::tree_or_own("simplify_regional", cloud, tree, own);
   const BoundingBox box = bounding_box(cloud.positions);
   double spacing = params.spacing > 0.0 ? params.spacing : mean_spacing(*t);
   if (!(spacing > 0.0)) spacing = box.diagonal() > 0.0 ? box.diagonal() / std::sqrt(double(n)) : 1.0;
@@ -143,8 +147,11 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   // Per point, from the first pass: its cluster's unit mean normal and the variation, normal
   // and own-plane terms; per cell, the planes of its greedy clusters.
   std::vector<Vector3d> cluster_normal(n);
-  std::vector<float> base_terms(n), own_delta(n), crease(n, 0.0f);
+  std::vector<float> base_terms(n), own_delta(n), crease(n, 0.0f), cluster_sigma(n);
   std::vector<std::vector<Plane>> planes(regions.size());
+  // Cell by cell in key order, inside a cell by position: a visiting order that does not depend
+  // on the input order (the tree's does, through its ties).
+  std::vector<std::uint32_t> visit_order(n);
   tbb::enumerable_thread_specific<CellScratch> scratch;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, regions.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     if (reporter.cancelled()) return;
@@ -158,6 +165,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
         return detail::lexicographic_less(cloud.positions[a], cloud.positions[b]) ||
                (cloud.positions[a] == cloud.positions[b] && a < b);
       });
+      std::copy(s.members.begin(), s.members.end(), visit_order.begin() + std::ptrdiff_t(regions.starts[cell]));
       visited += s.members.size();
       s.clusters.clear();
       s.cluster.resize(s.members.size());
@@ -207,11 +215,16 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
         }
         compute_statistics(s, cloud.positions, surface.normals, box.min);
       }
+      // Each cluster's mean sigma: how curved the region is, for its thinning.
+      s.sigma_sum.assign(s.clusters.size(), 0.0);
+      for (std::size_t q = 0; q < s.members.size(); ++q)
+        s.sigma_sum[s.cluster[q]] += std::min(1.0, 3.0 * std::max(surface.variation[s.members[q]], 0.0));
       for (std::size_t q = 0; q < s.members.size(); ++q) {
         const std::uint32_t i = s.members[q];
         const Cluster& c = s.clusters[s.cluster[q]];
         const Vector3d& normal = surface.normals[i];
         const double sigma = std::min(1.0, 3.0 * std::max(surface.variation[i], 0.0));
+        cluster_sigma[i] = static_cast<float>(s.sigma_sum[s.cluster[q]] / double(c.count));
         // A point without a normal (degenerate neighbourhood) or in a cluster without one
         // deviates as much as it can.
         const double theta = normal.squaredNorm() > 0.0 && c.mean.squaredNorm() > 0.0
@@ -280,15 +293,21 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
     std::nth_element(sorted.begin(), mid, sorted.end());
     threshold = std::max(0.02, median + 3.0 * 1.4826 * double(*mid));
   }
+  // Kept as they are: points the features module marked, boundary points of open surfaces (the
+  // angular-gap test) and points whose feature factor passes the threshold.
   const ScalarField* feature_field = cloud.fields.find("feature");
+  const BoundaryResult boundary = detect_boundary_points(cloud, {}, t);
+  const auto marked = [&](std::uint32_t i) { return feature_field != nullptr && feature_field->values[i] > 0.0; };
   std::vector<std::uint32_t> candidates;
   for (std::uint32_t i = 0; i < n; ++i)
-    if ((feature_field != nullptr && feature_field->values[i] > 0.0) || factor[i] >= threshold) candidates.push_back(i);
-  // Priority: points the features module marked first, then by decreasing F + crease term
-  // (the crease term again: of the band of high-F points along an edge, those on the crease).
-  const auto priority = [&](std::uint32_t i) {
-    return (feature_field != nullptr && feature_field->values[i] > 0.0 ? 4.0 : 0.0) + double(factor[i]) + double(crease[i]);
-  };
+    if (marked(i) || boundary.boundary[i] || factor[i] >= threshold) candidates.push_back(i);
+  // Priority when they are more than the budget: marked points first, then by decreasing
+  // F + crease term (the crease term again: of the band of high-F points along an edge, those on
+  // the crease). Boundary points rank by the same measure: a point on a crease whose neighbours
+  // lie on two faces passes the angular-gap test too, and is a feature first. A rim point is one
+  // that passes the test off a crease.
+  const auto rim = [&](std::uint32_t i) { return boundary.boundary[i] && crease[i] < 0.5f; };
+  const auto priority = [&](std::uint32_t i) { return (marked(i) ? 4.0 : 0.0) + double(factor[i]) + double(crease[i]); };
   const auto before = [&](std::uint32_t a, std::uint32_t b) {
     const double pa = priority(a), pb = priority(b);
     return pa > pb || (pa == pb && detail::lexicographic_less(cloud.positions[a], cloud.positions[b]));
@@ -301,70 +320,77 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
     std::nth_element(candidates.begin(), candidates.begin() + std::ptrdiff_t(feature_budget), candidates.end(), before);
     candidates.resize(feature_budget);
   }
-  std::vector<char> kept(n, 0);
-  for (std::uint32_t i : candidates) kept[i] = 1;
+  std::sort(candidates.begin(), candidates.end());
   result.feature_points = candidates.size();
+  for (std::uint32_t i : candidates) result.boundary_points += rim(i);
 
-  // Flat points: a grid over the rest, the sample nearest to each cell's centroid.
-  std::vector<std::uint32_t> flat;
-  flat.reserve(n - candidates.size());
-  for (std::uint32_t i = 0; i < n; ++i)
-    if (!kept[i]) flat.push_back(i);
-  const std::size_t flat_wanted = by_cell ? 0 : wanted - candidates.size();
-  std::vector<std::uint32_t> chosen;
-  if (!flat.empty() && (by_cell || flat_wanted > 0)) {
-    double cell = params.target.cell;
-    if (!by_cell) {
-      if (flat_wanted >= flat.size()) {
-        cell = 0.0;
-        chosen = flat;
-      } else {
-        const double initial = spacing * std::sqrt(double(flat.size()) / double(flat_wanted));
-        cell = detail::solve_length(initial, flat_wanted, 0.02, 6, [&](double c) {
-                 return detail::count_cells(cloud.positions, flat, false, detail::make_grid("simplify_regional", box, c));
-               }).first;
-      }
-    }
-    if (cell > 0.0) {
-      result.length_used = cell;
-      const detail::GridCells cells =
-          detail::sort_into_cells(cloud.positions, flat, false, detail::make_grid("simplify_regional", box, cell));
-      chosen.resize(cells.size());
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t s = r.begin(); s != r.end(); ++s)
-          chosen[s] = detail::nearest_to_centroid(
-              cloud.positions, std::span<const std::uint32_t>(cells.order.data() + cells.starts[s], cells.starts[s + 1] - cells.starts[s]));
-      });
-      if (!by_cell && chosen.size() > flat_wanted) {
-        // Too many cells: drop the representatives of the least populated cells (partial cells
-        // at borders), so the count is exact.
-        std::vector<std::size_t> cell_index(chosen.size());
-        std::iota(cell_index.begin(), cell_index.end(), std::size_t(0));
-        std::stable_sort(cell_index.begin(), cell_index.end(), [&](std::size_t a, std::size_t b) {
-          return cells.starts[a + 1] - cells.starts[a] > cells.starts[b + 1] - cells.starts[b];
+  // Flat areas, thinned per cluster: a greedy Poisson-disk pass (in spatial order) whose
+  // distance in each cluster shrinks with the cluster's curvature, d_i = d / sqrt(1 + g s_C / s),
+  // s_C the cluster's mean sigma and s the mean over all points: a curved region keeps more
+  // points than a flat one of the same area. The kept feature and boundary points come first and
+  // remove the flat points around them. d is solved for the count.
+  double mean_sigma = 0.0;
+  for (float v : cluster_sigma) mean_sigma += v;
+  mean_sigma = std::max(mean_sigma / double(n), 1e-12);
+  std::vector<float> radius_scale(n);
+  for (std::size_t i = 0; i < n; ++i)
+    radius_scale[i] = static_cast<float>(1.0 / std::sqrt(1.0 + params.curved_cluster_density * cluster_sigma[i] / mean_sigma));
+  std::vector<char> is_candidate(n, 0), removed(n);
+  for (std::uint32_t i : candidates) is_candidate[i] = 1;
+  std::vector<std::uint32_t> order(candidates);
+  for (std::uint32_t i : visit_order)
+    if (!is_candidate[i]) order.push_back(i);
+  std::vector<std::uint32_t> kept, covered(n);  // covered: the flat points a kept point removed
+  const auto thin = [&](double d) {
+    removed.assign(n, 0);
+    std::fill(covered.begin(), covered.end(), 0u);
+    kept.clear();
+    detail::poisson_disk(
+        *t, cloud.positions, order, removed, kept, [&](std::uint32_t i) { return d * double(radius_scale[i]); },
+        [&](std::uint32_t i, std::uint32_t j) {
+          covered[i] += !removed[j] && !is_candidate[j];
+          return !is_candidate[j];
         });
-        cell_index.resize(flat_wanted);
-        std::vector<std::uint32_t> trimmed;
-        trimmed.reserve(flat_wanted);
-        for (std::size_t s : cell_index) trimmed.push_back(chosen[s]);
-        chosen = std::move(trimmed);
-      }
-    }
-    for (std::uint32_t i : chosen) kept[i] = 1;
-    if (!by_cell && chosen.size() < flat_wanted) {
-      // Too few cells: add the leftover points with the highest F.
-      std::vector<std::uint32_t> rest;
-      for (std::uint32_t i : flat)
-        if (!kept[i]) rest.push_back(i);
-      const std::size_t extra = std::min(rest.size(), flat_wanted - chosen.size());
-      std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(), before);
-      for (std::size_t q = 0; q < extra; ++q) kept[rest[q]] = 1;
+    return kept.size();
+  };
+  double d = params.target.cell;
+  if (!by_cell) {
+    if (wanted <= candidates.size()) {
+      d = 0.0;
+      kept = candidates;
+    } else {
+      const double initial = spacing * std::sqrt(double(n - candidates.size()) / double(wanted - candidates.size()));
+      d = detail::solve_length(initial, wanted, 0.01, 8, [&](double l) {
+            reporter.throw_if_cancelled();
+            return thin(l);
+          }).first;
     }
   }
+  if (d > 0.0) thin(d);
+  result.length_used = d;
+  std::vector<char> kept_mask(n, 0);
+  for (std::uint32_t i : kept) kept_mask[i] = 1;
+  if (!by_cell && kept.size() > wanted) {
+    // A few too many: drop the flat points that covered the fewest others (they fill the
+    // smallest gaps left).
+    std::vector<std::uint32_t> flat(kept.begin() + std::ptrdiff_t(candidates.size()), kept.end());
+    const std::size_t drop = std::min(flat.size(), kept.size() - wanted);
+    std::nth_element(flat.begin(), flat.begin() + std::ptrdiff_t(drop), flat.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return covered[a] < covered[b] || (covered[a] == covered[b] && a < b);
+    });
+    for (std::size_t q = 0; q < drop; ++q) kept_mask[flat[q]] = 0;
+  } else if (!by_cell && kept.size() < wanted) {
+    // A few too few: add the leftover points with the highest F.
+    std::vector<std::uint32_t> rest;
+    for (std::uint32_t i = 0; i < n; ++i)
+      if (!kept_mask[i]) rest.push_back(i);
+    const std::size_t extra = std::min(rest.size(), wanted - kept.size());
+    std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(), before);
+    for (std::size_t q = 0; q < extra; ++q) kept_mask[rest[q]] = 1;
+  }
   std::vector<std::size_t> keep;
-  keep.reserve(by_cell ? candidates.size() + chosen.size() : wanted);
   for (std::size_t i = 0; i < n; ++i)
-    if (kept[i]) keep.push_back(i);
+    if (kept_mask[i]) keep.push_back(i);
   result.cloud = cloud.select(keep);
   ScalarField& field = result.cloud.fields.add("feature_factor", keep.size(), ScalarType::Float32);
   for (std::size_t j = 0; j < keep.size(); ++j) field.values[j] = factor[keep[j]];

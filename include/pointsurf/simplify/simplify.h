@@ -44,6 +44,8 @@ struct SimplifyResult {
   std::size_t input_points = 0;           // N
   std::size_t feature_points = 0;         // points kept because they are features (regional,
                                           // curvature-distance: the high-curvature part kept)
+  std::size_t boundary_points = 0;        // of feature_points: boundary points of open surfaces
+                                          // (regional: the angular-gap test)
   std::size_t added_points = 0;           // new points inserted in sparse regions (lfs only)
   double length_used = 0.0;               // cloud units: the grid cell (grid), Poisson-disk
                                           // distance of the flat / low part (regional,
@@ -119,6 +121,9 @@ struct RegionalParams {
   double feature_threshold = -1.0;     // F above which a point is a feature candidate, [0, 1];
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
+  double curved_cluster_density = 1.0; // g: flat points of a cluster with mean sigma s_C are thinned
+                                       // with distance d / sqrt(1 + g s_C / s), s the cloud's
+                                       // mean, >= 0 (0: one distance everywhere)
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
                                        // (with a cloud that already has normals and the field
                                        // "variation", a given spacing means no kd-tree is needed)
@@ -181,7 +186,7 @@ SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const Curvat
 
 struct LfsParams {
   SimplifyTarget target;                // sets the spacing scale lambda (see below)
-  int k = 16;                           // neighbours for normals, variation and LFS (>= 3)
+  int k = 16;                           // neighbours for normals (>= 3)
   double adaptivity = 4.0;              // LFS clamped to [median / a, median × a], a >= 1
   int fill_neighbours = 6;              // kNN edges tested for gaps when filling (>= 1)
   /// Throws UsageError naming the first value out of range (the target is checked against
@@ -189,18 +194,29 @@ struct LfsParams {
   void validate() const;
 };
 
-/// Local-feature-size adaptive resampling. Per point, LFS_i = min(curvature radius, distance
-/// to the nearest neighbour off the tangent plane by more than 30 degrees, bounding-box
-/// diagonal); the curvature radius is estimated from the surface variation v of the k
-/// neighbours within radius r (a spherical cap gives v = r² / (24 R²), so R = r / sqrt(24 v)).
-/// Target spacing t_i = lambda × clamp(LFS_i, median/a, median×a), lambda solved for the
-/// target (cell: the spacing at the median LFS). Gaps: along each of the fill_neighbours
-/// nearest-neighbour edges longer than t, candidates are inserted every 0.4 t, blended between the
-/// two endpoints' tangent planes (normal interpolated; colour interpolated; fields copied from
-/// the nearer endpoint). Then a greedy Poisson-disk pass with per-point radius t (input points
-/// first, in spatial order, inserted points after) thins dense regions. A non-uniform cloud
-/// comes out more uniform in flat regions and denser where the LFS is small. Uses `tree` for
-/// the input. Throws UsageError for bad parameters; CancelledError when `progress` returns false.
+/// Local feature size of every point (Amenta, Bern & Kamvysselis 1998): the distance to the
+/// medial axis, approximated by the nearest Voronoi pole (`voronoi_poles`, inner and outer) of
+/// any sample. Poles closer to their own sample than its nearest neighbour are noise, not the
+/// medial axis, and are not used. A distance to a set of points, the result is 1-Lipschitz
+/// (|LFS(p) - LFS(q)| <= |p - q|). A sphere of radius R gives R; a plate of thickness 2h gives h
+/// on its faces. +infinity where no pole is left (all points coplanar: a plane has no medial
+/// axis). Uses `tree` (over cloud.positions) when given. Throws UsageError for fewer than 4
+/// points; InputError for a non-finite coordinate.
+std::vector<double> local_feature_size(const PointCloud& cloud, const KdTree* tree = nullptr);
+
+/// Local-feature-size adaptive resampling. LFS_i from `local_feature_size` (the bounding-box
+/// diagonal where it is infinite). Target spacing t_i = lambda × clamp(LFS_i, median/a,
+/// median×a), lambda solved for the target (cell: the spacing at the median LFS). Gaps: along
+/// each of the fill_neighbours nearest-neighbour edges longer than t (and within 30 degrees of
+/// both endpoints' tangent planes: an edge across a thin part joins two sheets, not a gap),
+/// candidates are inserted every 0.25 t, blended between the two endpoints' tangent planes
+/// (normal interpolated; colour interpolated; fields copied from the nearer endpoint). Then a
+/// greedy Poisson-disk pass over input and inserted points together, in one spatial order, with
+/// per-point radius t; a kept point removes only points nearer its tangent plane than its LFS
+/// (beyond that lies the other side of the medial axis: the two faces of a thin plate are never
+/// merged). A non-uniform cloud comes out uniform in flat regions and denser where the LFS is
+/// small. Uses `tree` for the input. Throws UsageError for bad parameters; CancelledError when
+/// `progress` returns false.
 SimplifyResult resample_lfs(const PointCloud& cloud, const LfsParams& params = {}, const KdTree* tree = nullptr,
                             const ProgressCallback& progress = {});
 
