@@ -41,7 +41,6 @@ RegionalParams regional_params(const StageArgs& a) {
   p.distance_weight = a.number("distance_weight");
   p.feature_threshold = a.number("feature_threshold");
   p.max_feature_share = a.number("max_feature_share");
-  p.curved_cluster_density = a.number("curved_cluster_density");
   return p;
 }
 
@@ -187,10 +186,6 @@ StageSpec simplify_stage() {
           .only({"regional"}),
       P::number("max_feature_share", reg.max_feature_share, "At most this share of the output are feature points").range(0.0, 1.0, true, false).only(
           {"regional"}),
-      P::number("curved_cluster_density", reg.curved_cluster_density,
-                "Flat points of a curved cluster are thinned less: distance / sqrt(1 + this x cluster sigma / mean sigma)")
-          .non_negative()
-          .only({"regional"}),
       P::integer("k", cd.k, "Neighbours for variation when the input has none").at_least(3).only({"curvature-distance"}),
       P::number("split_quantile", cd.split_quantile, "Variation quantile splitting high from low").range(0.0, 1.0, true, true).only(
           {"curvature-distance"}),

@@ -4,11 +4,13 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <tuple>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "core/detail/lexicographic.h"
 #include "core/detail/progress_reporter.h"
@@ -36,6 +38,15 @@ struct Cluster {
   std::size_t count = 0;
 };
 
+// A flat point in its cluster's grid cell.
+struct FlatCell {
+  std::uint64_t cluster;            // region cell << 16 | cluster in the region cell
+  std::array<std::int64_t, 3> cell;  // grid cell of the cluster's own size
+  std::uint32_t point;
+  bool same_cell(const FlatCell& o) const { return cluster == o.cluster && cell == o.cell; }
+  bool operator<(const FlatCell& o) const { return std::tie(cluster, cell, point) < std::tie(o.cluster, o.cell, o.point); }
+};
+
 struct Plane {
   Vector3d centroid;  // relative to the bounding-box minimum
   Vector3d normal;    // unit
@@ -50,7 +61,6 @@ struct CellScratch {
   std::vector<std::uint32_t> members;
   std::vector<std::uint32_t> cluster;  // per member
   std::vector<Cluster> clusters;
-  std::vector<double> sigma_sum;  // per cluster
 };
 
 // Mean normal (sign-aligned sum), centroid (relative to `origin`) and radius of each cluster
@@ -99,8 +109,6 @@ void RegionalParams::validate() const {
     throw UsageError(fmt::format("{}: spacing must be >= 0 (cloud units; 0: measured), got {}", f, p.spacing));
   if (!(p.max_feature_share > 0.0 && p.max_feature_share <= 1.0))
     throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
-  if (!(p.curved_cluster_density >= 0.0) || !std::isfinite(p.curved_cluster_density))
-    throw UsageError(fmt::format("{}: curved_cluster_density must be >= 0, got {}", f, p.curved_cluster_density));
 }
 
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
@@ -147,7 +155,8 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   // Per point, from the first pass: its cluster's unit mean normal and the variation, normal
   // and own-plane terms; per cell, the planes of its greedy clusters.
   std::vector<Vector3d> cluster_normal(n);
-  std::vector<float> base_terms(n), own_delta(n), crease(n, 0.0f), cluster_sigma(n);
+  std::vector<float> base_terms(n), own_delta(n), crease(n, 0.0f);
+  std::vector<std::uint64_t> cluster_key(n);  // cell << 16 | cluster in the cell
   std::vector<std::vector<Plane>> planes(regions.size());
   // Cell by cell in key order, inside a cell by position: a visiting order that does not depend
   // on the input order (the tree's does, through its ties).
@@ -215,16 +224,12 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
         }
         compute_statistics(s, cloud.positions, surface.normals, box.min);
       }
-      // Each cluster's mean sigma: how curved the region is, for its thinning.
-      s.sigma_sum.assign(s.clusters.size(), 0.0);
-      for (std::size_t q = 0; q < s.members.size(); ++q)
-        s.sigma_sum[s.cluster[q]] += std::min(1.0, 3.0 * std::max(surface.variation[s.members[q]], 0.0));
       for (std::size_t q = 0; q < s.members.size(); ++q) {
         const std::uint32_t i = s.members[q];
         const Cluster& c = s.clusters[s.cluster[q]];
         const Vector3d& normal = surface.normals[i];
         const double sigma = std::min(1.0, 3.0 * std::max(surface.variation[i], 0.0));
-        cluster_sigma[i] = static_cast<float>(s.sigma_sum[s.cluster[q]] / double(c.count));
+        cluster_key[i] = (std::uint64_t(cell) << 16) | s.cluster[q];
         // A point without a normal (degenerate neighbourhood) or in a cluster without one
         // deviates as much as it can.
         const double theta = normal.squaredNorm() > 0.0 && c.mean.squaredNorm() > 0.0
@@ -324,67 +329,69 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   result.feature_points = candidates.size();
   for (std::uint32_t i : candidates) result.boundary_points += rim(i);
 
-  // Flat areas, thinned per cluster: a greedy Poisson-disk pass (in spatial order) whose
-  // distance in each cluster shrinks with the cluster's curvature, d_i = d / sqrt(1 + g s_C / s),
-  // s_C the cluster's mean sigma and s the mean over all points: a curved region keeps more
-  // points than a flat one of the same area. The kept feature and boundary points come first and
-  // remove the flat points around them. d is solved for the count.
-  double mean_sigma = 0.0;
-  for (float v : cluster_sigma) mean_sigma += v;
-  mean_sigma = std::max(mean_sigma / double(n), 1e-12);
-  std::vector<float> radius_scale(n);
-  for (std::size_t i = 0; i < n; ++i)
-    radius_scale[i] = static_cast<float>(1.0 / std::sqrt(1.0 + params.curved_cluster_density * cluster_sigma[i] / mean_sigma));
-  std::vector<char> is_candidate(n, 0), removed(n);
+  // Flat areas, thinned per cluster: the other points of each cluster on a grid of cell d, one
+  // point per occupied cell of a cluster (the one nearest the centroid of the cell's points of
+  // that cluster), so that no cell mixes two clusters (a roof and the ground beside it). d is
+  // solved for the count. (A Poisson-disk pass in place of the grid measured worse: +11.4 %
+  // against +1.4 % area change on b9.)
+  std::vector<char> is_candidate(n, 0);
   for (std::uint32_t i : candidates) is_candidate[i] = 1;
-  std::vector<std::uint32_t> order(candidates);
+  std::vector<std::uint32_t> flat;
   for (std::uint32_t i : visit_order)
-    if (!is_candidate[i]) order.push_back(i);
-  std::vector<std::uint32_t> kept, covered(n);  // covered: the flat points a kept point removed
-  const auto thin = [&](double d) {
-    removed.assign(n, 0);
-    std::fill(covered.begin(), covered.end(), 0u);
-    kept.clear();
-    detail::poisson_disk(
-        *t, cloud.positions, order, removed, kept, [&](std::uint32_t i) { return d * double(radius_scale[i]); },
-        [&](std::uint32_t i, std::uint32_t j) {
-          covered[i] += !removed[j] && !is_candidate[j];
-          return !is_candidate[j];
-        });
-    return kept.size();
+    if (!is_candidate[i]) flat.push_back(i);
+  std::vector<FlatCell> cells(flat.size());
+  std::vector<std::size_t> starts;  // cells[starts[g] .. starts[g + 1]) hold group g
+  const auto group = [&](double d) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, flat.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t q = r.begin(); q != r.end(); ++q) {
+        const Vector3d g = (cloud.positions[flat[q]] - box.min) / d;
+        cells[q] = {cluster_key[flat[q]], {std::int64_t(std::floor(g.x())), std::int64_t(std::floor(g.y())), std::int64_t(std::floor(g.z()))},
+                    flat[q]};
+      }
+    });
+    tbb::parallel_sort(cells.begin(), cells.end());
+    starts.clear();
+    for (std::size_t q = 0; q < cells.size(); ++q)
+      if (q == 0 || !cells[q].same_cell(cells[q - 1])) starts.push_back(q);
+    starts.push_back(cells.size());
+    return candidates.size() + starts.size() - 1;
   };
   double d = params.target.cell;
-  if (!by_cell) {
-    if (wanted <= candidates.size()) {
-      d = 0.0;
-      kept = candidates;
-    } else {
-      const double initial = spacing * std::sqrt(double(n - candidates.size()) / double(wanted - candidates.size()));
-      d = detail::solve_length(initial, wanted, 0.01, 8, [&](double l) {
-            reporter.throw_if_cancelled();
-            return thin(l);
-          }).first;
+  if (!by_cell && !flat.empty() && wanted > candidates.size()) {
+    const double initial = spacing * std::sqrt(double(flat.size()) / double(wanted - candidates.size()));
+    d = detail::solve_length(initial, wanted, 0.01, 8, [&](double l) {
+          reporter.throw_if_cancelled();
+          return group(l);
+        }).first;
+  }
+  std::vector<char> kept_mask(n, 0);
+  for (std::uint32_t i : candidates) kept_mask[i] = 1;
+  if (d > 0.0 && !flat.empty()) {
+    group(d);
+    result.length_used = d;
+    std::vector<std::size_t> order(starts.size() - 1);
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    if (!by_cell && candidates.size() + order.size() > wanted) {
+      // A few too many: drop the representatives of the least populated cells (partial cells
+      // at borders), so the count is exact.
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return starts[a + 1] - starts[a] > starts[b + 1] - starts[b]; });
+      order.resize(wanted - candidates.size());
+    }
+    std::vector<std::uint32_t> members;
+    for (std::size_t g : order) {
+      members.clear();
+      for (std::size_t q = starts[g]; q < starts[g + 1]; ++q) members.push_back(cells[q].point);
+      kept_mask[detail::nearest_to_centroid(cloud.positions, members)] = 1;
     }
   }
-  if (d > 0.0) thin(d);
-  result.length_used = d;
-  std::vector<char> kept_mask(n, 0);
-  for (std::uint32_t i : kept) kept_mask[i] = 1;
-  if (!by_cell && kept.size() > wanted) {
-    // A few too many: drop the flat points that covered the fewest others (they fill the
-    // smallest gaps left).
-    std::vector<std::uint32_t> flat(kept.begin() + std::ptrdiff_t(candidates.size()), kept.end());
-    const std::size_t drop = std::min(flat.size(), kept.size() - wanted);
-    std::nth_element(flat.begin(), flat.begin() + std::ptrdiff_t(drop), flat.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return covered[a] < covered[b] || (covered[a] == covered[b] && a < b);
-    });
-    for (std::size_t q = 0; q < drop; ++q) kept_mask[flat[q]] = 0;
-  } else if (!by_cell && kept.size() < wanted) {
+  std::size_t kept = std::size_t(std::count(kept_mask.begin(), kept_mask.end(), char(1)));
+  if (!by_cell && kept < wanted) {
     // A few too few: add the leftover points with the highest F.
     std::vector<std::uint32_t> rest;
     for (std::uint32_t i = 0; i < n; ++i)
       if (!kept_mask[i]) rest.push_back(i);
-    const std::size_t extra = std::min(rest.size(), wanted - kept.size());
+    const std::size_t extra = std::min(rest.size(), wanted - kept);
     std::nth_element(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(), before);
     for (std::size_t q = 0; q < extra; ++q) kept_mask[rest[q]] = 1;
   }

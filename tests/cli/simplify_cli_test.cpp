@@ -135,9 +135,9 @@ TEST_F(SimplifyCli, BadTargetsAndInputsExitWithTheirCodes) {
   CliRun r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --ratio 0");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(test::contains(r.err, "ratio")) << r.err;
-  r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --method regional --curved-cluster-density -1");
+  r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --method regional --max-feature-share 2");
   EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_TRUE(test::contains(r.err, "curved-cluster-density")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "max-feature-share")) << r.err;
   r = run("simplify " + path("missing.ply") + " " + path("o.ply"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_TRUE(test::contains(r.err, "missing.ply")) << r.err;

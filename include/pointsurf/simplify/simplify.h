@@ -121,9 +121,6 @@ struct RegionalParams {
   double feature_threshold = -1.0;     // F above which a point is a feature candidate, [0, 1];
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
-  double curved_cluster_density = 1.0; // g: flat points of a cluster with mean sigma s_C are thinned
-                                       // with distance d / sqrt(1 + g s_C / s), s the cloud's
-                                       // mean, >= 0 (0: one distance everywhere)
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
                                        // (with a cloud that already has normals and the field
                                        // "variation", a given spacing means no kd-tree is needed)
