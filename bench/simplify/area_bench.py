@@ -24,6 +24,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import tables  # noqa: E402  (results_csv: header once, date, machine)
 
 METHODS = ("regional", "cgal-hierarchy", "curvature", "curvature-distance", "grid", "random")
+# The measure's own noise: regional again at 1 % fewer and 1 % more points (a different mesh
+# through almost the same points), not a method.
+SENSITIVITY = (("regional-1%", 0.99), ("regional+1%", 1.01))
 CGAL_VARIATION = 0.01  # CGAL's own example value: clusters split further where the surface bends
 
 
@@ -93,11 +96,13 @@ def main():
         print("|---|---|---|---|---|")
         for ratio in ratios.split():
             size, m = cgal_at(cgal, xyz, f"{d}/cgal_{ratio}.xyz", round(float(ratio) * n))
-            for method in METHODS:
+            for method in METHODS + tuple(label for label, _ in SENSITIVITY):
                 print(f"[area] {name} {method} {ratio}", file=sys.stderr)
                 simplified = f"{d}/{method}_{ratio}.ply"
                 if method == "cgal-hierarchy":
                     with_normals(full_cloud, f"{d}/cgal_{ratio}.xyz", simplified)
+                elif method in dict(SENSITIVITY):
+                    run(cli, "simplify", cloud, simplified, "--method", "regional", "--count", round(m * dict(SENSITIVITY)[method]), "-q")
                 else:
                     run(cli, "simplify", cloud, simplified, "--method", method, "--count", m, "-q")
                 points = len(o3d.io.read_point_cloud(simplified).points)

@@ -122,8 +122,8 @@ struct RegionalParams {
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
-                                       // (with a cloud that already has normals and the field
-                                       // "variation", a given spacing means no kd-tree is needed)
+                                       // (normals and the field "variation" are likewise taken
+                                       // from the cloud when it has them)
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;
@@ -146,18 +146,22 @@ struct RegionalParams {
 ///     the same cell with at least 3 points and a normal more than region_angle_deg from m_C,
 ///     and s is the mean spacing: a point within 2 s of such a plane lies where two regions meet
 ///   F_i = (wv sigma_i + wn theta_i + wd delta_i) / (wv + wn + wd)
-/// Feature points: those with field "feature" > 0 (from the features module) when present,
-/// then those with F >= threshold, by decreasing F + c_i (c_i the crease part of delta_i:
-/// of the band of high-F points along an edge, those on the crease first), up to
-/// max_feature_share of the target.
-/// The rest of the budget goes to the other points, thinned by a grid (nearest sample to each
-/// cell centroid) whose cell is solved for the remaining count; the count is then made exact
-/// by dropping the lowest-F or adding the highest-F leftover points.
-/// Follows the regional method of the paper (SPEC C6); the paper names the feature factor
-/// without a formula, the one above is ours. Reuses `tree` (built over cloud.positions) for
-/// normals and spacing; builds one only when it needs one (normals or variation missing, or
-/// spacing 0 and no tree given). Parallel; throws UsageError for bad parameters; CancelledError when
-/// `progress` returns false.
+/// Kept points: those with field "feature" > 0 (from the features module) when present, the
+/// boundary points of open surfaces (`detect_boundary_points`, the angular-gap test, with its
+/// defaults; a rim point is one that passes it off a crease, counted in `boundary_points`) and
+/// those with F >= threshold; when they exceed max_feature_share of the target, the marked ones
+/// first, then by decreasing F + c_i (c_i the crease part of delta_i: of the band of high-F
+/// points along an edge, those on the crease first).
+/// The rest of the budget goes to the other points, thinned per cluster: each cluster's points
+/// on a grid of cell d, one per occupied cell of the cluster (the sample nearest the centroid of
+/// the cell's points of that cluster), d solved for the remaining count; the count is then made
+/// exact by dropping the representatives of the least populated cells or adding the highest-F
+/// leftover points.
+/// Follows the regional method of the paper (SPEC C6; docs/simplify.md maps each step); the
+/// paper names the feature factor without a formula, the one above is ours. Reuses `tree`
+/// (built over cloud.positions) for normals, spacing and the boundary test; builds one when none
+/// is given. Parallel; throws UsageError for bad parameters; CancelledError when `progress`
+/// returns false.
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params = {}, const KdTree* tree = nullptr,
                                  const ProgressCallback& progress = {});
 
