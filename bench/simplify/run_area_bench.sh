@@ -5,7 +5,8 @@
 #   bench/simplify/run_area_bench.sh [RATIOS] [NAME ...]
 # Inputs (NAME): b9 (CGAL's aerial LiDAR tile, normals by `pointsurf normals --orient mst`),
 # building (CGAL's facade scan with its own normals), and area-uniform samples with mesh normals
-# of CGAL's armadillo (100k), fandisk (50k) and bull (100k). Default: all five, ratios "0.1".
+# of CGAL's armadillo (100k), fandisk (50k), bull (100k) and elephant (100k). Default: all six,
+# ratios "0.1".
 # Needs BUILD_DIR (default build) with pointsurf and bench/pointsurf_bench; compiles the CGAL
 # peer. Areas by Open3D 0.16 (/usr/bin/python3). Writes bench/out/area/, appends raw rows to
 # bench/results/simplify_area.csv and prints a markdown table per input.
@@ -14,7 +15,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
 RATIOS="${1:-0.1}"
 shift || true
-NAMES="${*:-b9 building armadillo fandisk bull}"
+NAMES="${*:-b9 building armadillo fandisk bull elephant}"
 CLI="$BUILD_DIR/pointsurf"
 SAMPLER="$BUILD_DIR/bench/pointsurf_bench"
 PY=/usr/bin/python3
@@ -35,9 +36,9 @@ for name in $NAMES; do
     case "$name" in
       b9) "$CLI" normals "$ROOT/data/b9_training.ply" "$cloud" --orient mst -q ;;
       building) cp "$DATA/data/points_3/building.ply" "$cloud" ;;
-      armadillo | bull) "$SAMPLER" sample "$DATA/data/meshes/$name.off" 100000 "$cloud" 1 ;;
+      armadillo | bull | elephant) "$SAMPLER" sample "$DATA/data/meshes/$name.off" 100000 "$cloud" 1 ;;
       fandisk) "$SAMPLER" sample "$DATA/data/meshes/$name.off" 50000 "$cloud" 1 ;;
-      *) echo "error: unknown input $name (b9 building armadillo fandisk bull)" >&2; exit 1 ;;
+      *) echo "error: unknown input $name (b9 building armadillo fandisk bull elephant)" >&2; exit 1 ;;
     esac
   fi
   inputs+=("$name=$cloud")
