@@ -78,12 +78,14 @@ TEST_F(SimplifyCli, RegionalKeepsTheCubesEdgesAndMeetsTheCount) {
   EXPECT_EQ(regional.size(), 2000u);
   EXPECT_EQ(stage["counts"]["output"], 2000);
   EXPECT_GT(stage["counts"]["feature_points"].get<int>(), 0);
-  EXPECT_EQ(stage["counts"]["boundary_points"], 0);  // a closed surface has no rim
+  // A closed surface has no rim: what the angular-gap test finds on random samples (about 0.5 %
+  // of the points, the test's known false positives) is thinned with the flat points.
+  EXPECT_LT(stage["counts"]["boundary_points"].get<int>(), 200);
   const double kept = share_kept(cube, edge, regional);
   std::printf("cli regional: %.3f of the cube's edge points kept, chamfer %.2f spacings\n", kept,
               stage["metrics"]["chamfer_in_spacings"].get<double>());
-  EXPECT_GE(kept, 0.9);  // measured 0.964; a grid keeps about 0.1
-  // The faces stay covered: mean distance both ways within a few spacings (measured 1.53).
+  EXPECT_GE(kept, 0.9);  // measured 0.983; a grid keeps about 0.1
+  // The faces stay covered: mean distance both ways within a few spacings (measured 1.62).
   EXPECT_LT(stage["metrics"]["chamfer_in_spacings"].get<double>(), 2.5);
 
   const PointCloud grid = [&] {
@@ -104,8 +106,13 @@ TEST_F(SimplifyCli, RegionalKeepsTheRimOfAnOpenSheet) {
     rim[i] = 1.0 - std::max(std::abs(sheet.positions[i].x()), std::abs(sheet.positions[i].y())) < 0.2 * spacing;
   const nlohmann::json stage = simplify("sheet.ply", "out.ply", "--method regional --ratio 0.1");
   const double kept = share_kept(sheet, rim, read_point_cloud(path("out.ply")).cloud);
-  std::printf("cli regional: %.3f of the sheet's rim kept, %d boundary points\n", kept, stage["counts"]["boundary_points"].get<int>());
-  EXPECT_GE(kept, 0.9);  // measured 1.000 (811 boundary points)
+  simplify("sheet.ply", "grid.ply", "--method grid --mode nearest --count 2000");
+  const double grid_kept = share_kept(sheet, rim, read_point_cloud(path("grid.ply")).cloud);
+  std::printf("cli regional: %.3f of the sheet's rim band kept (grid %.3f), %d boundary points\n", kept, grid_kept,
+              stage["counts"]["boundary_points"].get<int>());
+  // The rim is thinned on a grid of half the flat points' cell: measured 0.489 against 0.021.
+  EXPECT_GT(kept, 0.35);
+  EXPECT_GT(kept, 2.0 * grid_kept);
   EXPECT_GT(stage["counts"]["boundary_points"].get<int>(), 0);
 }
 
