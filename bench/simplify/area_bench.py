@@ -27,6 +27,8 @@ METHODS = ("regional", "cgal-hierarchy", "curvature", "curvature-distance", "gri
 # The measure's own noise: regional again at 1 % fewer and 1 % more points (a different mesh
 # through almost the same points), not a method.
 SENSITIVITY = (("regional-1%", 0.99), ("regional+1%", 1.01))
+# Regional without its rim step (--no-keep-boundary), at the same count.
+VARIANTS = {"regional-no-boundary": ["--no-keep-boundary"]}
 CGAL_VARIATION = 0.01  # CGAL's own example value: clusters split further where the surface bends
 
 
@@ -96,11 +98,13 @@ def main():
         print("|---|---|---|---|---|")
         for ratio in ratios.split():
             size, m = cgal_at(cgal, xyz, f"{d}/cgal_{ratio}.xyz", round(float(ratio) * n))
-            for method in METHODS + tuple(label for label, _ in SENSITIVITY):
+            for method in METHODS + tuple(VARIANTS) + tuple(label for label, _ in SENSITIVITY):
                 print(f"[area] {name} {method} {ratio}", file=sys.stderr)
                 simplified = f"{d}/{method}_{ratio}.ply"
                 if method == "cgal-hierarchy":
                     with_normals(full_cloud, f"{d}/cgal_{ratio}.xyz", simplified)
+                elif method in VARIANTS:
+                    run(cli, "simplify", cloud, simplified, "--method", "regional", "--count", m, "-q", *VARIANTS[method])
                 elif method in dict(SENSITIVITY):
                     run(cli, "simplify", cloud, simplified, "--method", "regional", "--count", round(m * dict(SENSITIVITY)[method]), "-q")
                 else:

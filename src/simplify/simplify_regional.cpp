@@ -321,7 +321,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   // Kept as they are: points the features module marked, boundary points of open surfaces (the
   // angular-gap test) and points whose feature factor passes the threshold.
   const ScalarField* feature_field = cloud.fields.find("feature");
-  const BoundaryResult boundary = detect_boundary_points(cloud, {}, t);
+  const BoundaryResult boundary = params.keep_boundary ? detect_boundary_points(cloud, {}, t) : BoundaryResult{std::vector<std::uint8_t>(n, 0), {}, 0};
   const auto marked = [&](std::uint32_t i) { return feature_field != nullptr && feature_field->values[i] > 0.0; };
   // A rim point passes the angular-gap test off a crease; one on a crease (its neighbours on two
   // faces) is an edge of a closed surface, kept only as a feature (by F). Rim points are thinned
