@@ -344,6 +344,12 @@ TEST(SimplifyRegional, KeepsTheBoundaryOfAnOpenSurface) {
   EXPECT_GT(share, 2.0 * grid_share);   // measured 0.488 against 0.071
   EXPECT_LT(gap, 0.6 * r.length_used);  // measured 0.46 cells
   EXPECT_LT(gap, grid_gap);             // measured 0.0237 against 0.0303
+  // Without the rim step the rim is thinned like the rest.
+  params.keep_boundary = false;
+  const SimplifyResult flat = simplify_regional(sheet, params, &tree);
+  EXPECT_EQ(flat.cloud.size(), 2000u);
+  EXPECT_EQ(flat.boundary_points, 0u);
+  EXPECT_LT(edge_share_kept(flat, rim), 0.5 * share);
 }
 
 TEST(SimplifyRegional, CellTargetKeepsFeaturesAndThinsFlatAreas) {
