@@ -44,8 +44,8 @@ struct SimplifyResult {
   std::size_t input_points = 0;           // N
   std::size_t feature_points = 0;         // points kept because they are features (regional,
                                           // curvature-distance: the high-curvature part kept)
-  std::size_t boundary_points = 0;        // of feature_points: boundary points of open surfaces
-                                          // (regional: the angular-gap test)
+  std::size_t boundary_points = 0;        // rim points kept: boundary points of open surfaces
+                                          // (regional: the angular-gap test), thinned along the rim
   std::size_t added_points = 0;           // new points inserted in sparse regions (lfs only)
   double length_used = 0.0;               // cloud units: the grid cell (grid), Poisson-disk
                                           // distance of the flat / low part (regional,
@@ -149,17 +149,18 @@ struct RegionalParams {
 ///     the same cell with at least 3 points and a normal more than region_angle_deg from m_C,
 ///     and s is the mean spacing: a point within 2 s of such a plane lies where two regions meet
 ///   F_i = (wv sigma_i + wn theta_i + wd delta_i) / (wv + wn + wd)
-/// Kept points: those with field "feature" > 0 (from the features module) when present, the
-/// boundary points of open surfaces (`detect_boundary_points`, the angular-gap test, with its
-/// defaults; a rim point is one that passes it off a crease, counted in `boundary_points`) and
+/// Kept points: those with field "feature" > 0 (from the features module) when present, and
 /// those with F >= threshold; when they exceed max_feature_share of the target, the marked ones
 /// first, then by decreasing F + c_i (c_i the crease part of delta_i: of the band of high-F
 /// points along an edge, those on the crease first).
-/// The rest of the budget goes to the other points, thinned per cluster: each cluster's points
-/// on a grid of cell d, one per occupied cell of the cluster (the sample nearest the centroid of
-/// the cell's points of that cluster), d solved for the remaining count; the count is then made
-/// exact by dropping the representatives of the least populated cells or adding the highest-F
-/// leftover points.
+/// The rest of the budget goes to the other points, thinned per cluster orientation: the
+/// clusters of one normal class (27 classes of about 35 degrees, a cube map of the cluster's mean
+/// normal) share one grid of cell d, one point per occupied cell and class (the sample nearest
+/// the centroid of the cell's points of that class); rim points (keep_boundary: boundary points
+/// of open surfaces by `detect_boundary_points`, the angular-gap test with its defaults, off a
+/// crease; counted in `boundary_points`) on their own grid of cell d / 2. d is solved for the
+/// remaining count; the count is then made exact by dropping the representatives of the least
+/// populated cells or adding the highest-F leftover points.
 /// Follows the regional method of the paper (SPEC C6; docs/simplify.md maps each step); the
 /// paper names the feature factor without a formula, the one above is ours. Reuses `tree`
 /// (built over cloud.positions) for normals, spacing and the boundary test; builds one when none
