@@ -1,56 +1,47 @@
 #!/usr/bin/env bash
 # Surface-area change rate of simplification (the paper's measure of its regional method,
-# 0.43 %): reconstruct a mesh from the full cloud and from each simplified cloud with the same
-# method (region-growing triangulation), then |A_simplified - A_full| / A_full, next to the
-# holes each mesh keeps (a hole lowers the area, so both are printed).
-#   bench/simplify/run_area_bench.sh [CLOUD] [RATIOS]
-# Defaults: bench/out/armadillo_100000.ply (bench/run_bench.sh makes it; oriented normals from
-# the mesh) and ratios "0.1 0.2". Needs BUILD_DIR (default build) with the pointsurf CLI.
-# Areas by Open3D 0.16 (/usr/bin/python3). Writes bench/out/area/ and prints a markdown table.
+# 0.43 %), every method against CGAL's hierarchy simplification at equal reduction (the count
+# CGAL gives nearest ratio x N): see area_bench.py.
+#   bench/simplify/run_area_bench.sh [RATIOS] [NAME ...]
+# Inputs (NAME): b9 (CGAL's aerial LiDAR tile, normals by `pointsurf normals --orient mst`),
+# building (CGAL's facade scan with its own normals), and area-uniform samples with mesh normals
+# of CGAL's armadillo (100k), fandisk (50k), bull (100k) and elephant (100k). Default: all six,
+# ratios "0.1".
+# Needs BUILD_DIR (default build) with pointsurf and bench/pointsurf_bench; compiles the CGAL
+# peer. Areas by Open3D 0.16 (/usr/bin/python3). Writes bench/out/area/, appends raw rows to
+# bench/results/simplify_area.csv and prints a markdown table per input.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/build}"
-CLOUD="${1:-$ROOT/bench/out/armadillo_100000.ply}"
-RATIOS="${2:-0.1 0.2}"
+RATIOS="${1:-0.1}"
+shift || true
+NAMES="${*:-b9 building armadillo fandisk bull elephant}"
 CLI="$BUILD_DIR/pointsurf"
+SAMPLER="$BUILD_DIR/bench/pointsurf_bench"
 PY=/usr/bin/python3
 WORK="$ROOT/bench/out/area"
-mkdir -p "$WORK"
-[ -x "$CLI" ] || { echo "error: $CLI is missing; build first" >&2; exit 1; }
-[ -f "$CLOUD" ] || { echo "error: $CLOUD is missing (run bench/run_bench.sh first)" >&2; exit 1; }
-
-"$CLI" reconstruct "$CLOUD" "$WORK/full.ply" -q --report "$WORK/full.json"
-for ratio in $RATIOS; do
-  for method in regional curvature curvature-distance grid random; do
-    echo "[area] $method $ratio" >&2
-    "$CLI" simplify "$CLOUD" "$WORK/${method}_${ratio}.ply" --method "$method" --ratio "$ratio" -q
-    "$CLI" reconstruct "$WORK/${method}_${ratio}.ply" "$WORK/${method}_${ratio}_mesh.ply" -q \
-      --report "$WORK/${method}_${ratio}_mesh.json"
-  done
+DATA="$ROOT/bench/out/cgaldata"
+CGAL_BIN="$WORK/cgal_hierarchy"
+mkdir -p "$WORK" "$DATA"
+for tool in "$CLI" "$SAMPLER"; do [ -x "$tool" ] || { echo "error: $tool is missing; build first" >&2; exit 1; }; done
+if [ ! -x "$CGAL_BIN" ] || [ "$ROOT/bench/simplify/cgal_hierarchy.cpp" -nt "$CGAL_BIN" ]; then
+  g++ -O2 -std=c++17 -DNDEBUG -DCGAL_EIGEN3_ENABLED -I/usr/include/eigen3 "$ROOT/bench/simplify/cgal_hierarchy.cpp" \
+    -o "$CGAL_BIN" -lgmp -lmpfr
+fi
+[ -d "$DATA/data" ] || tar -xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$DATA"
+inputs=()
+for name in $NAMES; do
+  cloud="$WORK/input_$name.ply"
+  if [ ! -f "$cloud" ]; then
+    case "$name" in
+      b9) "$CLI" normals "$ROOT/data/b9_training.ply" "$cloud" --orient mst -q ;;
+      building) cp "$DATA/data/points_3/building.ply" "$cloud" ;;
+      armadillo | bull | elephant) "$SAMPLER" sample "$DATA/data/meshes/$name.off" 100000 "$cloud" 1 ;;
+      fandisk) "$SAMPLER" sample "$DATA/data/meshes/$name.off" 50000 "$cloud" 1 ;;
+      *) echo "error: unknown input $name (b9 building armadillo fandisk bull elephant)" >&2; exit 1 ;;
+    esac
+  fi
+  inputs+=("$name=$cloud")
 done
-
-"$PY" - "$WORK" "$RATIOS" <<'PYEOF'
-import json, sys
-import open3d as o3d
-work, ratios = sys.argv[1], sys.argv[2].split()
-def area(path):
-    return o3d.io.read_triangle_mesh(path).get_surface_area()
-def holes(report):  # the reconstruction stage's hole count and the input's point count
-    r = json.load(open(report))
-    points = r["inputs"][0]["points"]
-    for stage in r["stages"]:
-        if "holes" in stage.get("metrics", {}):
-            return stage["metrics"]["holes"], points
-    return "?", points
-full = area(f"{work}/full.ply")
-h, n = holes(f"{work}/full.json")
-print(f"full cloud: {n} points, mesh area {full:.6g}, {h} holes")
-print()
-print("| method | ratio | points | mesh area | area change | holes |")
-print("|---|---|---|---|---|---|")
-for ratio in ratios:
-    for method in ("regional", "curvature", "curvature-distance", "grid", "random"):
-        a = area(f"{work}/{method}_{ratio}_mesh.ply")
-        h, n = holes(f"{work}/{method}_{ratio}_mesh.json")
-        print(f"| {method} | {ratio} | {n} | {a:.6g} | {100 * abs(a - full) / full:.2f} % | {h} |")
-PYEOF
+cd "$ROOT"
+"$PY" "$ROOT/bench/simplify/area_bench.py" "$CLI" "$CGAL_BIN" "$WORK" "$ROOT/bench/results/simplify_area.csv" "$RATIOS" "${inputs[@]}"

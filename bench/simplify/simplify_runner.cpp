@@ -110,7 +110,8 @@ int run(int argc, char** argv) {
       const KdTree tree(cloud.positions);
       tree_s.push_back(seconds_since(t0));
       // One kNN pass gives normals, variation and the outlier statistic (k = 20, the
-      // statistical default); the regional step then needs no tree of its own.
+      // statistical default); the regional step builds one tree over the cleaned cloud (for its
+      // boundary test and its thinning) and reuses the normals, variation and spacing.
       auto t1 = Clock::now();
       PointCloud work = cloud;
       NormalParams normals;

@@ -41,6 +41,7 @@ RegionalParams regional_params(const StageArgs& a) {
   p.distance_weight = a.number("distance_weight");
   p.feature_threshold = a.number("feature_threshold");
   p.max_feature_share = a.number("max_feature_share");
+  p.keep_boundary = a.boolean("keep_boundary");
   return p;
 }
 
@@ -100,6 +101,7 @@ void run_simplify(StageRun& run) {
   rec.count("output", as_count(r.cloud.size()));
   rec.count("removed", as_count(input - kept_inputs));
   rec.count("feature_points", as_count(r.feature_points));
+  rec.count("boundary_points", as_count(r.boundary_points));
   rec.count("added", as_count(r.added_points));
   rec.metric("reduction", reduction);
   if (r.length_used > 0.0) rec.metric("length_used", r.length_used);
@@ -185,6 +187,7 @@ StageSpec simplify_stage() {
           .only({"regional"}),
       P::number("max_feature_share", reg.max_feature_share, "At most this share of the output are feature points").range(0.0, 1.0, true, false).only(
           {"regional"}),
+      P::boolean("keep_boundary", reg.keep_boundary, "Thin the rims of open surfaces (angular-gap test) on a grid of half the cell").only({"regional"}),
       P::integer("k", cd.k, "Neighbours for variation when the input has none").at_least(3).only({"curvature-distance"}),
       P::number("split_quantile", cd.split_quantile, "Variation quantile splitting high from low").range(0.0, 1.0, true, true).only(
           {"curvature-distance"}),

@@ -43,22 +43,16 @@ SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const Curvat
   // Greedy Poisson-disk thinning of each part with its own distance, in spatial order.
   const std::span<const std::uint32_t> order = t.spatial_order();
   std::vector<char> removed(n);
-  std::vector<Neighbor> neighbors;
-  std::vector<std::size_t> keep;
+  std::vector<std::uint32_t> keep;
   std::size_t kept_high = 0;
   const auto thin = [&](double d_low) {
     std::fill(removed.begin(), removed.end(), 0);
     keep.clear();
-    kept_high = 0;
     const double d_high = params.high_to_low_distance * d_low;
-    for (std::uint32_t i : order) {
-      if (removed[i]) continue;
-      keep.push_back(i);
-      kept_high += high[i] != 0;
-      t.radius(cloud.positions[i], high[i] ? d_high : d_low, neighbors);
-      for (const Neighbor& nb : neighbors)
-        if (high[nb.index] == high[i]) removed[nb.index] = 1;
-    }
+    detail::poisson_disk(
+        t, cloud.positions, order, removed, keep, [&](std::uint32_t i) { return high[i] ? d_high : d_low; },
+        [&](std::uint32_t i, std::uint32_t j) { return high[j] == high[i]; });
+    kept_high = std::size_t(std::count_if(keep.begin(), keep.end(), [&](std::uint32_t i) { return high[i] != 0; }));
     return keep.size();
   };
   double d_low = params.target.cell;
@@ -79,8 +73,8 @@ SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const Curvat
   result.input_points = n;
   result.feature_points = kept_high;
   result.length_used = d_low;
-  result.cloud = cloud.select(keep);
-  result.source_index = std::move(keep);
+  result.source_index.assign(keep.begin(), keep.end());
+  result.cloud = cloud.select(result.source_index);
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return result;

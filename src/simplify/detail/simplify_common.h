@@ -80,6 +80,32 @@ std::pair<double, std::size_t> solve_length(double initial, std::size_t wanted, 
 /// The index of the point of `members` nearest to the centroid of the members.
 std::uint32_t nearest_to_centroid(std::span<const Vector3d> points, std::span<const std::uint32_t> members);
 
+/// A well-mixed 64-bit hash of an index (splitmix64's finaliser): a seeded, order-free coin.
+constexpr std::uint64_t mix_index(std::uint64_t x) noexcept {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+/// Greedy Poisson-disk thinning: the points of `order` are visited in turn; one not yet
+/// `removed` is appended to `kept` and marks removed every point j within `radius(i)` of it
+/// (`tree` built over `positions`) for which `removes(i, j)` holds. `removed` is read as given
+/// (points marked beforehand are never kept) and updated. Serial; radius queries only from
+/// kept points.
+template <typename RadiusFn, typename RemovesFn>
+void poisson_disk(const KdTree& tree, std::span<const Vector3d> positions, std::span<const std::uint32_t> order,
+                  std::vector<char>& removed, std::vector<std::uint32_t>& kept, RadiusFn&& radius, RemovesFn&& removes) {
+  std::vector<Neighbor> neighbors;
+  for (std::uint32_t i : order) {
+    if (removed[i]) continue;
+    kept.push_back(i);
+    tree.radius(positions[i], radius(i), neighbors);
+    for (const Neighbor& nb : neighbors)
+      if (removes(i, nb.index)) removed[nb.index] = 1;
+  }
+}
+
 }  // namespace pointsurf::detail
 
 #include "simplify/detail/solve_length.inl"
