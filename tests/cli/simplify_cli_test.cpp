@@ -2,8 +2,6 @@
 // End-to-end tests of `pointsurf simplify`: shapes whose answer is known by construction (a
 // cube's edges, an open sheet's rim, a sphere whose halves differ 4x in density) through the
 // command line, with bounds that a regression crosses.
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -13,30 +11,22 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/io/io.h"
+#include "support/cli_run.h"
 #include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
 
-struct CliRun {
-  int exit_code = -1;
-  std::string err;
-};
-
 class SimplifyCli : public ::testing::Test {
 protected:
   void SetUp() override { dir_ = test::temp_dir(::testing::UnitTest::GetInstance()->current_test_info()->name()); }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  CliRun run(const std::string& args) const {
-    const std::string command = std::string(POINTSURF_CLI_PATH) + " " + args + " >/dev/null 2>" + path("stderr.txt");
-    const int status = std::system(command.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, test::read_bytes(path("stderr.txt"))};
-  }
+  test::RunResult run(const std::string& args) const { return test::run_cli(args, dir_); }
   // simplify IN OUT ARGS --report: the report's simplify stage (exit 0 asserted).
   nlohmann::json simplify(const std::string& in, const std::string& out, const std::string& args) const {
-    const CliRun r = run("simplify " + path(in) + " " + path(out) + " " + args + " --report " + path("report.json"));
+    const test::RunResult r = run("simplify " + path(in) + " " + path(out) + " " + args + " --report " + path("report.json"));
     EXPECT_EQ(r.exit_code, 0) << args << ": " << r.err;
     const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("report.json")));
     for (const auto& stage : report["stages"])
@@ -104,7 +94,7 @@ TEST_F(SimplifyCli, RegionalKeepsTheRimOfAnOpenSheet) {
   std::vector<char> rim(sheet.size());
   for (std::size_t i = 0; i < sheet.size(); ++i)
     rim[i] = 1.0 - std::max(std::abs(sheet.positions[i].x()), std::abs(sheet.positions[i].y())) < 0.2 * spacing;
-  const nlohmann::json stage = simplify("sheet.ply", "out.ply", "--method regional --ratio 0.1");
+  const nlohmann::json stage = simplify("sheet.ply", "out.ply", "--method regional --ratio 0.1 --keep-boundary");
   const double kept = share_kept(sheet, rim, read_point_cloud(path("out.ply")).cloud);
   simplify("sheet.ply", "grid.ply", "--method grid --mode nearest --count 2000");
   const double grid_kept = share_kept(sheet, rim, read_point_cloud(path("grid.ply")).cloud);
@@ -139,7 +129,7 @@ TEST_F(SimplifyCli, LfsEvensADensityStepOnASphere) {
 
 TEST_F(SimplifyCli, BadTargetsAndInputsExitWithTheirCodes) {
   write_point_cloud(path("cube.ply"), test::sample_cube(500, 1.0, 2));
-  CliRun r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --ratio 0");
+  test::RunResult r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --ratio 0");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_TRUE(test::contains(r.err, "ratio")) << r.err;
   r = run("simplify " + path("cube.ply") + " " + path("o.ply") + " --method regional --max-feature-share 2");

@@ -329,6 +329,7 @@ TEST(SimplifyRegional, KeepsTheBoundaryOfAnOpenSurface) {
   const std::vector<char> rim = near_square_border(sheet, 0.3 * mean_spacing(tree));
   RegionalParams params;
   params.target.ratio = 0.1;
+  params.keep_boundary = true;
   const SimplifyResult r = simplify_regional(sheet, params, &tree);
   expect_valid(r, sheet);
   EXPECT_EQ(r.cloud.size(), 2000u);

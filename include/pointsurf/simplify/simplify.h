@@ -121,9 +121,11 @@ struct RegionalParams {
   double feature_threshold = -1.0;     // F above which a point is a feature candidate, [0, 1];
                                        // < 0: derived (median + 3 × 1.4826 MAD of F, at least 0.02)
   double max_feature_share = 0.5;      // at most this share of the output are feature points, (0, 1]
-  bool keep_boundary = true;           // thin the rims of open surfaces (the angular-gap test) on a
-                                       // grid of half the flat cell; false: rim points are flat
-                                       // points, and no boundary test runs
+  bool keep_boundary = false;          // true: thin the rims of open surfaces (the angular-gap
+                                       // test) on a grid of half the flat cell (the paper's step;
+                                       // measured to raise the area change on open scans, see
+                                       // docs/simplify.md); false: rim points are flat points, and
+                                       // no boundary test runs
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
                                        // (normals and the field "variation" are likewise taken
                                        // from the cloud when it has them)
