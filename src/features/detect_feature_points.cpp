@@ -81,6 +81,9 @@ struct ScreenBuffers {
   std::vector<int> assignment;
   std::vector<Eigen::Vector3d> offsets;
   std::array<Cluster, kMaxClusters> clusters;
+  // Where three planes of the last screened neighbourhood meet, as an offset from its point,
+  // when that is inside the neighbourhood but farther than kCornerReach dd (see pass 5).
+  std::optional<Eigen::Vector3d> far_corner;
 };
 
 // Index of the cluster whose mean direction is nearest to n (unoriented), and that |cos|.
@@ -104,8 +107,9 @@ void add_to(Cluster& cluster, const Eigen::Vector3d& n) {
 // Number of distinct neighbour planes within `dd` of p (the screening of one candidate).
 int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const std::uint32_t> neighbors,
                 const std::vector<Eigen::Vector3d>& normals, double cos_dn, double dd, double min_sin2, int min_points,
-                ScreenBuffers& b) {
+                double reach, ScreenBuffers& b) {
   const std::size_t m = neighbors.size();
+  b.far_corner.reset();
   b.assignment.assign(m, -1);
   int count = 0;
   // Leader clustering, nearest neighbour first.
@@ -173,6 +177,7 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
           continue;
         const Eigen::Vector3d corner = normals_abc.partialPivLu().solve(Eigen::Vector3d(kept_offset[a], kept_offset[c], kept_offset[e]));
         if (corner.norm() <= kCornerReach * dd) return 3;
+        if (corner.norm() <= reach && !b.far_corner) b.far_corner = corner;
       }
   if (near < 2) return near;
   // A pair of planes makes p an edge point when they turn by at least min_turn and p lies
@@ -330,6 +335,7 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
   const double min_sin2 = std::pow(std::sin(params.min_turn_deg * std::numbers::pi / 180.0), 2);
   tbb::enumerable_thread_specific<ScreenBuffers> screen;
   tbb::enumerable_thread_specific<std::array<std::size_t, 2>> counts(std::array<std::size_t, 2>{0, 0});
+  tbb::enumerable_thread_specific<std::vector<Eigen::Vector3d>> far_corners;
   {
     detail::ProgressReporter reporter(progress, kRobustShare, 1.0, c);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c, grain), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -339,7 +345,9 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
       for (std::size_t q = r.begin(); q != r.end(); ++q) {
         const std::uint32_t i = candidates[q];
         const std::span<const std::uint32_t> neighbors(candidate_neighbors.data() + q * k, k);
-        const int planes = planes_near(*tree, cloud.positions[i], neighbors, normals, cos_dn, result.dd_used, min_sin2, params.min_cluster_points, b);
+        const int planes = planes_near(*tree, cloud.positions[i], neighbors, normals, cos_dn, result.dd_used, min_sin2,
+                                       params.min_cluster_points, std::sqrt(reach2[i]), b);
+        if (b.far_corner) far_corners.local().push_back(cloud.positions[i] + *b.far_corner);
         if (planes >= 3) {
           labels[i] = double(FeatureLabel::Corner);
           ++count[1];
@@ -358,6 +366,21 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
     result.edges += count[0];
     result.corners += count[1];
   }
+  // Pass 5: a corner whose three faces meet a few spacings from every candidate (random samples
+  // leave a corner's own neighbourhoods with too few points of one face) is still found by the
+  // candidates farther out, whose three planes meet there: the sample nearest that meeting point
+  // is a Corner when it lies within kCornerReach dd of it.
+  std::vector<Neighbor> nearest;
+  for (const auto& located : far_corners)
+    for (const Eigen::Vector3d& corner : located) {
+      tree->knn(corner, 1, nearest);
+      if (nearest.empty() || nearest[0].squared_distance > std::pow(kCornerReach * result.dd_used, 2)) continue;
+      double& label = labels[nearest[0].index];
+      if (label == double(FeatureLabel::Corner)) continue;
+      if (label == double(FeatureLabel::Edge)) --result.edges;
+      label = double(FeatureLabel::Corner);
+      ++result.corners;
+    }
   // A field "feature" already there keeps its old type through add(), hence the explicit type.
   ScalarField& field = cloud.fields.add("feature", 0, ScalarType::UInt8);
   field.type = ScalarType::UInt8;

@@ -2,6 +2,7 @@
 #include "pointsurf/features/feature_points.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -99,6 +100,34 @@ TEST(DetectFeaturePoints, CubeCornersAreLabelledNearCorners) {
   EXPECT_EQ(corners, r.corners);
   EXPECT_GE(r.corners, 4u);
   EXPECT_EQ(r.edges + r.corners, std::size_t(std::count_if(labels.begin(), labels.end(), [](double v) { return v != 0.0; })));
+}
+
+TEST(DetectFeaturePoints, EveryCubeCornerIsFoundOnSeveralSamplings) {
+  // Random samples often leave no point whose own neighbourhood holds enough of each of a
+  // corner's three faces; the candidates farther out still see the three planes meet there.
+  // Scored as the CLI test scores it: a Corner label within 5 spacings finds a corner, none
+  // lies 6 or more spacings from every corner.
+  int total = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    test::FeatureShape shape = test::sample_cube_features(40000, 1.0, seed);
+    const double spacing = mean_spacing(shape.cloud.positions);
+    detect_feature_points(shape.cloud);
+    const std::vector<double>& labels = labels_of(shape.cloud);
+    std::array<bool, 8> found{};
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      if (labels[i] != double(FeatureLabel::Corner)) continue;
+      EXPECT_LT(shape.corner_distance[i], 6.0 * spacing) << "seed " << seed << ", point " << i;
+      if (shape.corner_distance[i] > 5.0 * spacing) continue;
+      const Vector3d& p = shape.cloud.positions[i];
+      found[(p.x() > 0) + 2 * (p.y() > 0) + 4 * (p.z() > 0)] = true;
+    }
+    const int corners = int(std::count(found.begin(), found.end(), true));
+    std::printf("seed %d: %d of the 8 corners found\n", int(seed), corners);
+    EXPECT_GE(corners, 7) << "seed " << seed;
+    total += corners;
+  }
+  // Measured 31 of 32 (seed 2 misses one); 25 without the far-corner pass.
+  EXPECT_GE(total, 31);
 }
 
 TEST(DetectFeaturePoints, SmoothSurfacesHaveAlmostNoFeatures) {
