@@ -12,26 +12,12 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
 
 using Points = std::vector<Eigen::Vector3d>;
-
-// n uniform points in [0, 1]^3 + offset, then `duplicates` exact copies of earlier points.
-Points random_points(std::size_t n, std::size_t duplicates, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
-                     std::uint64_t seed = 3) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Points p;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = u(rng), y = u(rng), z = u(rng);
-    p.push_back(offset + Eigen::Vector3d(x, y, z));
-  }
-  std::uniform_int_distribution<std::size_t> pick(0, n - 1);
-  for (std::size_t i = 0; i < duplicates; ++i) p.push_back(p[pick(rng)]);
-  return p;
-}
 
 // A unit sphere surface (a scan-like 2D density), a dense blob on it and sparse far points:
 // kNN radii differing by 100x, so wide rings and the kd-tree fallback are both exercised.
@@ -45,14 +31,6 @@ Points uneven_points(std::uint64_t seed = 5) {
   return p;
 }
 
-// Integer lattice: many exactly equal distances, to check the tie-break by index.
-Points lattice(int side) {
-  Points p;
-  for (int z = 0; z < side; ++z)
-    for (int y = 0; y < side; ++y)
-      for (int x = 0; x < side; ++x) p.push_back(Eigen::Vector3d(x, y, z));
-  return p;
-}
 
 // Every point's list from the grid, indexed by point; each point must be visited once.
 template <class Run>
@@ -103,7 +81,7 @@ void expect_radius_like_tree(const Points& points, double cell, double radius) {
 }
 
 TEST(VoxelGrid, KnnEqualsTheKdTreeForAnyCellSize) {
-  const Points p = random_points(3000, 200);
+  const Points p = test::random_box_points(3000, 200);
   const double tuned = VoxelGrid::knn_cell_size(p, 12);
   EXPECT_GT(tuned, 0.0);
   for (const double cell : {0.01, 0.05, tuned, 0.3, 5.0}) {
@@ -113,7 +91,7 @@ TEST(VoxelGrid, KnnEqualsTheKdTreeForAnyCellSize) {
 }
 
 TEST(VoxelGrid, KnnBreaksTiesByIndexOnALattice) {
-  const Points p = lattice(9);
+  const Points p = test::lattice_points(9);
   for (const double cell : {0.7, 1.0, 2.0}) {
     SCOPED_TRACE(cell);
     expect_knn_like_tree(p, cell, 7);
@@ -128,24 +106,24 @@ TEST(VoxelGrid, KnnOnUnevenDensityUsesWiderRingsAndTheTree) {
 }
 
 TEST(VoxelGrid, KnnWithMoreNeighboursThanPointsReturnsAll) {
-  const Points p = random_points(20, 3);
+  const Points p = test::random_box_points(20, 3);
   expect_knn_like_tree(p, 0.1, 50);
   expect_knn_like_tree(p, 0.1, 0);
 }
 
 TEST(VoxelGrid, FarFromTheOriginEqualsTheKdTree) {
-  const Points p = random_points(2000, 50, Eigen::Vector3d(4.2e6, -3.1e6, 1.0e3));
+  const Points p = test::random_box_points(2000, 50, Eigen::Vector3d(4.2e6, -3.1e6, 1.0e3));
   expect_knn_like_tree(p, VoxelGrid::knn_cell_size(p, 16), 16);
   expect_radius_like_tree(p, 0.08, 0.08);
 }
 
 TEST(VoxelGrid, RadiusAndCountsEqualTheKdTree) {
-  const Points p = random_points(3000, 200);
+  const Points p = test::random_box_points(3000, 200);
   expect_radius_like_tree(p, 0.05, 0.05);   // one ring
   expect_radius_like_tree(p, 0.05, 0.03);   // smaller than a cell
   expect_radius_like_tree(p, 0.02, 0.05);   // three rings
   expect_radius_like_tree(p, 0.05, 0.0);    // duplicates only
-  expect_radius_like_tree(lattice(6), 1.0, 1.0);  // exactly on the radius: inclusive
+  expect_radius_like_tree(test::lattice_points(6), 1.0, 1.0);  // exactly on the radius: inclusive
   expect_radius_like_tree(uneven_points(), 0.2, 0.2);
 }
 
@@ -157,7 +135,7 @@ TEST(VoxelGrid, CoincidentPoints) {
 }
 
 TEST(VoxelGrid, GridOrderIsAPermutation) {
-  const Points p = random_points(500, 0);
+  const Points p = test::random_box_points(500, 0);
   const VoxelGrid grid(p, 0.1);
   std::vector<std::uint32_t> order(grid.grid_order().begin(), grid.grid_order().end());
   std::sort(order.begin(), order.end());
@@ -169,10 +147,10 @@ TEST(VoxelGrid, GridOrderIsAPermutation) {
 
 TEST(VoxelGrid, BadInputThrowsUsageError) {
   EXPECT_THROW(VoxelGrid(Points{}, 1.0), UsageError);
-  EXPECT_THROW(VoxelGrid(random_points(10, 0), 0.0), UsageError);
-  EXPECT_THROW(VoxelGrid(random_points(10, 0), std::nan("")), UsageError);
+  EXPECT_THROW(VoxelGrid(test::random_box_points(10, 0), 0.0), UsageError);
+  EXPECT_THROW(VoxelGrid(test::random_box_points(10, 0), std::nan("")), UsageError);
   EXPECT_THROW(VoxelGrid::knn_cell_size(Points{}, 3), UsageError);
-  const VoxelGrid grid(random_points(10, 0), 0.5);
+  const VoxelGrid grid(test::random_box_points(10, 0), 0.5);
   EXPECT_THROW(grid.for_each_radius(-1.0, [](std::uint32_t, std::span<const Neighbor>) {}), UsageError);
   EXPECT_THROW(grid.count_within(std::nan(""), 3), UsageError);
 }
