@@ -94,7 +94,8 @@ def main():
         start()
         pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(30))
         stop()
-        out["mean_angle_deg"] = errors(truth, np.asarray(pcd.normals))[0]
+        if len(truth) == len(pcd.points):
+            out["mean_angle_deg"] = errors(truth, np.asarray(pcd.normals))[0]
     elif stage == "orient":
         pcd.normals = o3d.utility.Vector3dVector()
         pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(30))

@@ -36,7 +36,7 @@ for ((r = 0; r < REPEATS; r++)); do
   "$PY" "$ROOT/bench/open3d_bench.py" baseline >> "$RESULTS"
 done
 # Stage pairs: pointsurf's name, Open3D's name (the same query order for kNN).
-pairs="read:read write:write knn:knn_spatial knn_input:knn normals:normals orient:orient"
+pairs="${PAIRS:-read:read write:write knn:knn_spatial knn_input:knn normals:normals orient:orient}"
 for n in $SIZES; do
   cloud="$OUT/${MESH}_${n}.ply"
   [ -f "$cloud" ] || "$BUILD_DIR/bench/pointsurf_bench" sample "$OUT/$MESH.off" "$n" "$cloud" 1

@@ -298,7 +298,7 @@ double VoxelGrid::knn_cell_size(std::span<const Eigen::Vector3d> points, std::si
   // cloud: 1 + (sample neighbours in its cell) * N / M.
   const std::size_t m = std::min<std::size_t>(n, 32768);
   const double stride = double(n) / double(m);
-  const double target = std::max(2.0, double(k) / 3.0);
+  const double target = std::max(2.0, double(k) / 2.0);
   double side = largest / std::cbrt(double(n));
   std::vector<std::uint64_t> keys(m);
   for (int iteration = 0; iteration < 8; ++iteration) {
