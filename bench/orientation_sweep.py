@@ -20,7 +20,7 @@ print("|---|---|---|---|")
 for f in files:
     a = o3d.io.read_point_cloud(f)
     N0 = np.asarray(a.normals).copy()
-    subprocess.run([cli, "normals", f, OUT, "-q"], check=True)
+    subprocess.run([cli, "normals", f, OUT, "--orient", "mst", "-q"], check=True)
     ours = np.asarray(o3d.io.read_point_cloud(OUT).normals)
     b = o3d.io.read_point_cloud(f)
     b.normals = o3d.utility.Vector3dVector()

@@ -19,6 +19,7 @@
 #include "clean/detail/clean_common.h"
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/spatial/voxel_grid.h"
 
 namespace pointsurf {
 namespace {
@@ -271,10 +272,19 @@ OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlie
 
   std::vector<std::uint8_t> keep(cloud.size());
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
-  detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
-    t.hybrid(cloud.positions[i], wanted, radius, neighbors);
-    keep[i] = neighbors.size() >= wanted;
-  });
+  if (radius > 0.0) {
+    // A voxel grid with cells of the radius: each cell scans its 27-cell block once for all of
+    // its points (own cell first, so dense clouds stop counting early); the same counts as
+    // the tree's hybrid query.
+    const VoxelGrid grid(cloud.positions, radius, &t);
+    const std::vector<std::uint32_t> counts = grid.count_within(radius, static_cast<std::uint32_t>(wanted));
+    for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = counts[i] >= wanted;
+  } else {
+    detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
+      t.hybrid(cloud.positions[i], wanted, radius, neighbors);
+      keep[i] = neighbors.size() >= wanted;
+    });
+  }
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return collect(keep, radius);

@@ -16,6 +16,7 @@
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
+#include "pointsurf/spatial/voxel_grid.h"
 
 namespace pointsurf {
 namespace {
@@ -27,16 +28,20 @@ struct PointNormal {
 };
 
 // PCA of the neighbourhood of `center`, in offsets from it (see detail::local_pca).
-PointNormal fit_normal(const KdTree& tree, const Eigen::Vector3d& center, std::span<const Neighbor> neighbors) {
+PointNormal fit_normal(std::span<const Eigen::Vector3d> positions, const Eigen::Vector3d& center,
+                       std::span<const Neighbor> neighbors) {
   PointNormal out;
   const detail::LocalPca pca = detail::local_pca(
-      [&](std::size_t j) { return Eigen::Vector3d(tree.point(neighbors[j].index) - center); }, neighbors.size());
+      [&](std::size_t j) { return Eigen::Vector3d(positions[neighbors[j].index] - center); }, neighbors.size());
   if (!pca.valid) return out;
   out.normal = pca.normal();
   out.variation = pca.variation();
   out.degenerate = false;
   return out;
 }
+
+// Points whose progress is reported at once (an atomic add per point would contend).
+constexpr std::size_t kProgressBatch = 1024;
 
 }  // namespace
 
@@ -54,11 +59,14 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
     throw UsageError(
         fmt::format("estimate_normals: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
 
+  // kNN (the default) runs over a voxel grid: every point's neighbours from the short list of
+  // its block of cells, the same lists as the kd-tree's. Radius and hybrid use the tree.
+  const bool bulk_knn = settings.kind == NeighborhoodKind::Knn;
   std::optional<KdTree> own_tree;
-  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  if (tree == nullptr && !bulk_knn) tree = &own_tree.emplace(cloud.positions);
 
   NormalResult result;
-  result.radius_used = settings.resolve_radius(*tree);
+  if (!bulk_knn) result.radius_used = settings.resolve_radius(*tree);
 
   // Results go to fresh arrays, committed at the end, so a cancelled run leaves the cloud as
   // it was. Existing normals keep their side: each new normal is flipped to agree with the old.
@@ -67,32 +75,51 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   std::vector<double> variation(params.keep_variation ? n : 0);
   std::vector<double> mean_distance(params.keep_mean_distance ? n : 0);
 
-  const std::span<const std::uint32_t> order = tree->spatial_order();
   detail::ProgressReporter reporter(progress, 0.0, 1.0, n);
-  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  tbb::enumerable_thread_specific<std::size_t> degenerate(0);
+  tbb::enumerable_thread_specific<std::size_t> degenerate(0), pending(0);
   const std::size_t k = static_cast<std::size_t>(params.k);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    if (reporter.cancelled()) return;
-    std::vector<Neighbor>& neighbors = buffers.local();
-    std::size_t& local_degenerate = degenerate.local();
-    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
-      const std::uint32_t i = order[pos];
-      const Eigen::Vector3d& p = cloud.positions[i];
-      settings.query(*tree, p, k, result.radius_used, neighbors);
-      PointNormal fit = fit_normal(*tree, p, neighbors);
-      if (fit.degenerate) ++local_degenerate;
-      if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;
-      normals[i] = fit.normal;
-      if (params.keep_variation) variation[i] = fit.variation;
-      if (params.keep_mean_distance) {
-        double sum = 0.0;  // nearest first, as remove_statistical_outliers sums them
-        for (const Neighbor& nb : neighbors) sum += std::sqrt(nb.squared_distance);
-        mean_distance[i] = neighbors.empty() ? 0.0 : sum / double(neighbors.size());
-      }
+  const auto fit_one = [&](std::uint32_t i, std::span<const Neighbor> neighbors) {
+    const Eigen::Vector3d& p = cloud.positions[i];
+    PointNormal fit = fit_normal(cloud.positions, p, neighbors);
+    if (fit.degenerate) ++degenerate.local();
+    if (had_normals && fit.normal.dot(cloud.normals[i]) < 0.0) fit.normal = -fit.normal;
+    normals[i] = fit.normal;
+    if (params.keep_variation) variation[i] = fit.variation;
+    if (params.keep_mean_distance) {
+      double sum = 0.0;  // nearest first, as remove_statistical_outliers sums them
+      for (const Neighbor& nb : neighbors) sum += std::sqrt(nb.squared_distance);
+      mean_distance[i] = neighbors.empty() ? 0.0 : sum / double(neighbors.size());
     }
-    reporter.advance(r.size());
-  });
+  };
+  if (bulk_knn) {
+    const VoxelGrid grid(cloud.positions, VoxelGrid::knn_cell_size(cloud.positions, k), tree);
+    // The PCA needs the neighbours as a set; the mean distance sums them nearest first.
+    grid.for_each_knn(
+        k,
+        [&](std::uint32_t i, std::span<const Neighbor> neighbors) {
+          if (reporter.cancelled()) return;
+          fit_one(i, neighbors);
+          std::size_t& done = pending.local();
+          if (++done == kProgressBatch) {
+            reporter.advance(done);
+            done = 0;
+          }
+        },
+        params.keep_mean_distance);
+  } else {
+    const std::span<const std::uint32_t> order = tree->spatial_order();
+    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      if (reporter.cancelled()) return;
+      std::vector<Neighbor>& neighbors = buffers.local();
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+        const std::uint32_t i = order[pos];
+        settings.query(*tree, cloud.positions[i], k, result.radius_used, neighbors);
+        fit_one(i, neighbors);
+      }
+      reporter.advance(r.size());
+    });
+  }
   reporter.throw_if_cancelled();
   reporter.report(1.0);
   reporter.throw_if_cancelled();

@@ -117,6 +117,39 @@ private:
   double bound_;
 };
 
+// The nearest point with another label than the query's, within a strict squared bound.
+class NearestOtherResult {
+public:
+  using DistanceType = double;
+  using IndexType = std::uint32_t;
+
+  NearestOtherResult(const std::uint32_t* original, std::span<const std::uint32_t> labels, std::uint32_t label, double bound)
+      : original_(original), labels_(labels), label_(label), worst_(bound) {}
+
+  std::size_t size() const { return found_ ? 1 : 0; }
+  bool full() const { return true; }
+  double worstDist() const { return found_ ? just_above(best_.squared_distance) : worst_; }
+  bool found() const { return found_; }
+  const Neighbor& best() const { return best_; }
+
+  bool addPoint(double squared_distance, std::uint32_t slot_in_tree) {
+    const std::uint32_t index = original_[slot_in_tree];
+    if (labels_[index] == label_ || !(squared_distance < worst_)) return true;
+    if (found_ && !precedes(squared_distance, index, best_)) return true;
+    best_ = Neighbor{index, squared_distance};
+    found_ = true;
+    return true;
+  }
+
+private:
+  const std::uint32_t* original_;
+  std::span<const std::uint32_t> labels_;
+  std::uint32_t label_;
+  double worst_;
+  Neighbor best_;
+  bool found_ = false;
+};
+
 double checked_squared_radius(const char* where, double radius) {
   if (!(radius >= 0.0)) throw UsageError(fmt::format("KdTree::{}: radius must be >= 0, got {}", where, radius));
   return radius * radius;
@@ -280,6 +313,17 @@ void KdTree::hybrid(const Eigen::Vector3d& query, std::size_t k, double radius, 
   std::size_t count = 0;
   impl_->hybrid(query, out.size(), squared_radius, out.data(), count);
   out.resize(count);
+}
+
+bool KdTree::nearest_other(const Eigen::Vector3d& query, std::span<const std::uint32_t> labels, std::uint32_t label,
+                           double max_squared_distance, Neighbor& out) const {
+  if (labels.size() != size())
+    throw UsageError(fmt::format("KdTree::nearest_other: {} labels for {} points", labels.size(), size()));
+  NearestOtherResult result(impl_->original.data(), labels, label, max_squared_distance);
+  impl_->search(query, result);
+  if (!result.found()) return false;
+  out = result.best();
+  return true;
 }
 
 NeighborLists KdTree::knn_all(std::span<const Eigen::Vector3d> queries, std::size_t k) const {

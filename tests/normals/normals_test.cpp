@@ -413,6 +413,23 @@ TEST(OrientNormals, CountsFlipsAndComponents) {
   EXPECT_EQ(inward_count(both.normals, exact), 0u);
 }
 
+TEST(OrientNormals, ASamplingGapIsJoinedButSeparateObjectsAreNot) {
+  // A sphere without its equatorial band (|z| < 0.1, about 4 spacings wide): the kNN graph
+  // falls into two caps, which the shortest connecting edge joins into one component.
+  Shape full = make(test::sample_sphere(6000, 1.0, Vector3d::Zero(), 4));
+  Shape s;
+  for (std::size_t i = 0; i < full.cloud.size(); ++i) {
+    if (std::abs(full.cloud.positions[i].z()) < 0.1) continue;
+    s.cloud.positions.push_back(full.cloud.positions[i]);
+    s.exact.push_back(full.exact[i]);
+  }
+  s.cloud.normals = s.exact;
+  for (std::size_t i = 0; i < s.exact.size(); i += 3) s.cloud.normals[i] = -s.exact[i];
+  const OrientResult o = orient_normals(s.cloud, {.k = 8});
+  EXPECT_EQ(o.components, 1u);
+  EXPECT_EQ(inward_count(s.cloud.normals, s.exact), 0u);
+}
+
 TEST(OrientNormals, ZeroNormalsAreSkipped) {
   Shape s = make(test::sample_sphere(5000));
   s.cloud.normals = s.exact;

@@ -18,30 +18,6 @@ namespace {
 
 using Points = std::vector<Eigen::Vector3d>;
 
-// n uniform points in [0, 1]^3 around `offset`, then `duplicates` exact copies of earlier points.
-Points random_points(std::size_t n, std::size_t duplicates, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero(),
-                     std::uint64_t seed = 3) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Points p;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = u(rng), y = u(rng), z = u(rng);
-    p.push_back(offset + Eigen::Vector3d(x, y, z));
-  }
-  std::uniform_int_distribution<std::size_t> pick(0, n - 1);
-  for (std::size_t i = 0; i < duplicates; ++i) p.push_back(p[pick(rng)]);
-  return p;
-}
-
-// Integer lattice: many exactly equal distances, to check the tie-break by index.
-Points lattice(int side, double h = 1.0, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero()) {
-  Points p;
-  for (int z = 0; z < side; ++z)
-    for (int y = 0; y < side; ++y)
-      for (int x = 0; x < side; ++x) p.push_back(offset + h * Eigen::Vector3d(x, y, z));
-  return p;
-}
-
 // Brute force: every point with its squared distance, nearest first, ties by index.
 std::vector<Neighbor> brute_force(const Points& points, const Eigen::Vector3d& q) {
   std::vector<Neighbor> all;
@@ -77,10 +53,10 @@ void expect_same(std::span<const Neighbor> got, std::span<const Neighbor> want, 
 }
 
 TEST(KdTree, KnnMatchesBruteForceWithDuplicates) {
-  const Points points = random_points(1500, 300);
+  const Points points = test::random_box_points(1500, 300);
   const KdTree tree(points);
   ASSERT_EQ(tree.size(), points.size());
-  const Points queries = random_points(40, 0, Eigen::Vector3d::Constant(-0.1), 11);
+  const Points queries = test::random_box_points(40, 0, Eigen::Vector3d::Constant(-0.1), 11);
   std::vector<Neighbor> out;
   for (std::size_t k : {std::size_t(1), std::size_t(2), std::size_t(8), std::size_t(30)}) {
     for (const Eigen::Vector3d& q : queries) {
@@ -95,7 +71,7 @@ TEST(KdTree, KnnMatchesBruteForceWithDuplicates) {
 }
 
 TEST(KdTree, KnnWithKAboveSizeReturnsEveryPoint) {
-  const Points points = random_points(20, 5);
+  const Points points = test::random_box_points(20, 5);
   const KdTree tree(points);
   std::vector<Neighbor> out;
   tree.knn(Eigen::Vector3d(0.5, 0.5, 0.5), 1000, out);
@@ -105,7 +81,7 @@ TEST(KdTree, KnnWithKAboveSizeReturnsEveryPoint) {
 }
 
 TEST(KdTree, TiesAreBrokenByIndex) {
-  const Points points = lattice(6);
+  const Points points = test::lattice_points(6);
   const KdTree tree(points, 3);
   std::vector<Neighbor> out;
   for (std::size_t i = 0; i < points.size(); i += 5) {
@@ -121,9 +97,9 @@ TEST(KdTree, TiesAreBrokenByIndex) {
 }
 
 TEST(KdTree, RadiusAndHybridMatchBruteForce) {
-  const Points points = random_points(1500, 300);
+  const Points points = test::random_box_points(1500, 300);
   const KdTree tree(points);
-  const Points queries = random_points(40, 0, Eigen::Vector3d::Zero(), 12);
+  const Points queries = test::random_box_points(40, 0, Eigen::Vector3d::Zero(), 12);
   std::vector<Neighbor> out;
   for (double r : {0.0, 0.02, 0.1, 0.3}) {
     for (const Eigen::Vector3d& q : queries) {
@@ -136,7 +112,7 @@ TEST(KdTree, RadiusAndHybridMatchBruteForce) {
 }
 
 TEST(KdTree, RadiusZeroFindsExactDuplicates) {
-  Points points = random_points(200, 0);
+  Points points = test::random_box_points(200, 0);
   points.push_back(points[17]);
   points.push_back(points[17]);
   const KdTree tree(points);
@@ -150,7 +126,7 @@ TEST(KdTree, RadiusZeroFindsExactDuplicates) {
 }
 
 TEST(KdTree, RadiusIsInclusive) {
-  const Points points = lattice(3, 0.25);  // distances 0.25 are exact in binary
+  const Points points = test::lattice_points(3, 0.25);  // distances 0.25 are exact in binary
   const KdTree tree(points);
   std::vector<Neighbor> out;
   tree.radius(points[13], 0.25, out);  // the centre and its 6 face neighbours
@@ -161,8 +137,8 @@ TEST(KdTree, RadiusIsInclusive) {
 
 TEST(KdTree, GeoreferencedCloudKeepsPrecision) {
   const Eigen::Vector3d offset(6.5e6, -4.3e6, 6.5e6);
-  const Points points = random_points(1000, 50, offset);
-  const Points local = random_points(1000, 50);
+  const Points points = test::random_box_points(1000, 50, offset);
+  const Points local = test::random_box_points(1000, 50);
   const KdTree tree(points);
   std::vector<Neighbor> out;
   for (std::size_t i = 0; i < points.size(); i += 29) {
@@ -184,9 +160,9 @@ TEST(KdTree, GeoreferencedCloudKeepsPrecision) {
 }
 
 TEST(KdTree, BatchQueriesEqualSingleQueries) {
-  const Points points = random_points(3000, 200);
+  const Points points = test::random_box_points(3000, 200);
   const KdTree tree(points);
-  const Points queries = random_points(500, 0, Eigen::Vector3d::Zero(), 21);
+  const Points queries = test::random_box_points(500, 0, Eigen::Vector3d::Zero(), 21);
   std::vector<Neighbor> out;
   for (const Points* qs : {&points, &queries}) {
     const bool own = qs == &points;
@@ -209,7 +185,7 @@ TEST(KdTree, BatchQueriesEqualSingleQueries) {
 }
 
 TEST(KdTree, ConcurrentQueriesGiveTheSameAnswers) {
-  const Points points = random_points(4000, 100);
+  const Points points = test::random_box_points(4000, 100);
   const KdTree tree(points);
   const NeighborLists reference = tree.knn_all({}, 9);
   std::vector<int> mismatches(4, 0);
@@ -232,7 +208,7 @@ TEST(KdTree, ConcurrentQueriesGiveTheSameAnswers) {
 }
 
 TEST(KdTree, MovedTreeStillAnswers) {
-  const Points points = random_points(100, 0);
+  const Points points = test::random_box_points(100, 0);
   KdTree a(points);
   KdTree b(std::move(a));
   std::vector<Neighbor> out;
@@ -248,7 +224,7 @@ TEST(KdTree, BadInputThrowsUsageError) {
   } catch (const UsageError& e) {
     EXPECT_EQ(std::string(e.what()), "KdTree: cannot build a tree over an empty point set");
   }
-  const Points points = random_points(10, 0);
+  const Points points = test::random_box_points(10, 0);
   EXPECT_THROW(KdTree(points, 0), UsageError);
   const KdTree tree(points);
   std::vector<Neighbor> out;
@@ -264,7 +240,7 @@ TEST(KdTree, BadInputThrowsUsageError) {
 
 TEST(MeanSpacing, RegularGridGivesTheGridStep) {
   const double h = 0.125;
-  Points grid = lattice(12, h, Eigen::Vector3d(6.5e6, 1e6, 300.0));
+  Points grid = test::lattice_points(12, h, Eigen::Vector3d(6.5e6, 1e6, 300.0));
   EXPECT_NEAR(mean_spacing(grid), h, 1e-9);
   const std::size_t n = grid.size();
   for (std::size_t i = 0; i < n; i += 3) grid.push_back(grid[i]);  // duplicates do not count
@@ -278,7 +254,7 @@ TEST(MeanSpacing, RegularGridGivesTheGridStep) {
 }
 
 TEST(MeanSpacing, SampleIsSeededAndCoincidentPointsGiveZero) {
-  const Points points = random_points(3000, 0);
+  const Points points = test::random_box_points(3000, 0);
   const KdTree tree(points);
   EXPECT_EQ(mean_spacing(tree, 500, 1), mean_spacing(tree, 500, 1));
   EXPECT_NEAR(mean_spacing(tree, 500, 1), mean_spacing(tree), 0.1 * mean_spacing(tree));
@@ -301,7 +277,7 @@ TEST(MortonOrder, IsAPermutationInZOrder) {
   ASSERT_EQ(order.size(), 8u);
   for (std::size_t pos = 0; pos < 8; ++pos) EXPECT_EQ(order[pos], 7 - pos);
 
-  const Points points = random_points(5000, 100);
+  const Points points = test::random_box_points(5000, 100);
   std::vector<std::uint32_t> perm = morton_order(points);
   std::sort(perm.begin(), perm.end());
   for (std::size_t i = 0; i < perm.size(); ++i) ASSERT_EQ(perm[i], i);

@@ -103,4 +103,25 @@ std::filesystem::path temp_dir(const std::string& name) {
   return p;
 }
 
+std::vector<Vector3d> random_box_points(std::size_t n, std::size_t duplicates, const Vector3d& offset, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vector3d> p;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng), z = u(rng);
+    p.push_back(offset + Vector3d(x, y, z));
+  }
+  std::uniform_int_distribution<std::size_t> pick(0, n - 1);
+  for (std::size_t i = 0; i < duplicates; ++i) p.push_back(p[pick(rng)]);
+  return p;
+}
+
+std::vector<Vector3d> lattice_points(int side, double h, const Vector3d& offset) {
+  std::vector<Vector3d> p;
+  for (int z = 0; z < side; ++z)
+    for (int y = 0; y < side; ++y)
+      for (int x = 0; x < side; ++x) p.push_back(offset + h * Vector3d(x, y, z));
+  return p;
+}
+
 }  // namespace pointsurf::test

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "pointsurf/core/point_cloud.h"
 
@@ -24,5 +25,12 @@ void add_noise(PointCloud& cloud, double sigma, std::uint64_t seed = 7);
 std::filesystem::path data_path(const std::string& name);
 /// A fresh empty directory under the system temp dir for one test.
 std::filesystem::path temp_dir(const std::string& name);
+
+/// n uniform points in [0, 1]^3 + offset, then `duplicates` exact copies of earlier points
+/// (seeded): neighbour searches against brute force.
+std::vector<Vector3d> random_box_points(std::size_t n, std::size_t duplicates, const Vector3d& offset = Vector3d::Zero(),
+                                        std::uint64_t seed = 3);
+/// The integer lattice side^3 scaled by h, plus offset: many exactly equal distances (ties).
+std::vector<Vector3d> lattice_points(int side, double h = 1.0, const Vector3d& offset = Vector3d::Zero());
 
 }  // namespace pointsurf::test

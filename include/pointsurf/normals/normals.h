@@ -40,7 +40,9 @@ struct NormalResult {
 /// neighbourhood covariance (Hoppe et al. 1992). Writes `cloud.normals` (N×3) and, when asked,
 /// the field "variation". Sign is arbitrary (call orient_normals afterwards) except that
 /// existing normals, if any, keep their side. Reuses `tree` if given (it must be built over
-/// `cloud.positions`). Parallel (oneTBB) in the tree's spatial order; throws UsageError for k < 3, a
+/// `cloud.positions`; kNN neighbourhoods use a voxel grid, with the tree only for the rare
+/// points whose neighbours lie beyond the grid's rings). Parallel (oneTBB) in spatial order;
+/// throws UsageError for k < 3, a
 /// negative radius or fewer than 3 points; CancelledError when `progress` returns false.
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params = {}, const KdTree* tree = nullptr,
                               const ProgressCallback& progress = {});
@@ -63,13 +65,16 @@ struct OrientParams {
 };
 
 struct OrientResult {
-  std::size_t components = 0;   // connected components of the kNN graph (Mst)
+  std::size_t components = 0;   // connected components of the graph, after joining (Mst)
   std::size_t flipped = 0;      // normals whose sign changed
 };
 
 /// Orients `cloud.normals` (which must be present) consistently. Mst (Hoppe et al. 1992):
-/// builds the symmetric kNN graph with edge weights 1 - |ni·nj|, takes its minimum spanning
-/// forest, and propagates the sign along it from one seed per connected component. Each
+/// builds the Riemannian graph, the symmetric kNN graph plus the shortest edges joining its
+/// components (the Euclidean MST's edges between them; components further apart than 3 kNN
+/// reaches stay apart as separate objects), with edge weights 1 - |ni·nj| + 0.3 x length in kNN
+/// reaches (smooth paths first, short steps among them), takes its minimum spanning forest,
+/// and propagates the sign along it from one seed per connected component. Each
 /// component's global sign is then decided by all its points:
 ///  - terrain-like components (mostly horizontal surfaces, mean |n_z| >= 0.7, forming an open
 ///    sheet) face up (+z), the convention of aerial and ground LiDAR; inside them, smooth

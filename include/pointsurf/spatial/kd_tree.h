@@ -66,6 +66,13 @@ public:
   /// At most `k` nearest points within `radius`, nearest first.
   void hybrid(const Eigen::Vector3d& query, std::size_t k, double radius, std::vector<Neighbor>& out) const;
 
+  /// The nearest point whose label `labels[index]` differs from `label`, strictly closer than
+  /// `max_squared_distance` (ties by index): the shortest edge from `query` out of its part of
+  /// a partition (connecting the components of a graph). `labels` holds one label per point.
+  /// Returns false, leaving `out` unchanged, when there is none.
+  bool nearest_other(const Eigen::Vector3d& query, std::span<const std::uint32_t> labels, std::uint32_t label,
+                     double max_squared_distance, Neighbor& out) const;
+
   /// Batch versions over many queries, in parallel. For the tree's own points pass
   /// `queries = {}`, which uses the tree's points and visits them in spatial_order().
   NeighborLists knn_all(std::span<const Eigen::Vector3d> queries, std::size_t k) const;
