@@ -244,16 +244,26 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
 bool lies_on_line(const std::vector<Vector3d>& positions, std::uint32_t i, const Vector3d& n, const std::vector<Neighbor>& nb,
                   std::vector<double>& angles) {
   const Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-  angles.clear();
+  // The doubled angle's unit vector of (x, y) is (x^2 - y^2, 2 x y) / (x^2 + y^2): no
+  // trigonometry for the test most points fail.
   Vector2d sum = Vector2d::Zero();
+  int count = 0;
   for (const Neighbor& x : nb) {
     if (x.index == i || !(x.squared_distance > 0.0)) continue;
     const Vector3d d = positions[x.index] - positions[i];
-    angles.push_back(std::atan2(d.dot(e2), d.dot(e1)));
-    sum += Vector2d(std::cos(2.0 * angles.back()), std::sin(2.0 * angles.back()));
+    const double u = d.dot(e1), v = d.dot(e2), r2 = u * u + v * v;
+    if (!(r2 > 0.0)) continue;
+    sum += Vector2d(u * u - v * v, 2.0 * u * v) / r2;
+    ++count;
   }
-  if (angles.size() < 2) return false;
-  if (sum.norm() < kLineResultant * double(angles.size())) return false;
+  if (count < 2 || sum.norm() < kLineResultant * double(count)) return false;
+  angles.clear();
+  for (const Neighbor& x : nb) {
+    if (x.index == i || !(x.squared_distance > 0.0)) continue;
+    const Vector3d d = positions[x.index] - positions[i];
+    const double u = d.dot(e1), v = d.dot(e2);
+    if (u * u + v * v > 0.0) angles.push_back(std::atan2(v, u));
+  }
   std::sort(angles.begin(), angles.end());
   double first = 0.0, second = 0.0;
   for (std::size_t a = 0; a < angles.size(); ++a) {
