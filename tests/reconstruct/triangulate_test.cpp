@@ -206,8 +206,10 @@ TEST(RegionGrowing, ScanLinesFarApartAreJoined) {
     const int count = std::max(3, int(std::round(2.0 * std::numbers::pi * std::cos(lat) / along)));
     const double start = phase(rng);
     for (int j = 0; j < count; ++j) {
-      const double lon = 2.0 * std::numbers::pi * (j + start) / count;
-      const Vector3d p(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+      // Jittered a little along and across the line, as a scanner's samples are.
+      const double lon = 2.0 * std::numbers::pi * (j + start + 0.2 * (phase(rng) - 0.5)) / count;
+      const double la = lat + 0.05 * line_step * (phase(rng) - 0.5);
+      const Vector3d p(std::cos(la) * std::cos(lon), std::cos(la) * std::sin(lon), std::sin(la));
       cloud.positions.push_back(p);
       cloud.normals.push_back(p);
     }
