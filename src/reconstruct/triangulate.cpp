@@ -55,6 +55,18 @@ constexpr double kHoldingPointFactor = 15.0;
 // A loop along which the local spacing changes abruptly (its largest is this many times its
 // mean) has its limit set by the largest; random uniform samples stay well below.
 constexpr double kAbruptDensityRatio = 3.0;
+// A point whose nearest neighbours lie along a line through it (a scan line) sees no point of the
+// next line among its k nearest or within a few of its spacings, and the growth never crosses
+// the band between two lines (CGAL's radar.xyz). Along a line, in the point's tangent plane, the
+// two largest angular gaps between its neighbours are both at least kLineGapDeg wide and their
+// directions agree as axes (the mean of their doubled angles' unit vectors is at least
+// kLineResultant long; 1 on a straight line). Random samples of a surface show such a
+// neighbourhood now and then (3 % of points pass the gap test alone), a scan line a run of
+// them: a point counts as on a line when one of its two nearest neighbours also passes. Its
+// umbrella then reaches kLineReachFactor times farther and takes as many times more neighbours.
+constexpr double kLineGapDeg = 120.0;
+constexpr double kLineResultant = 0.6;
+constexpr double kLineReachFactor = 4.0;
 
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
@@ -149,6 +161,8 @@ struct Setup {
   const std::vector<Vector3d>& normals;   // unit, or zero where unusable
   const std::vector<double>& local_spacing;
   const std::vector<std::uint8_t>& usable;
+  const std::vector<double>& radius_of;  // search radius and longest edge per point
+  const std::vector<std::uint8_t>& on_line;  // scan-line points: k times kLineReachFactor
 };
 
 // The Delaunay umbrella of point i in its tangent plane; appends accepted candidates.
@@ -156,10 +170,11 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
   if (!s.usable[i]) return;
   const Vector3d& p = s.cloud.positions[i];
   const Vector3d& n = s.normals[i];
-  const double radius = s.params.radius > 0.0 ? s.params.radius : s.params.radius_in_spacings * s.local_spacing[i];
+  const double radius = s.radius_of[i];
   const double max_offset = s.params.max_offset_in_spacings * s.local_spacing[i];
   const double min_normal_dot = std::cos(radians(s.params.max_normal_angle_deg));
-  s.tree.hybrid(p, static_cast<std::size_t>(s.params.k) + 1, radius, b.neighbors);
+  const double k = s.on_line[i] ? kLineReachFactor * double(s.params.k) : double(s.params.k);
+  s.tree.hybrid(p, static_cast<std::size_t>(k) + 1, radius, b.neighbors);
 
   const Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   b.planar.clear();
@@ -221,6 +236,42 @@ void umbrella(const Setup& s, std::uint32_t i, UmbrellaBuffers& b) {
     if (!(face.dot(n) > 0.0) || !(face.dot(s.normals[j1]) > 0.0) || !(face.dot(s.normals[j2]) > 0.0)) continue;
     b.candidates.push_back(make_candidate(i, j1, j2, smallest));
   }
+}
+
+// Whether the neighbours `nb` of point i (normal n) lie along a line through it: their doubled
+// angles around n agree (kLineResultant) and the two largest angular gaps between them are both
+// at least kLineGapDeg.
+bool lies_on_line(const std::vector<Vector3d>& positions, std::uint32_t i, const Vector3d& n, const std::vector<Neighbor>& nb,
+                  std::vector<double>& angles) {
+  const Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  // The doubled angle's unit vector of (x, y) is (x^2 - y^2, 2 x y) / (x^2 + y^2): no
+  // trigonometry for the test most points fail.
+  Vector2d sum = Vector2d::Zero();
+  int count = 0;
+  for (const Neighbor& x : nb) {
+    if (x.index == i || !(x.squared_distance > 0.0)) continue;
+    const Vector3d d = positions[x.index] - positions[i];
+    const double u = d.dot(e1), v = d.dot(e2), r2 = u * u + v * v;
+    if (!(r2 > 0.0)) continue;
+    sum += Vector2d(u * u - v * v, 2.0 * u * v) / r2;
+    ++count;
+  }
+  if (count < 2 || sum.norm() < kLineResultant * double(count)) return false;
+  angles.clear();
+  for (const Neighbor& x : nb) {
+    if (x.index == i || !(x.squared_distance > 0.0)) continue;
+    const Vector3d d = positions[x.index] - positions[i];
+    const double u = d.dot(e1), v = d.dot(e2);
+    if (u * u + v * v > 0.0) angles.push_back(std::atan2(v, u));
+  }
+  std::sort(angles.begin(), angles.end());
+  double first = 0.0, second = 0.0;
+  for (std::size_t a = 0; a < angles.size(); ++a) {
+    const double gap = a + 1 < angles.size() ? angles[a + 1] - angles[a] : angles[0] + 2.0 * std::numbers::pi - angles[a];
+    if (gap > first) { second = first; first = gap; }
+    else if (gap > second) second = gap;
+  }
+  return second >= radians(kLineGapDeg);
 }
 
 void check_params(const PointCloud& cloud, const TriangulateParams& p, const KdTree* tree) {
@@ -581,7 +632,9 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   // Pass 1: unit normals, duplicates, local spacing.
   std::vector<Vector3d> normals(n);
   std::vector<double> local_spacing(n, result.mean_spacing);
-  std::vector<std::uint8_t> usable(n, 0);
+  std::vector<std::uint8_t> usable(n, 0), line_like(n, 0), on_line(n, 0);
+  // The two nearest distinct neighbours of each point (kNone where missing).
+  std::vector<std::array<std::uint32_t, 2>> nearest(n, {kNone, kNone});
   const std::span<const std::uint32_t> order = tree->spatial_order();
   {
     // Exact copies by sorting: a stack of more copies than the kNN below sees stays one point.
@@ -591,6 +644,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
       if (pass.cancelled()) return;
       std::vector<Neighbor>& nb = buffers.local();
+      std::vector<double> angles;
       for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
         const std::uint32_t i = order[pos];
         tree->knn(cloud.positions[i], kSpacingNeighbours, nb);
@@ -603,6 +657,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
             duplicate = duplicate || x.index < i;
             continue;
           }
+          if (count < 2) nearest[i][count] = x.index;
           if (count < kSpacingAveraged) { sum += std::sqrt(x.squared_distance); ++count; }
         }
         if (count > 0) local_spacing[i] = sum / double(count);
@@ -610,6 +665,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
         const bool has_normal = length > 0.0 && std::isfinite(length);
         normals[i] = has_normal ? Vector3d(cloud.normals[i] / length) : Vector3d::Zero();
         usable[i] = static_cast<std::uint8_t>(has_normal && !duplicate && result.mean_spacing > 0.0);
+        line_like[i] = static_cast<std::uint8_t>(usable[i] && lies_on_line(cloud.positions, i, normals[i], nb, angles));
       }
       pass.advance(r.size());
     });
@@ -623,8 +679,19 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   }
   result.local_spacing_mean = spacing_sum / double(n);
 
+  // A point is on a scan line when it and one of its two nearest neighbours look so (see
+  // kLineGapDeg). An explicit radius is the user's reach: nothing is widened then.
+  for (std::size_t i = 0; i < n; ++i)
+    on_line[i] = static_cast<std::uint8_t>(params.radius <= 0.0 && line_like[i] && ((nearest[i][0] != kNone && line_like[nearest[i][0]]) ||
+                                                                                    (nearest[i][1] != kNone && line_like[nearest[i][1]])));
+  std::vector<double> radius_of(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    radius_of[i] = params.radius > 0.0 ? params.radius : params.radius_in_spacings * local_spacing[i];
+    if (on_line[i]) radius_of[i] *= kLineReachFactor;
+  }
+
   // Pass 2: umbrellas, in parallel; candidates gathered per thread.
-  const Setup setup{cloud, params, *tree, normals, local_spacing, usable};
+  const Setup setup{cloud, params, *tree, normals, local_spacing, usable, radius_of, on_line};
   tbb::enumerable_thread_specific<UmbrellaBuffers> umbrella_buffers;
   {
     detail::ProgressReporter pass(progress, 0.1, 0.7, n);
@@ -771,8 +838,6 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   reporter.throw_if_cancelled();
 
   // Pass 4: zip up the front where it turns sharply, then close small holes.
-  std::vector<double> radius_of(n);
-  for (std::size_t i = 0; i < n; ++i) radius_of[i] = params.radius > 0.0 ? params.radius : params.radius_in_spacings * local_spacing[i];
   result.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
   {
     // Fill, then open the pinches that remain (vertices where fans touch) and fill again.

@@ -192,6 +192,37 @@ TEST(RegionGrowing, HolesAlongAnAbruptDensityChangeAreClosed) {
   EXPECT_EQ(t.boundary_loops.size(), 0u);
 }
 
+// A sphere scanned along circles of latitude (as CGAL's radar.xyz): points 8 times closer along
+// each line than between lines. The umbrellas of points on a line must reach the next line, or
+// the growth leaves every band between two lines open and the sphere falls apart into rings.
+TEST(RegionGrowing, ScanLinesFarApartAreJoined) {
+  constexpr int kLines = 30;
+  const double line_step = std::numbers::pi / kLines, along = line_step / 8.0;
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> phase(0.0, 1.0);
+  PointCloud cloud;
+  for (int l = 0; l < kLines; ++l) {
+    const double lat = -0.5 * std::numbers::pi + (l + 0.5) * line_step;
+    const int count = std::max(3, int(std::round(2.0 * std::numbers::pi * std::cos(lat) / along)));
+    const double start = phase(rng);
+    for (int j = 0; j < count; ++j) {
+      // Jittered a little along and across the line, as a scanner's samples are.
+      const double lon = 2.0 * std::numbers::pi * (j + start + 0.2 * (phase(rng) - 0.5)) / count;
+      const double la = lat + 0.05 * line_step * (phase(rng) - 0.5);
+      const Vector3d p(std::cos(la) * std::cos(lon), std::cos(la) * std::sin(lon), std::sin(la));
+      cloud.positions.push_back(p);
+      cloud.normals.push_back(p);
+    }
+  }
+  const TriangulateResult r = reconstruct_region_growing(cloud);
+  const MeshTopology& t = r.topology;
+  EXPECT_EQ(t.non_manifold_edges, 0u);
+  EXPECT_EQ(t.inconsistent_edges, 0u);
+  EXPECT_EQ(t.components, 1u);
+  EXPECT_LE(t.boundary_loops.size(), 2u);
+  EXPECT_LT(mesh_to_surface(r, [](const Vector3d& p) { return std::abs(p.norm() - 1.0); }), 0.01);
+}
+
 // Two parallel sheets three mean spacings apart, facing the same way (a floor under a table)
 // and facing opposite ways (the two sides of a thin plate): no triangle joins them.
 TEST(RegionGrowing, NoTriangleBridgesParallelPlanes) {
