@@ -251,7 +251,7 @@ StageSpec reconstruct_stage() {
   const std::vector<std::string> tri = {"triangulate"}, cocone = {"cocone"}, delaunay = {"cocone", "crust"}, ball = {"ball-pivot"};
   s.params = {
       P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot"}),
-      P::integer("k", tp.k, "At most k neighbours per point").at_least(3).only(tri),
+      P::integer("k", tp.k, "At most k neighbours per point (4k within 4x the radius for points on a scan line)").at_least(3).only(tri),
       P::number("radius", tp.radius, "Search radius and longest edge; 0: radius_in_spacings x local spacing").unit("cloud units").non_negative().meta("R").only(tri),
       P::number("radius_in_spacings", tp.radius_in_spacings, "Radius when radius is 0").unit("local spacings").positive().only(tri),
       P::number("max_offset_in_spacings", tp.max_offset_in_spacings, "Ignore neighbours farther from the tangent plane").unit("local spacings").positive().only(tri),
