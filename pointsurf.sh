@@ -18,6 +18,7 @@ BUILD_PACKAGES=(
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
   libgtest-dev libgmock-dev
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libpugixml-dev
 )
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
