@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <string>
@@ -421,6 +422,41 @@ TEST(E57, RandomCorruptionGivesPointsOrInputErrors) {
   }
   EXPECT_EQ(errors + reads, 300);
   EXPECT_GT(errors, 0);
+}
+
+// pointsurf's E57 read by another implementation: web-e57 1.2.0 from npm (the Rust e57 crate as
+// WebAssembly), run by node. Skipped unless node and the package are there: install it with
+// `npm install --prefix build/interop web-e57@1.2.0` or name its folder in POINTSURF_WEB_E57.
+TEST(E57, AnotherImplementationReadsOurTwoScansWithPoses) {
+  const char* env = std::getenv("POINTSURF_WEB_E57");
+  const std::filesystem::path package =
+      env ? std::filesystem::path(env) : std::filesystem::path(POINTSURF_CLI_PATH).parent_path() / "interop" / "node_modules" / "web-e57";
+  if (!std::filesystem::exists(package / "e57_bg.wasm") || std::system("node --version > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "node or web-e57 missing (" << package << ")";
+  const auto dir = test::temp_dir("e57_interop");
+  PointCloud c = two_scans();
+  c.fields = FieldSet();
+  ScalarField& scan = c.fields.add("scan", c.size(), ScalarType::UInt16);
+  for (std::size_t i = 0; i < c.size(); ++i) scan.values[i] = i < 1200 ? 0 : 1;
+  const std::filesystem::path script = std::filesystem::path(__FILE__).parent_path() / "e57_interop.mjs";
+  for (const bool scaled : {false, true}) {
+    WriteOptions options;
+    options.scan_poses = two_poses();
+    if (scaled) options.e57_scale = 1e-6;
+    write_point_cloud(dir / "ours.e57", c, options);
+    const std::string command = fmt::format("node {} {} {} {}", script.string(), package.string(), (dir / "ours.e57").string(), (dir / "theirs.xyz").string());
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    ReadOptions columns;
+    columns.columns = "x,y,z,r,g,b";
+    const CloudReadResult theirs = read_point_cloud(dir / "theirs.xyz", columns);
+    const CloudReadResult ours = read_point_cloud(dir / "ours.e57");
+    ASSERT_EQ(theirs.cloud.size(), c.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) worst = std::max(worst, (theirs.cloud.positions[i] - ours.cloud.positions[i]).norm());
+    EXPECT_LT(worst, 1e-12) << (scaled ? "scaled integers" : "float64");
+    // web-e57 writes colours as 0..255, read back by the XYZ reader as such.
+    for (std::size_t i = 0; i < c.size(); i += 97) EXPECT_NEAR(theirs.cloud.colors[i].x(), ours.cloud.colors[i].x(), 1e-6) << i;
+  }
 }
 
 }  // namespace
