@@ -424,6 +424,20 @@ TEST(E57, RandomCorruptionGivesPointsOrInputErrors) {
   EXPECT_GT(errors, 0);
 }
 
+TEST(E57, CliKeepsPosesApartThroughConvertAndInfoShowsThem) {
+  const auto dir = test::temp_dir("e57_cli_poses");
+  WriteOptions options;
+  options.scan_poses = two_poses();
+  write_point_cloud(dir / "two.e57", two_scans(), options);
+  const test::RunResult kept = test::run_cli(fmt::format("convert {} {} --keep-poses", (dir / "two.e57").string(), (dir / "kept.e57").string()), dir);
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  const CloudReadResult before = read_point_cloud(dir / "two.e57"), after = read_point_cloud(dir / "kept.e57");
+  EXPECT_EQ(after.cloud.positions, before.cloud.positions);  // the poses travelled with the scans
+  const test::RunResult info = test::run_cli(fmt::format("info {}", (dir / "kept.e57").string()), dir);
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_TRUE(test::contains(info.out, "scan         south: 1800 points, pose rotation (w x y z) 0.825335615")) << info.out;
+}
+
 // pointsurf's E57 read by another implementation: web-e57 1.2.0 from npm (the Rust e57 crate as
 // WebAssembly), run by node. Skipped unless node and the package are there: install it with
 // `npm install --prefix build/interop web-e57@1.2.0` or name its folder in POINTSURF_WEB_E57.
