@@ -310,7 +310,7 @@ std::vector<double> decode(std::vector<unsigned char>& stream, const Leaf& leaf,
     const unsigned char* p = stream.data();
     if (leaf.single)
       for (std::uint64_t i = 0; i < count; ++i) out[i] = load_value<float>(reinterpret_cast<const char*>(p + 4 * i));
-    else
+    else if (count > 0)
       std::memcpy(out.data(), p, count * sizeof(double));
     return out;
   }
