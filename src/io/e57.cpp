@@ -404,7 +404,8 @@ ScanCloud scan_cloud(const E57PagedReader& file, const Scan& scan, std::size_t i
     throw InputError(fmt::format("{}: scan {} ({}): neither cartesianX/Y/Z nor sphericalRange/Azimuth/Elevation among its fields",
                                  file.name(), index, scan.name));
   }
-  if (options.apply_poses) {
+  const bool identity = scan.rotation.coeffs() == Eigen::Quaterniond::Identity().coeffs() && scan.translation == Vector3d::Zero();
+  if (options.apply_poses && !identity) {
     const Eigen::Matrix3d rotation = scan.rotation.toRotationMatrix();
     for (Vector3d& p : c.positions) p = rotation * p + scan.translation;
   }
@@ -693,6 +694,8 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
   }
   std::mt19937_64 rng(std::random_device{}());
   E57LogicalWriter w;
+  // Bytes per point: coordinates, colours, normals and fields at most 8 each, plus packet and XML overhead.
+  w.reserve(cloud.size() * (24 + 3 + 12 + 8 * cloud.fields.size()) * 65 / 64 + 65536);
   const unsigned char header_space[kE57HeaderSize] = {};
   w.append(header_space, kE57HeaderSize);
   std::string scans_xml;
@@ -728,7 +731,7 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
     if (cloud.has_colors()) {
       for (int ch = 0; ch < 3; ++ch) {
         std::vector<std::int64_t> raw(n);
-        for (std::size_t i = 0; i < n; ++i) raw[i] = std::lround(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * 255.0);
+        for (std::size_t i = 0; i < n; ++i) raw[i] = static_cast<std::int64_t>(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * 255.0 + 0.5);
         fields.push_back({fmt::format("<color{} type=\"Integer\" minimum=\"0\" maximum=\"255\"/>", ch == 0 ? "Red" : ch == 1 ? "Green" : "Blue"),
                           pack_bits(std::vector<std::uint64_t>(raw.begin(), raw.end()), 8)});
       }
@@ -833,9 +836,8 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
   std::memcpy(header + 32, &xml_length, 8);
   std::memcpy(header + 40, &page_size, 8);
   w.patch(0, header, kE57HeaderSize);
-  const std::vector<char> bytes = w.pages();
   FileWriter out(path);
-  out.write(bytes.data(), bytes.size());
+  w.write_pages(out);
   out.close();
 }
 

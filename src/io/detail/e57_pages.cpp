@@ -118,18 +118,18 @@ void E57LogicalWriter::patch(std::uint64_t logical, const void* data, std::size_
   std::memcpy(bytes_.data() + logical, data, size);
 }
 
-std::vector<char> E57LogicalWriter::pages() const {
+void E57LogicalWriter::write_pages(FileWriter& out) const {
   const std::size_t pages = std::max<std::size_t>(1, (bytes_.size() + kE57PagePayload - 1) / kE57PagePayload);
-  std::vector<char> out(pages * kE57PageSize, 0);
-  for (std::size_t page = 0; page < pages; ++page) {
-    char* p = out.data() + page * kE57PageSize;
-    const std::size_t begin = page * kE57PagePayload;
+  char page[kE57PageSize];
+  for (std::size_t index = 0; index < pages; ++index) {
+    const std::size_t begin = index * kE57PagePayload;
     const std::size_t n = std::min(kE57PagePayload, bytes_.size() - std::min(bytes_.size(), begin));
-    if (n > 0) std::memcpy(p, bytes_.data() + begin, n);
-    const std::uint32_t crc = byteswap_value(crc32c(p, kE57PagePayload));  // stored big endian
-    std::memcpy(p + kE57PagePayload, &crc, 4);
+    if (n > 0) std::memcpy(page, bytes_.data() + begin, n);
+    std::memset(page + n, 0, kE57PagePayload - n);
+    const std::uint32_t crc = byteswap_value(crc32c(page, kE57PagePayload));  // stored big endian
+    std::memcpy(page + kE57PagePayload, &crc, 4);
+    out.write(page, kE57PageSize);
   }
-  return out;
 }
 
 }  // namespace pointsurf::io::detail

@@ -13,6 +13,8 @@
 
 namespace pointsurf::io::detail {
 
+class FileWriter;
+
 constexpr std::size_t kE57PageSize = 1024;
 constexpr std::size_t kE57PagePayload = 1020;
 constexpr std::size_t kE57HeaderSize = 48;
@@ -72,8 +74,9 @@ public:
   void pad_to(std::size_t alignment);
   /// Overwrites bytes already written at `logical`.
   void patch(std::uint64_t logical, const void* data, std::size_t size);
-  /// The physical file: the logical bytes padded to whole pages, each followed by its CRC.
-  std::vector<char> pages() const;
+  void reserve(std::size_t size) { bytes_.reserve(size); }
+  /// Writes the physical file: the logical bytes padded to whole pages, each followed by its CRC.
+  void write_pages(FileWriter& out) const;
 
 private:
   std::vector<char> bytes_;
