@@ -439,12 +439,12 @@ TEST(E57, CliKeepsPosesApartThroughConvertAndInfoShowsThem) {
 }
 
 // pointsurf's E57 read by another implementation: web-e57 1.2.0 from npm (the Rust e57 crate as
-// WebAssembly), run by node. Skipped unless node and the package are there: install it with
-// `npm install --prefix build/interop web-e57@1.2.0` or name its folder in POINTSURF_WEB_E57.
+// WebAssembly), run by node. Skipped unless node and the package are there (./pointsurf.sh test
+// installs it: `npm install --prefix build/npm web-e57@1.2.0`), or name its folder in POINTSURF_WEB_E57.
 TEST(E57, AnotherImplementationReadsOurTwoScansWithPoses) {
   const char* env = std::getenv("POINTSURF_WEB_E57");
   const std::filesystem::path package =
-      env ? std::filesystem::path(env) : std::filesystem::path(POINTSURF_CLI_PATH).parent_path() / "interop" / "node_modules" / "web-e57";
+      env ? std::filesystem::path(env) : std::filesystem::path(POINTSURF_CLI_PATH).parent_path() / "npm" / "node_modules" / "web-e57";
   if (!std::filesystem::exists(package / "e57_bg.wasm") || std::system("node --version > /dev/null 2>&1") != 0)
     GTEST_SKIP() << "node or web-e57 missing (" << package << ")";
   const auto dir = test::temp_dir("e57_interop");
@@ -452,7 +452,7 @@ TEST(E57, AnotherImplementationReadsOurTwoScansWithPoses) {
   c.fields = FieldSet();
   ScalarField& scan = c.fields.add("scan", c.size(), ScalarType::UInt16);
   for (std::size_t i = 0; i < c.size(); ++i) scan.values[i] = i < 1200 ? 0 : 1;
-  const std::filesystem::path script = std::filesystem::path(__FILE__).parent_path() / "e57_interop.mjs";
+  const std::filesystem::path script = std::filesystem::path(POINTSURF_DATA_DIR).parent_path() / "tests" / "io" / "e57_interop.mjs";
   for (const bool scaled : {false, true}) {
     WriteOptions options;
     options.scan_poses = two_poses();

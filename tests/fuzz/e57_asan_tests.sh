@@ -3,7 +3,7 @@
 # CGAL modules, so it builds in two minutes where ./pointsurf.sh test-sanitize builds everything),
 # then runs them. The CLI tests among them use the release CLI in build/.
 set -e
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 export CCACHE_BASEDIR=/work CCACHE_DIR=/work/.ccache
 FLAGS=(-std=c++20 -O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
 DEFS=(-DPOINTSURF_VERSION=\"0.1.0\" "-DPOINTSURF_DATA_DIR=\"$PWD/data\"" "-DPOINTSURF_CLI_PATH=\"$PWD/build/pointsurf\"")
