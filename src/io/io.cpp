@@ -97,11 +97,11 @@ std::string format_from_extension(const std::filesystem::path& path) {
   if (ext == ".ply") return "ply";
   if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".csv" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".asc") return "xyz";
   if (ext == ".pcd") return "pcd";
+  if (ext == ".e57") return "e57";
   if (ext == ".las") return "las";
   if (ext == ".off") return "off";
   if (ext == ".obj") return "obj";
   if (ext == ".stl") return "stl";
-  if (ext == ".e57") return "e57";
   if (ext == ".laz") throw UsageError(fmt::format("{}: compressed LAS (LAZ) is not supported yet; write .las", display_name(path)));
   throw UsageError(fmt::format("{}: unknown output format '{}': expected .ply, .xyz, .txt, .pts, .csv, .pcd, .las, .off, .obj or .stl",
                                display_name(path), ext.empty() ? std::string("(no extension)") : ext));

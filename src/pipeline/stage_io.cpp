@@ -25,9 +25,9 @@ void run_read(StageRun& run) {
   const std::string& file = run.args.text("filename");
   ReadOptions options;
   options.strict = run.args.boolean("strict");
+  options.apply_poses = !run.args.boolean("keep_poses");
   options.columns = run.args.text("columns");
   options.format = run.args.text("format");
-  options.apply_poses = !run.args.boolean("keep_poses");
   const std::string format = options.format.empty() ? detect_format(file) : options.format;
   options.format = format;
   StageRecord& rec = run.record;
@@ -149,12 +149,12 @@ StageSpec read_stage() {
   s.params = {
       P::text("filename", "", "File to read").meta("FILE"),
       P::choice("format", "", kFormats, "Read as this format instead of detecting it from the content").meta("FORMAT"),
+      P::boolean("keep_poses", !ReadOptions{}.apply_poses,
+                 "E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose"),
       P::text("columns", ReadOptions{}.columns,
               "Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)")
           .meta("SPEC"),
       P::boolean("strict", ReadOptions{}.strict, "Points with NaN/Inf coordinates are an error instead of being dropped and counted"),
-      P::boolean("keep_poses", !ReadOptions{}.apply_poses,
-                 "E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose"),
   };
   s.run = run_read;
   s.check = [](const StageArgs& a) {

@@ -4,10 +4,10 @@
 //
 // Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
 // binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4).
-// E57 (ASTM E2807): several scans with their poses (CloudReadResult::scans), colour, intensity.
 // The format of a file being read is detected from its content (magic bytes, header); the
 // extension is only a hint for headerless text. The format written follows the extension of
 // the output path unless WriteOptions::format says otherwise.
+// E57 (ASTM E2807): several scans with their poses (CloudReadResult::scans), colour, intensity.
 //
 // Errors: malformed input throws InputError naming the file, the place (line, element index or
 // byte offset) and what was expected; a bad option throws UsageError. Points with NaN/Inf
@@ -64,12 +64,12 @@ struct ScanPose {
 
 struct ReadOptions {
   bool strict = false;      // NaN/Inf coordinates are an InputError instead of being dropped
+  bool apply_poses = true;  // E57: move each scan by its pose; false keeps scan coordinates (poses in the result's scans)
   std::string format;       // force a format ("ply", "xyz", ...); empty: detect from content
   // Column meaning for XYZ-family text, comma separated: x,y,z,nx,ny,nz,r,g,b,i (intensity)
   // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
   // chosen from the column count, or taken from a header line of names.
   std::string columns;
-  bool apply_poses = true;  // E57: move each scan by its pose; false keeps scan coordinates (poses in the result's scans)
 };
 
 struct CloudReadResult {
