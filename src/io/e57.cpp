@@ -253,6 +253,13 @@ std::vector<std::vector<unsigned char>> read_bytestreams(const E57PagedReader& f
   const std::uint64_t max_records = 8 * file.logical_size() + 1024;  // beyond it even 1-bit fields overflow the file
   if (scan.records > max_records)
     throw InputError(fmt::format("{}: {}: recordCount {} exceeds what a file of this size can hold", name, where, scan.records));
+  // Records whose every field is constant (0 bits) take no bytes: bound them apart, or a tiny
+  // file could ask for any number of identical points.
+  constexpr std::uint64_t kMaxConstantRecords = std::uint64_t{1} << 24;
+  const bool constant = std::all_of(scan.leaves.begin(), scan.leaves.end(), [](const Leaf& l) { return l.kind != Leaf::Kind::Float && l.bits == 0; });
+  if (constant && scan.records > kMaxConstantRecords)
+    throw InputError(fmt::format("{}: {}: recordCount {} of points whose every field is constant (0 bits); at most {} are read", name, where,
+                                 scan.records, kMaxConstantRecords));
   for (std::size_t k = 0; k < scan.leaves.size(); ++k) total += need[k] = scan.leaves[k].bytes_for(scan.records);
   if (total > length)
     throw InputError(fmt::format("{}: {}: {} records of {} fields need {} bytes, the section holds {}", name, where, scan.records,

@@ -389,6 +389,15 @@ TEST(E57, CorruptedFilesGiveNamedInputErrors) {
   ASSERT_NE(rc, std::string::npos);
   bad_count.replace(rc, 18, "recordCount=\"9999\"");
   expect_error<InputError>([&] { read_bytes_as_e57(dir, paged(bad_count)); }, "9999 records of");
+  // Many records of constant fields: no bytes, but bounded (the file is made 2.2 MB, by XML
+  // blanks, so that the bound by file size does not come first).
+  HandScan constant;
+  constant.xml = scan_xml("c", 17000000,
+                          "<cartesianX type=\"Integer\" minimum=\"1\" maximum=\"1\"/><cartesianY type=\"Integer\" minimum=\"2\" maximum=\"2\"/>"
+                          "<cartesianZ type=\"Integer\" minimum=\"3\" maximum=\"3\"/>");
+  constant.streams = {"", "", ""};
+  expect_error<InputError>([&] { read_bytes_as_e57(dir, build_e57({constant}, std::string(2200000, ' '))); },
+                           "recordCount 17000000 of points whose every field is constant");
   // Not E57 at all, and an empty file.
   expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "short.e57", "ASTM-E57")); }, "short.e57: not an E57 file");
 }
