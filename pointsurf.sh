@@ -18,7 +18,10 @@ BUILD_PACKAGES=(
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
   libgtest-dev libgmock-dev
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
 )
+# The browser test of the HTML report (tests/report): headless Chromium and its DevTools client.
+TEST_PACKAGES=(chromium python3-websocket)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
@@ -74,6 +77,7 @@ demo() {
 }
 
 run_tests() {
+  install_missing "${TEST_PACKAGES[@]}"
   build
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900
