@@ -71,9 +71,14 @@ demo() {
   "$cli" run examples/b9_mesh.json --report out/b9_run.json
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
-  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json
+  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json --html out/kitten_report.html
+  log "demo: pictures (pointsurf render) and the HTML report of the b9 run"
+  "$cli" render out/kitten_deviation.ply out/kitten_deviation.png --field deviation --view front --quiet
+  "$cli" render out/kitten_mesh.ply out/kitten_mesh.png --view front --quiet
+  "$cli" report out/b9_run.json out/b9_report.html
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
+  log "open the report: $out/kitten_report.html (offline, one file; also $out/b9_report.html)"
 }
 
 run_tests() {

@@ -281,7 +281,9 @@ void raster_points_band(const PointInputs& in, const Bins& bins, int band, Buffe
 
 // Eye-dome lighting: each covered sample is darkened by how far its neighbours at `step`
 // samples lie in front of it (background counts as `edge`); relative to the scene's depth range.
-void eye_dome(Buffers& buf, int step, float depth_range) {
+// Steps below `ignore` (about a splat's diameter) are left out: they are neighbouring splats of
+// one surface, whose outlines would otherwise cover the picture in bubbles.
+void eye_dome(Buffers& buf, int step, float depth_range, float ignore) {
   const float edge = 0.04f * depth_range;
   const float strength = 12.f / depth_range;
   std::vector<float> factor(buf.depth.size(), 1.f);
@@ -296,7 +298,7 @@ void eye_dome(Buffers& buf, int step, float depth_range) {
         for (int k = 0; k < 8; ++k) {
           const int nx = x + dx[k] * step, ny = y + dy[k] * step;
           const float nz = (nx < 0 || ny < 0 || nx >= buf.w || ny >= buf.h) ? kNoDepth : buf.depth[buf.index(nx, ny)];
-          sum += nz == kNoDepth ? edge : std::max(0.f, z - nz);
+          sum += nz == kNoDepth ? edge : std::max(0.f, z - nz - ignore);
         }
         factor[i] = std::exp(-strength * sum / 8.f * 4.f);
       }
@@ -558,7 +560,7 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
         hi_y = std::max(hi_y, q.y());
       }
     const double area_px = std::max(1.0, double(hi_x - lo_x) * double(hi_y - lo_y)) / double(s * s);
-    const double diameter_px = p.point_size_px > 0.0 ? p.point_size_px : std::clamp(1.4 * std::sqrt(area_px / double(n)), 1.5, 24.0);
+    const double diameter_px = p.point_size_px > 0.0 ? p.point_size_px : std::clamp(2.2 * std::sqrt(area_px / double(n)), 1.5, 24.0);
     const float radius = float(0.5 * diameter_px * s);
     std::vector<std::array<std::int32_t, 2>> rows(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -592,7 +594,9 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
           zmin = std::min(zmin, q.z());
           zmax = std::max(zmax, q.z());
         }
-      eye_dome(buf, s, std::max(zmax - zmin, float(1e-6 * diagonal)));
+      // A splat's diameter in depth units (perspective: at the middle depth).
+      const float ignore = float(2.0 * radius / proj.scale * (proj.perspective ? 0.5 * (zmin + zmax) : 1.0));
+      eye_dome(buf, s, std::max(zmax - zmin, float(1e-6 * diagonal)), ignore);
     }
   }
 

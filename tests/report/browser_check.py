@@ -8,7 +8,7 @@ driven over the DevTools protocol, and checks that it is a working 3D report:
   * the 3D view's screenshot is not blank (a share of its pixels differs from the background);
   * after a scripted orbit of the camera (window.pointsurfView.orbit) the screenshot differs.
 
-usage: browser_check.py REPORT.html [--out DIR] [--timeout S]
+usage: browser_check.py REPORT.html [--out DIR] [--timeout S]   (POINTSURF_CHROMIUM: the browser to use)
 Exit 0: all checks pass; 1: a check failed (said why); 77: Chromium cannot start here (said why).
 Screenshots are written to DIR (default: beside the report) as view_before.png, view_after.png.
 """
@@ -155,9 +155,11 @@ class DevTools:
 
 
 def start_chromium(profile, timeout):
-    exe = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+    exe = os.environ.get("POINTSURF_CHROMIUM") or shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
     if exe is None:
         return None, "no chromium on PATH (Debian package chromium)"
+    if not os.access(exe, os.X_OK):
+        return None, f"{exe} is not an executable"
     args = [exe, "--headless", "--no-sandbox", "--disable-gpu-sandbox", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
             "--enable-webgl", "--ignore-gpu-blocklist", "--no-first-run", "--no-default-browser-check", "--disable-extensions",
             "--remote-debugging-port=0", "--remote-debugging-address=127.0.0.1", f"--user-data-dir={profile}",
@@ -216,7 +218,7 @@ def main():
             failures.append(f"the 3D view did not become ready within {a.timeout} s (its message: {message!r})")
         rect = dt.evaluate("(function(){var e=document.getElementById('viewer');e.scrollIntoView();"
                            "var r=e.getBoundingClientRect();return [r.left+window.scrollX,r.top+window.scrollY,r.width,r.height];})()")
-        clip = {"x": rect[0], "y": rect[1], "width": rect[2], "height": rect[3], "scale": 1}
+        clip = {"x": rect[0], "y": rect[1], "width": rect[2], "height": rect[3], "scale": 0.5}  # half size: quick to decode
 
         def shot(name):
             time.sleep(0.3)

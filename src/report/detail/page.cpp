@@ -35,7 +35,8 @@ td:last-child { font-variant-numeric: tabular-nums; word-break: break-all; }
 #legend3d .ticks { display: flex; justify-content: space-between; }
 #viewmsg { position: absolute; left: 12px; top: 12px; color: #b3261e; }
 .controls { margin: 8px 0; } .controls label { margin-right: 14px; }
-figure { display: inline-block; margin: 6px; } figure img { max-width: 100%; border: 1px solid #d5d9de; } figcaption { font-size: 12px; color: #555; }
+.pics { display: grid; grid-template-columns: repeat(auto-fill, minmax(380px, 1fr)); gap: 10px; }
+figure { margin: 0; } figure img { width: 100%; border: 1px solid #d5d9de; } figcaption { font-size: 12px; color: #555; }
 .charts { display: flex; flex-wrap: wrap; gap: 16px; } .chart { position: relative; height: 280px; flex: 1 1 420px; }
 .two { display: flex; flex-wrap: wrap; gap: 24px; }
 details.stage { margin: 6px 0; } details.stage summary { cursor: pointer; font-weight: 600; }
@@ -58,7 +59,7 @@ ul.warn li { color: #8a5a00; }
 </div>
 <div id="viewer"><canvas id="c3d"></canvas><div id="legend3d"></div><div id="viewmsg"></div></div>
 </section>
-<section id="pictures"><h2>Pictures (pointsurf render)</h2>{{PICTURES}}</section>
+<section id="pictures"><h2>Pictures (pointsurf render)</h2><div class="pics">{{PICTURES}}</div></section>
 <section id="deviation"><h2>Deviation</h2><div class="two"><div>{{DEVIATION_TABLE}}</div><div class="chart"><canvas id="histogram"></canvas></div></div></section>
 <section id="stages"><h2>Stages: time and memory</h2>
 <div class="charts"><div class="chart"><canvas id="time-chart"></canvas></div><div class="chart"><canvas id="memory-chart"></canvas></div></div>
@@ -161,7 +162,7 @@ ul.warn li { color: #8a5a00; }
 
   var controls = new THREE.OrbitControls(camera, canvas);
   function home() {
-    var d = radius / Math.sin(camera.fov * Math.PI / 360) * 1.05;
+    var d = radius / Math.sin(camera.fov * Math.PI / 360) * 0.8;
     camera.position.set(d * 0.6, -d * 0.6, d * 0.5);
     controls.target.set(0, 0, 0);
     controls.update();
