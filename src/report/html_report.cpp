@@ -173,14 +173,17 @@ const json* find_path(const json& j, std::initializer_list<const char*> keys) {
 ReportSources report_sources(const std::string& run_json, const std::string& origin) {
   const json report = parse(run_json, origin);
   ReportSources s;
-  std::map<std::string, std::string> written;  // tag -> file
+  std::map<std::string, std::string> written;  // tag -> the file it was read from or written to
   std::string last_mesh, first_read;
   const json* evaluate = nullptr;
   const json stages = report.value("stages", json::array());
   for (const json& st : stages) {
     const std::string type = st.value("type", "");
     const json params = st.value("parameters", json::object());
-    if (type == "read" && first_read.empty()) first_read = params.value("filename", "");
+    if (type == "read") {
+      if (first_read.empty()) first_read = params.value("filename", "");
+      written[st.value("tag", "")] = params.value("filename", "");  // a mesh measured as read
+    }
     if (type == "write" && st.contains("inputs") && !st["inputs"].empty()) {
       written[st["inputs"][0].get<std::string>()] = params.value("filename", "");
       const json* faces = find_path(st, {"counts", "faces"});

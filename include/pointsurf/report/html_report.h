@@ -16,8 +16,8 @@
 namespace pointsurf {
 
 /// The files of a run the report shows, found in its report (JSON text of report_json):
-/// `mesh_file`, the mesh the last evaluate stage measured (else the last mesh written; "" when
-/// none was written) and `cloud_file`, the cloud with the field "deviation" that evaluate
+/// `mesh_file`, the mesh the last evaluate stage measured (the file it was written to or read
+/// from; else the last mesh written; "" when none) and `cloud_file`, the cloud with the field "deviation" that evaluate
 /// wrote (else the first file read). Throws InputError "ORIGIN: ..." for malformed JSON.
 struct ReportSources {
   std::string mesh_file, cloud_file;

@@ -95,7 +95,8 @@ ul.warn li { color: #8a5a00; }
     new Chart(document.getElementById("time-chart"), {
       type: "bar",
       data: { labels: labels, datasets: [{ label: "seconds", data: data.stages.map(function (s) { return s.seconds; }), backgroundColor: "#4c78a8" }] },
-      options: Object.assign({ indexAxis: "y", plugins: { title: { display: true, text: "Time per stage (s)" } } }, common)
+      options: Object.assign({ indexAxis: "y", scales: { y: { ticks: { autoSkip: false } } },
+                             plugins: { title: { display: true, text: "Time per stage (s)" } } }, common)
     });
     new Chart(document.getElementById("memory-chart"), {
       type: "bar",
