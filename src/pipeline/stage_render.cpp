@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The render stage: a PNG picture of a cloud or mesh (pointsurf/render/render_scene.h).
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 
@@ -130,7 +133,11 @@ StageSpec render_stage() {
                 "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.5 --unit mm"};
   s.run = run_render;
   s.check = [](const StageArgs& a) {
-    if (a.text("filename").empty()) throw UsageError("filename: missing (the PNG file to write)");
+    const std::string& file = a.text("filename");
+    if (file.empty()) throw UsageError("filename: missing (the PNG file to write)");
+    std::string ext = std::filesystem::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".png") throw UsageError(fmt::format("filename: {}: expected a .png file name", file));
     parse_size(a.text("size"));
     if (a.numbers("range").size() != 0 && a.numbers("range").size() != 2)
       throw UsageError(fmt::format("range: expected MIN,MAX, got {} numbers", a.numbers("range").size()));

@@ -49,6 +49,9 @@ TEST(RenderCli, BadOptionsAndInputsExitWithTheirCodes) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(test::contains(r.err, "no field \"deviation\"")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out));
+  r = test::run_cli("render " + in + " " + (dir / "c.ply").string(), dir);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "c.ply: expected a .png file name")) << r.err;
   r = test::run_cli("render " + in + " " + (dir / "missing" / "c.png").string(), dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "does not exist")) << r.err;
@@ -66,6 +69,11 @@ TEST(RenderCli, PipelineRendersAndPassesItsInputOn) {
   EXPECT_EQ(read_png(dir / "a.png").width, 200);
   EXPECT_EQ(read_png(dir / "b.png").height, 80);
   EXPECT_TRUE(std::filesystem::exists(dir / "n.ply"));
+  // The command gives the same bytes as the pipeline, whatever the threads.
+  const test::RunResult c = test::run_cli("render " + (dir / "c.ply").string() + " " + (dir / "cli.png").string() +
+                                              " --view top --size 200x150 --threads 1 --quiet", dir);
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(test::read_bytes(dir / "cli.png"), test::read_bytes(dir / "a.png"));
 }
 
 }  // namespace
