@@ -298,7 +298,7 @@ void eye_dome(Buffers& buf, int step, float depth_range, float ignore) {
         for (int k = 0; k < 8; ++k) {
           const int nx = x + dx[k] * step, ny = y + dy[k] * step;
           const float nz = (nx < 0 || ny < 0 || nx >= buf.w || ny >= buf.h) ? kNoDepth : buf.depth[buf.index(nx, ny)];
-          sum += nz == kNoDepth ? edge : std::max(0.f, z - nz - ignore);
+          sum += nz == kNoDepth ? edge : std::clamp(z - nz - ignore, 0.f, edge);  // a hole: no darker than an outline
         }
         factor[i] = std::exp(-strength * sum / 8.f * 4.f);
       }
@@ -319,8 +319,18 @@ std::string number_label(double v) {
   return fmt::format("{:.3g}", v);
 }
 
+std::string legend_head(const std::string& field, const ColorScale& scale) {
+  return field + (scale.unit.empty() ? "" : " [" + scale.unit + "]");
+}
+
+std::string legend_band(const ColorScale& scale) {
+  return scale.kind == ColorMapKind::Diverging && scale.tolerance > 0.0 ? fmt::format("green: |d| <= {}", number_label(scale.tolerance)) : "";
+}
+
+int legend_font(int height) { return std::max(10, height / 48); }
+
 void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const std::string& field, detail::TextPainter& text) {
-  const int font = std::max(10, img.height / 48);
+  const int font = legend_font(img.height);
   const int bar_w = std::max(10, img.width / 60);
   const int top = lay.plot_y0 + img.height / 8, bottom = lay.plot_y0 + lay.plot_h - img.height / 8;
   const int x = lay.legend_x + font;
@@ -357,12 +367,9 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
     text.draw(img, x + bar_w + 8, y + font / 2 - 1, label, font, {30, 30, 30});
     last_y = y;
   }
-  const std::string head = field + (scale.unit.empty() ? "" : " [" + scale.unit + "]");
-  text.draw(img, std::max(0, x - font / 2), top - font, head, font, {20, 20, 20});
-  if (scale.kind == ColorMapKind::Diverging && scale.tolerance > 0.0) {
-    const std::string band = fmt::format("green: |d| <= {}", number_label(scale.tolerance));
-    text.draw(img, std::max(0, x - font / 2), bottom + 2 * font, band, std::max(9, font - 2), {30, 110, 40});
-  }
+  text.draw(img, std::max(0, x - font / 2), top - font, legend_head(field, scale), font, {20, 20, 20});
+  const std::string band = legend_band(scale);
+  if (!band.empty()) text.draw(img, std::max(0, x - font / 2), bottom + 2 * font, band, std::max(9, font - 2), {30, 110, 40});
 }
 
 // A bar of a round length (1, 2 or 5 times a power of ten) about a fifth of the plot wide.
@@ -438,7 +445,14 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   if (!text.ok()) result.warnings.push_back(text.error());
   Layout lay;
   const bool legend = field && p.legend;
-  const int legend_w = legend ? std::max(110, p.width / 6) : 0;
+  // The legend's column: wide enough for its longest text.
+  int legend_w = 0;
+  if (legend) {
+    const int font = legend_font(p.height);
+    legend_w = std::max({110, p.width / 6, text.width(legend_head(p.field, result.scale), font) + 2 * font,
+                         text.width(legend_band(result.scale), std::max(9, font - 2)) + 2 * font});
+    legend_w = std::min(legend_w, p.width / 2);
+  }
   const int title_h = p.title.empty() ? 0 : std::max(16, p.height / 22);
   lay.plot_x0 = 0;
   lay.plot_y0 = title_h;
@@ -560,7 +574,7 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
         hi_y = std::max(hi_y, q.y());
       }
     const double area_px = std::max(1.0, double(hi_x - lo_x) * double(hi_y - lo_y)) / double(s * s);
-    const double diameter_px = p.point_size_px > 0.0 ? p.point_size_px : std::clamp(2.2 * std::sqrt(area_px / double(n)), 1.5, 24.0);
+    const double diameter_px = p.point_size_px > 0.0 ? p.point_size_px : std::clamp(3.0 * std::sqrt(area_px / double(n)), 1.5, 24.0);
     const float radius = float(0.5 * diameter_px * s);
     std::vector<std::array<std::int32_t, 2>> rows(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {

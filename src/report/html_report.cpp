@@ -316,11 +316,15 @@ HtmlReport build_html_report(const HtmlReportInputs& in, const HtmlReportParams&
     payload["histogram"] = {{"centres", centres}, {"counts", (*hist)["counts"]}, {"colors", colours}};
   }
   json stage_chart = json::array();
-  for (const json& st : stages)
-    stage_chart.push_back({{"label", fmt::format("{} {}", st.value("index", 0), st.value("type", ""))},
+  for (const json& st : stages) {
+    // A stage's own tag says more than its type ("crust_30000"); the default tag repeats it.
+    const std::string type = st.value("type", ""), tag = st.value("tag", "");
+    const bool named = tag != fmt::format("{}{}", type, st.value("index", 0));
+    stage_chart.push_back({{"label", fmt::format("{} {}", st.value("index", 0), named ? tag : type)},
                            {"seconds", st.value("seconds", 0.0)},
                            {"peak_rss_mb", st.value("peak_rss_mb", 0.0)},
                            {"rss_rise_mb", st.value("rss_rise_mb", 0.0)}});
+  }
   payload["stages"] = stage_chart;
   payload["notes"] = out.notes;
   payload["report"] = report;

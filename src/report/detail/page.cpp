@@ -92,6 +92,8 @@ ul.warn li { color: #8a5a00; }
       });
     }
     var labels = data.stages.map(function (s) { return s.label; });
+    // One bar a stage: a long pipeline gets a taller chart, not squeezed labels.
+    document.getElementById("time-chart").parentNode.style.height = Math.max(280, 18 * labels.length + 90) + "px";
     new Chart(document.getElementById("time-chart"), {
       type: "bar",
       data: { labels: labels, datasets: [{ label: "seconds", data: data.stages.map(function (s) { return s.seconds; }), backgroundColor: "#4c78a8" }] },
