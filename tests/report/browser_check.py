@@ -189,6 +189,7 @@ def main():
     a = ap.parse_args()
     report = os.path.abspath(a.report)
     out = a.out or os.path.dirname(report)
+    os.makedirs(out, exist_ok=True)
     profile = tempfile.mkdtemp(prefix="pointsurf_chromium_")
     started, why = start_chromium(profile, 30)
     if started is None:

@@ -44,6 +44,22 @@ TEST(BrowserReport, OpensOfflineDrawsA3DViewThatOrbitsWithoutErrors) {
   const std::string before = test::read_bytes(dir / "view_before.png");
   const Image shot = decode_png(std::vector<std::uint8_t>(before.begin(), before.end()), "view_before.png");
   EXPECT_GT(shot.width, 300);
+
+  // The check can fail: a console error, and a view that does not move when orbited.
+  const std::string page = test::read_bytes(html);
+  const std::size_t end = page.rfind("</body>");
+  ASSERT_NE(end, std::string::npos);
+  const std::pair<const char*, const char*> broken[] = {
+      {"<script>console.error('boom');</script>", "console error: boom"},
+      {"<script>window.pointsurfView.orbit = function () { return 0; };</script>", "not a live 3D view"}};
+  for (const auto& [injected, expected] : broken) {
+    test::write_bytes(dir / "broken.html", page.substr(0, end) + injected + page.substr(end));
+    const int s = std::system((python + " " + script + " " + (dir / "broken.html").string() + " --out " + dir.string() + " >" + out +
+                               " 2>&1").c_str());
+    const std::string told = test::read_bytes(out);
+    EXPECT_EQ(WIFEXITED(s) ? WEXITSTATUS(s) : -1, 1) << told;
+    EXPECT_TRUE(test::contains(told, expected)) << told;
+  }
 }
 
 }  // namespace

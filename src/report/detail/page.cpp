@@ -110,6 +110,7 @@ ul.warn li { color: #8a5a00; }
   }
 
   // Legend of the 3D view.
+  if (!data.legend) document.getElementById("legend3d").style.display = "none";
   if (data.legend) {
     var l = data.legend, el = document.getElementById("legend3d");
     el.innerHTML = "<div>" + l.field + (l.tolerance > 0 ? " (green: |d| &le; " + l.tolerance.toPrecision(3) + ")" : "") + "</div>" +
