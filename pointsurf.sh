@@ -20,8 +20,8 @@ BUILD_PACKAGES=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
 )
-# The browser test of the HTML report (tests/report): headless Chromium and its DevTools client.
-TEST_PACKAGES=(chromium python3-websocket)
+# The browser test of the HTML report (tests/report): headless Chromium, driven from Python.
+TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
