@@ -21,3 +21,30 @@ for kind in mesh points; do
     done
   done
 done
+
+# The peer, interleaved with ours in the same minutes: Mesa's llvmpipe through OSMesa
+# (bench/render/osmesa_peer.c; needs libosmesa6-dev), the same torus at 3x the size (our 3x3
+# supersampling, without its downsampling) and at 1x. Medians of 3 processes each; rows in
+# bench/results/render_peer.csv.
+if [ -f /usr/include/GL/osmesa.h ]; then
+  PEER="$(mktemp -d)/osmesa_peer"
+  cc -O2 "$ROOT/bench/render/osmesa_peer.c" -o "$PEER" -lOSMesa -lm
+  PCSV="$ROOT/bench/results/render_peer.csv"
+  [ -f "$PCSV" ] || echo "commit,date,machine,load1,kind,n,ours_render_s,osmesa_3x_total_s,osmesa_3x_draw_s,osmesa_1x_total_s" > "$PCSV"
+  for kind in mesh points; do
+    for n in 100000 1000000; do
+      ours=(); o3=(); d3=(); o1=()
+      for rep in 1 2 3; do
+        ours+=("$("$BUILD/bench/render_runner" "$kind" "$n" 1024x768 3 1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["render_s"])')")
+        line="$("$PEER" "$kind" "$n" 1024 768 3)"
+        o3+=("$(echo "$line" | python3 -c 'import json,sys; print(json.load(sys.stdin)["total_s"])')")
+        d3+=("$(echo "$line" | python3 -c 'import json,sys; print(json.load(sys.stdin)["draw_s"])')")
+        o1+=("$("$PEER" "$kind" "$n" 1024 768 1 | python3 -c 'import json,sys; print(json.load(sys.stdin)["total_s"])')")
+      done
+      med() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
+      row="$commit,$(date -u +%FT%TZ),\"$machine\",$(cut -d' ' -f1 /proc/loadavg),$kind,$n,$(med "${ours[@]}"),$(med "${o3[@]}"),$(med "${d3[@]}"),$(med "${o1[@]}")"
+      echo "$row" >&2
+      echo "$row" >> "$PCSV"
+    done
+  done
+fi

@@ -144,10 +144,18 @@ inline Eigen::Vector3f shade(Eigen::Vector3f n, const Eigen::Vector3f& base, con
   return c.cwiseMin(255.f);
 }
 
+// A sample's colour packed in 4 bytes (R, G, B; 8 bits each): a quarter of three floats, which
+// at 9 samples per pixel is most of the renderer's memory and of its fixed cost.
+inline std::uint32_t pack(const Eigen::Vector3f& c) {
+  auto q = [](float v) { return std::uint32_t(std::clamp(v + 0.5f, 0.f, 255.f)); };
+  return q(c.x()) | q(c.y()) << 8 | q(c.z()) << 16;
+}
+inline Eigen::Vector3f unpack(std::uint32_t c) { return Eigen::Vector3f(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u)); }
+
 struct Buffers {
   int w = 0, h = 0;
   std::vector<float> depth;
-  std::vector<Eigen::Vector3f> color;  // float: the downsampling averages without rounding twice
+  std::vector<std::uint32_t> color;  // packed RGB, meaningful where depth is set
   Buffers(int width, int height) : w(width), h(height), depth(std::size_t(width) * std::size_t(height), kNoDepth), color(depth.size()) {}
   std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(w) + std::size_t(x); }
 };
@@ -242,7 +250,7 @@ void raster_triangles_band(const MeshInputs& in, const Bins& bins, int band, Buf
           const float d = std::min({std::abs(w0) / len0, std::abs(w1) / len1, std::abs(w2) / len2});
           if (d < in.line_half_width) col = col * 0.25f + Eigen::Vector3f(20, 24, 30) * 0.75f;
         }
-        buf.color[i] = col;
+        buf.color[i] = pack(col);
       }
     }
   }
@@ -263,8 +271,9 @@ void raster_points_band(const PointInputs& in, const Bins& bins, int band, Buffe
     const Eigen::Vector3f& s = (*in.screen)[i];
     const int x0 = std::max(0, int(std::floor(s.x() - r))), x1 = std::min(buf.w - 1, int(std::ceil(s.x() + r)));
     const int r0 = std::max(y_lo, int(std::floor(s.y() - r))), r1 = std::min(y_hi, int(std::ceil(s.y() + r)));
-    Eigen::Vector3f col = (*in.colors)[i];
-    if (in.light) col *= (*in.light)[i];
+    Eigen::Vector3f shaded = (*in.colors)[i];
+    if (in.light) shaded *= (*in.light)[i];
+    const std::uint32_t col = pack(shaded);
     for (int y = r0; y <= r1; ++y) {
       const float dy = float(y) + 0.5f - s.y();
       for (int x = x0; x <= x1; ++x) {
@@ -305,7 +314,8 @@ void eye_dome(Buffers& buf, int step, float depth_range, float ignore) {
   });
   tbb::parallel_for(std::size_t(0), buf.depth.size(), std::size_t(65536), [&](std::size_t start) {
     const std::size_t end = std::min(buf.depth.size(), start + 65536);
-    for (std::size_t i = start; i < end; ++i) buf.color[i] *= factor[i];
+    for (std::size_t i = start; i < end; ++i)
+      if (factor[i] < 1.f) buf.color[i] = pack(unpack(buf.color[i]) * factor[i]);
   });
 }
 
@@ -625,7 +635,7 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
         for (int j = 0; j < s; ++j)
           for (int i = 0; i < s; ++i) {
             const std::size_t k = buf.index(x * s + i, y * s + j);
-            sum += buf.depth[k] == kNoDepth ? bg : buf.color[k];
+            sum += buf.depth[k] == kNoDepth ? bg : unpack(buf.color[k]);
           }
         sum *= inv;
         std::uint8_t* px = img.at(x, y);
