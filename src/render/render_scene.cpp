@@ -139,7 +139,9 @@ inline Eigen::Vector3f shade(Eigen::Vector3f n, const Eigen::Vector3f& base, con
   if (n.z() < 0.f) n = -n;
   const float diffuse = std::max(0.f, n.dot(l.key));
   const float fill = std::max(0.f, n.dot(l.fill));
-  const float spec = std::pow(std::max(0.f, n.dot(l.half)), 40.f);
+  // The specular term's power 40 by squaring (x^32 x^8): std::pow per sample was a third of the time.
+  const float h1 = std::max(0.f, n.dot(l.half)), h2 = h1 * h1, h4 = h2 * h2, h8 = h4 * h4, h32 = h8 * h8 * h8 * h8;
+  const float spec = h32 * h8;
   Eigen::Vector3f c = base * (0.22f + 0.68f * diffuse + 0.18f * fill) + Eigen::Vector3f::Constant(70.f * spec);
   return c.cwiseMin(255.f);
 }
