@@ -24,7 +24,7 @@ BUILD_PACKAGES=(
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
-BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
+BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
 
