@@ -18,11 +18,14 @@ BUILD_PACKAGES=(
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
   libgtest-dev libgmock-dev
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
   libpugixml-dev
 )
+# The browser test of the HTML report (tests/report): headless Chromium, driven from Python.
+TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
-BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
+BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
 
@@ -69,12 +72,18 @@ demo() {
   "$cli" run examples/b9_mesh.json --report out/b9_run.json
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
-  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json
+  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json --html out/kitten_report.html
+  log "demo: pictures (pointsurf render) and the HTML report of the b9 run"
+  "$cli" render out/kitten_deviation.ply out/kitten_deviation.png --field deviation --view front --quiet
+  "$cli" render out/kitten_mesh.ply out/kitten_mesh.png --view front --quiet
+  "$cli" report out/b9_run.json out/b9_report.html
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
+  log "open the report: $out/kitten_report.html (offline, one file; also $out/b9_report.html)"
 }
 
 run_tests() {
+  install_missing "${TEST_PACKAGES[@]}"
   build
   # web-e57 (npm) reads pointsurf's E57 in tests/io/e57_test.cpp; the test skips without it.
   [ -d "$BUILD_DIR/npm/node_modules/web-e57" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund web-e57@1.2.0 >/dev/null 2>&1 ||
