@@ -124,27 +124,33 @@ std::vector<ExtraField> read_extra_bytes(std::string_view bytes, std::size_t hea
         const int options = static_cast<unsigned char>(e[3]);
         std::string field(e + 4, kExtraNameSize);
         field.resize(field.find('\0') == std::string::npos ? kExtraNameSize : field.find('\0'));
-        if (code < 1 || code > 10) {
-          // Undefined bytes (0: `options` is their count) and the deprecated arrays are skipped.
+        if (code < 1 || code > 30) {
+          // Undefined bytes (0: `options` is their count) and unknown types are skipped.
           const std::size_t size = code == 0 ? std::size_t(options) : 0;
-          warnings.push_back(fmt::format("{}: extra bytes '{}' of data type {} skipped (only types 1-10 are read)", name, field, code));
-          if (code != 0) return fields;  // an array's size is unknown here: later offsets would be wrong
+          warnings.push_back(fmt::format("{}: extra bytes '{}' of data type {} skipped (only types 1-30 are read)", name, field, code));
+          if (code != 0) return fields;  // the size is unknown here: later offsets would be wrong
           offset += size;
           continue;
         }
-        ExtraField f;
-        f.name = field.empty() ? fmt::format("extra_{}", fields.size()) : field;
-        f.type = kExtraTypes[code - 1];
-        f.offset = offset;
-        if (options & 0x08) f.scale = load_value<double>(e + 112);  // bit 3: scale, bit 4: offset
-        if (options & 0x10) f.shift = load_value<double>(e + 136);
-        f.scaled = (options & 0x18) != 0;
-        offset += std::size_t(scalar_type_size(f.type));
-        if (offset > extra_room) {
-          warnings.push_back(fmt::format("{}: extra bytes '{}' lie beyond the {}-byte point record; skipped", name, f.name, extra_room));
-          return fields;
+        // Types 11-20 and 21-30 are the (deprecated) 2- and 3-element arrays of types 1-10: one
+        // field per element, named name_0, name_1, ...
+        const int elements = (code - 1) / 10 + 1;
+        for (int k = 0; k < elements; ++k) {
+          ExtraField f;
+          f.name = field.empty() ? fmt::format("extra_{}", fields.size()) : field;
+          if (elements > 1) f.name += fmt::format("_{}", k);
+          f.type = kExtraTypes[(code - 1) % 10];
+          f.offset = offset;
+          if (options & 0x08) f.scale = load_value<double>(e + 112 + 8 * k);  // bit 3: scale, bit 4: offset
+          if (options & 0x10) f.shift = load_value<double>(e + 136 + 8 * k);
+          f.scaled = (options & 0x18) != 0;
+          offset += std::size_t(scalar_type_size(f.type));
+          if (offset > extra_room) {
+            warnings.push_back(fmt::format("{}: extra bytes '{}' lie beyond the {}-byte point record; skipped", name, f.name, extra_room));
+            return fields;
+          }
+          fields.push_back(std::move(f));
         }
-        fields.push_back(std::move(f));
       }
     }
     at = body + length;
