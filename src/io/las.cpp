@@ -37,7 +37,7 @@ RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
 }
 
 void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
-  const LasRecordWriter writer(cloud, options, display_name(path), false);
+  const LasRecordWriter writer(cloud, options, display_name(path));
   FileWriter out(path);
   out.write(writer.head("", 0, 0));
   std::vector<char> r(writer.record_length());

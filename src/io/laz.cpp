@@ -15,6 +15,7 @@
 #include "io/detail/formats.h"
 #include "io/detail/las_format.h"
 #include "io/detail/laz_items.h"
+#include "io/detail/laz_layered.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf::io::detail {
@@ -160,13 +161,14 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
   return raw;
 }
 
-// Written as LAS 1.4 with point format 0-3 (1 or 3 with a gps_time field, 2 or 3 with colours)
-// and LASzip's point-wise chunked compressor, 50,000 points per chunk.
+// Written as the LAS writer writes (LAS 1.4, point format 6, or 7 with colours, extra bytes for
+// the other fields) with LASzip's layered chunked compressor, 50,000 points per chunk.
 void write_laz(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
   const std::string name = display_name(path);
-  const LasRecordWriter writer(cloud, options, name, true);
+  const LasRecordWriter writer(cloud, options, name);
   laz::LaszipVlr lz;
-  lz.items = laz::pointwise_items(writer.format(), writer.extra_bytes());
+  lz.compressor = 3;
+  lz.items = laz::layered_items(writer.format(), writer.extra_bytes());
   const std::string head = writer.head(las_vlr(laz::kLaszipUserId, laz::kLaszipRecordId, "pointsurf", lz.body()), 1, 0x80);
 
   FileWriter out(path);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// libFuzzer target for the LAZ decoder: arbitrary bytes as a chunk of point records (the first
-// byte picks the point format 0-3 and the extra bytes) and as a chunk table. The decoder must
+// libFuzzer target for the LAZ decoders: arbitrary bytes as a chunk of point records (the first
+// byte picks the compressor, point-wise for formats 0-3 or layered for 6-8, the format and the
+// extra bytes) and as a chunk table. The decoder must
 // stay inside its input and stop within the points asked for, whatever the bytes.
 // Built with -DPOINTSURF_BUILD_FUZZERS=ON (clang); run e.g.
 //   build-fuzz/laz_fuzz -max_total_time=300 -max_len=4096 corpus/
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "io/detail/laz_items.h"
+#include "io/detail/laz_layered.h"
 
 namespace laz = pointsurf::io::detail::laz;
 
@@ -24,7 +26,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   } catch (const std::runtime_error&) {
   }
   laz::LaszipVlr vlr;
-  vlr.items = laz::pointwise_items(format, extra);
+  if (data[0] & 0x40) {
+    vlr.compressor = 3;
+    vlr.items = laz::layered_items(6 + format % 3, extra);
+  } else {
+    vlr.items = laz::pointwise_items(format, extra);
+  }
   laz::ChunkDecoder decoder(vlr);
   decoder.start(data + 1, size - 1);
   std::vector<char> record(vlr.record_size());

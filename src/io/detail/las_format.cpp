@@ -250,12 +250,6 @@ void store_extra(char* p, ScalarType type, double v) {
   }
 }
 
-// Legacy formats 0-5 hold narrower values in the same slots.
-constexpr Slot kLegacySlots[] = {{"intensity", 0, 65535, false},      {"return_number", 0, 7, false},
-                                 {"number_of_returns", 0, 7, false}, {"classification", 0, 31, false},
-                                 {"user_data", 0, 255, false},        {"scan_angle", -90, 90, false},
-                                 {"point_source_id", 0, 65535, false}, {"gps_time", -1e300, 1e300, true}};
-
 }  // namespace
 
 LasHeader parse_las_header(std::string_view bytes, std::uint64_t file_size, const std::string& name) {
@@ -482,7 +476,7 @@ void LasRecordReader::finish() {
 
 struct LasRecordWriter::State {
   const PointCloud* cloud = nullptr;
-  bool legacy = false, colors = false, gps = true;
+  bool colors = false;
   int format = 6;
   std::size_t core_length = 30, record_length = 30, extra_size = 0;
   std::vector<ExtraOut> extras;
@@ -501,20 +495,18 @@ struct LasRecordWriter::State {
 // fit, follow as LAS 1.4 extra bytes under their own name (at most 32 characters) and type, so
 // the round trip keeps every field by name. Points without a return_number field are written
 // as return 1 of 1.
-LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name, bool legacy)
+LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name)
     : s_(std::make_unique<State>()) {
   State& s = *s_;
   s.cloud = &cloud;
-  s.legacy = legacy;
-  const Slot* slots = legacy ? kLegacySlots : kSlots;
   const std::size_t n = cloud.size();
   std::vector<ExtraOut>& extras = s.extras;
   std::vector<std::string> in_slots;
   if (cloud.has_normals())
     for (int a = 0; a < 3; ++a) extras.push_back({std::string("n") + "xyz"[a], ScalarType::Float32, nullptr, a});
   for (const ScalarField& f : cloud.fields) {
-    const auto slot = std::find_if(slots, slots + std::size(kSlots), [&](const Slot& sl) { return f.name == sl.name; });
-    if (slot != slots + std::size(kSlots) && fits_slot(f, *slot)) {
+    const auto slot = std::find_if(std::begin(kSlots), std::end(kSlots), [&](const Slot& sl) { return f.name == sl.name; });
+    if (slot != std::end(kSlots) && fits_slot(f, *slot)) {
       in_slots.push_back(f.name);
       continue;
     }
@@ -572,8 +564,7 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
   }
 
   s.colors = cloud.has_colors();
-  s.gps = std::find(in_slots.begin(), in_slots.end(), "gps_time") != in_slots.end();
-  s.format = legacy ? (s.gps ? 1 : 0) + (s.colors ? 2 : 0) : s.colors ? 7 : 6;
+  s.format = s.colors ? 7 : 6;
   s.core_length = point_layout(s.format).size;
   s.record_length = s.core_length + s.extra_size;
   if (s.record_length > 65535)
@@ -592,7 +583,7 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
       qmin[a] = std::min(qmin[a], q);
       qmax[a] = std::max(qmax[a], q);
     }
-    const long long ret = s.slots[1].integer(i, 0, legacy ? 7 : 15);
+    const long long ret = s.slots[1].integer(i, 0, 15);
     if (ret >= 1) ++by_return[static_cast<std::size_t>(ret - 1)];
   }
 
@@ -601,7 +592,7 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
   put_text(h, "LASF", 4);
   // Bit 4 (WKT) must be set for formats 6-10 even without a coordinate system (LAS 1.4 R15);
   // PDAL refuses such files otherwise. Bit 0 stays clear: the GPS time type is unknown.
-  put<std::uint16_t>(h + 6, legacy ? 0 : 0x10);
+  put<std::uint16_t>(h + 6, 0x10);
   h[kVersionMajor] = 1;
   h[kVersionMajor + 1] = 4;
   put_text(h + 26, "OTHER", 32);
@@ -617,12 +608,7 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
   put<std::uint16_t>(h + kHeaderSize, static_cast<std::uint16_t>(kHeaderSize14));
   h[kPointFormat] = static_cast<char>(s.format);
   put<std::uint16_t>(h + kRecordLength, static_cast<std::uint16_t>(s.record_length));
-  // Legacy counts (bytes 107-130) stay 0 for formats 6-10 (LAS 1.4 requires it); formats 0-5
-  // fill them too when the count fits.
-  if (legacy && n <= std::numeric_limits<std::uint32_t>::max()) {
-    put<std::uint32_t>(h + kLegacyCount, static_cast<std::uint32_t>(n));
-    for (int r = 0; r < 5; ++r) put<std::uint32_t>(h + kLegacyCount + 4 + 4 * r, static_cast<std::uint32_t>(by_return[r]));
-  }
+  // Legacy counts (bytes 107-130) stay 0: LAS 1.4 requires that for formats 6-10.
   for (int a = 0; a < 3; ++a) {
     put<double>(h + kScale + 8 * a, scale[a]);
     put<double>(h + kOffset + 8 * a, offset[a]);
@@ -656,25 +642,15 @@ void LasRecordWriter::record(std::size_t i, char* r) const {
   std::memset(r, 0, s.core_length);
   for (int a = 0; a < 3; ++a) put<std::int32_t>(r + 4 * a, s.quantise(i, a));
   put<std::uint16_t>(r + 12, static_cast<std::uint16_t>(slot[0].integer(i, 0, 65535)));
-  if (s.legacy) {
-    const auto ret = static_cast<unsigned>(slot[1].integer(i, 0, 7));
-    const auto rets = static_cast<unsigned>(slot[2].integer(i, 0, 7));
-    r[14] = static_cast<char>(ret | (rets << 3));
-    r[15] = static_cast<char>(slot[3].integer(i, 0, 31));
-    r[16] = static_cast<char>(slot[5].integer(i, -90, 90));
-    r[17] = static_cast<char>(slot[4].integer(i, 0, 255));
-    put<std::uint16_t>(r + 18, static_cast<std::uint16_t>(slot[6].integer(i, 0, 65535)));
-  } else {
-    const auto ret = static_cast<unsigned>(slot[1].integer(i, 0, 15));
-    const auto rets = static_cast<unsigned>(slot[2].integer(i, 0, 15));
-    r[14] = static_cast<char>(ret | (rets << 4));
-    r[15] = 0;  // classification flags, scanner channel, scan direction, edge of flight line
-    r[16] = static_cast<char>(slot[3].integer(i, 0, 255));
-    r[17] = static_cast<char>(slot[4].integer(i, 0, 255));
-    const double angle = std::round(slot[5].raw(i) / kScanAngleStepDeg);
-    put<std::int16_t>(r + 18, static_cast<std::int16_t>(std::clamp(angle, -32768.0, 32767.0)));
-    put<std::uint16_t>(r + 20, static_cast<std::uint16_t>(slot[6].integer(i, 0, 65535)));
-  }
+  const auto ret = static_cast<unsigned>(slot[1].integer(i, 0, 15));
+  const auto rets = static_cast<unsigned>(slot[2].integer(i, 0, 15));
+  r[14] = static_cast<char>(ret | (rets << 4));
+  r[15] = 0;  // classification flags, scanner channel, scan direction, edge of flight line
+  r[16] = static_cast<char>(slot[3].integer(i, 0, 255));
+  r[17] = static_cast<char>(slot[4].integer(i, 0, 255));
+  const double angle = std::round(slot[5].raw(i) / kScanAngleStepDeg);
+  put<std::int16_t>(r + 18, static_cast<std::int16_t>(std::clamp(angle, -32768.0, 32767.0)));
+  put<std::uint16_t>(r + 20, static_cast<std::uint16_t>(slot[6].integer(i, 0, 65535)));
   const PointLayout layout = point_layout(s.format);
   if (layout.gps_time >= 0) put<double>(r + layout.gps_time, slot[7].raw(i));
   if (s.colors)

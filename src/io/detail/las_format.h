@@ -54,13 +54,12 @@ private:
   std::unique_ptr<State> s_;
 };
 
-/// Turns a cloud into point records: the header, the VLRs and one record per point.
-/// Extended (default): LAS 1.4 point format 6 or 7. Legacy: format 0-3 (1.4 header), whose
-/// slots are narrower (returns up to 7, classes up to 31, whole scan angles of -90..90);
-/// a field that does not fit goes to extra bytes under its name.
+/// Turns a cloud into point records: the header (LAS 1.4, point format 6, or 7 with colours),
+/// the VLRs and one record per point; a field that does not fit its slot goes to extra bytes
+/// under its name.
 class LasRecordWriter {
 public:
-  LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name, bool legacy);
+  LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name);
   ~LasRecordWriter();
   int format() const;
   std::size_t record_length() const;

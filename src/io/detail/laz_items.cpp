@@ -4,6 +4,7 @@
 // contexts are LASzip's so the two can be compared.
 #include "io/detail/laz_items.h"
 
+#include "io/detail/laz_layered.h"
 #include "io/detail/laz_models.h"
 
 #include <array>
@@ -285,7 +286,7 @@ private:
 std::vector<std::unique_ptr<ItemCoder>> make_coders(const LaszipVlr& vlr, bool decoder) {
   if (vlr.coder != 0) throw std::runtime_error(fmt::format("unknown LASzip coder {} (only 0, arithmetic, exists)", vlr.coder));
   if (vlr.compressor != 1 && vlr.compressor != 2)
-    throw std::runtime_error(fmt::format("LASzip compressor {} is not supported (1 and 2, point-wise, are)", vlr.compressor));
+    throw std::runtime_error(fmt::format("LASzip compressor {} is not supported (1 and 2, point-wise, and 3, layered, are)", vlr.compressor));
   std::vector<std::unique_ptr<ItemCoder>> coders;
   for (const Item& item : vlr.items) {
     const bool v2 = item.version == 2;  // version 1 differs in its models
@@ -306,16 +307,21 @@ std::vector<std::unique_ptr<ItemCoder>> make_coders(const LaszipVlr& vlr, bool d
 // ---------------------------------------------------------------------------------------------
 // Chunks.
 
-ChunkDecoder::ChunkDecoder(const LaszipVlr& vlr) : coders_(make_coders(vlr, true)), record_size_(vlr.record_size()) {}
+ChunkDecoder::ChunkDecoder(const LaszipVlr& vlr) : record_size_(vlr.record_size()) {
+  if (vlr.compressor == 3) layered_ = std::make_unique<LayeredDecoder>(vlr);
+  else coders_ = make_coders(vlr, true);
+}
 ChunkDecoder::~ChunkDecoder() = default;
 
 void ChunkDecoder::start(const unsigned char* data, std::size_t size) {
+  if (layered_) layered_->start(data, size);
   data_ = data;
   size_ = size;
   first_ = true;
 }
 
 bool ChunkDecoder::next(char* record) {
+  if (layered_) return layered_->next(record);
   if (first_) {
     // The first record of a chunk is stored raw; the coded stream follows it.
     if (size_ < record_size_) return false;
@@ -339,12 +345,19 @@ bool ChunkDecoder::next(char* record) {
   return dec_.overrun() <= 4;
 }
 
-ChunkEncoder::ChunkEncoder(const LaszipVlr& vlr, std::vector<unsigned char>& out) : coders_(make_coders(vlr, false)), out_(out), enc_(out) {}
+ChunkEncoder::ChunkEncoder(const LaszipVlr& vlr, std::vector<unsigned char>& out) : out_(out), enc_(out) {
+  if (vlr.compressor == 3) layered_ = std::make_unique<LayeredEncoder>(vlr, out);
+  else coders_ = make_coders(vlr, false);
+}
 ChunkEncoder::~ChunkEncoder() = default;
 
-void ChunkEncoder::start() { first_ = true; }
+void ChunkEncoder::start() {
+  if (layered_) layered_->start();
+  first_ = true;
+}
 
 void ChunkEncoder::add(const char* record) {
+  if (layered_) return layered_->add(record);
   const char* item = record;
   if (first_) {
     std::size_t size = 0;
@@ -364,6 +377,7 @@ void ChunkEncoder::add(const char* record) {
 }
 
 void ChunkEncoder::finish() {
+  if (layered_) return layered_->finish();
   if (!first_) enc_.done();
 }
 

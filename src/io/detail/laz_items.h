@@ -49,6 +49,8 @@ inline constexpr std::uint32_t kVariableChunks = 0xFFFFFFFFu;
 std::vector<Item> pointwise_items(int format, std::size_t extra);
 
 class ItemCoder;
+class LayeredDecoder;
+class LayeredEncoder;
 
 /// Decodes the records of one chunk at a time.
 class ChunkDecoder {
@@ -65,6 +67,7 @@ public:
 
 private:
   std::vector<std::unique_ptr<ItemCoder>> coders_;
+  std::unique_ptr<LayeredDecoder> layered_;  // compressor 3
   std::size_t record_size_ = 0;
   Decoder dec_;
   const unsigned char* data_ = nullptr;
@@ -83,6 +86,7 @@ public:
 
 private:
   std::vector<std::unique_ptr<ItemCoder>> coders_;
+  std::unique_ptr<LayeredEncoder> layered_;  // compressor 3
   std::vector<unsigned char>& out_;
   Encoder enc_;
   bool first_ = true;

@@ -171,8 +171,8 @@ public:
   void write(Encoder& enc, std::int64_t t) {
     for (;;) {
       if (diff_[last_] == 0) {
-        if (t == time_[last_]) {
-          enc.encode_symbol(zero_diff_, 0);  // version 2 only: version 3 codes changes
+        if (!v3_ && t == time_[last_]) {
+          enc.encode_symbol(zero_diff_, 0);  // version 3 has no such symbol: a zero difference
         } else {
           const std::int64_t d64 = sub(t, time_[last_]);
           const auto d = static_cast<std::int32_t>(d64);
@@ -193,8 +193,8 @@ public:
           time_[last_] = t;
         }
       } else {
-        if (t == time_[last_]) {
-          enc.encode_symbol(multi_, kUnchanged);  // version 2 only
+        if (!v3_ && t == time_[last_]) {
+          enc.encode_symbol(multi_, kUnchanged);  // version 3: a zero difference (after a switch)
         } else {
           const std::int64_t d64 = sub(t, time_[last_]);
           const auto d = static_cast<std::int32_t>(d64);
