@@ -18,7 +18,7 @@ namespace laz = pointsurf::io::detail::laz;
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   const int format = data[0] & 3;
-  const std::size_t extra = (data[0] >> 2) & 7;
+  const std::size_t extra = (data[0] >> 2) & 15;
   const bool variable = (data[0] & 0x80) != 0;
   try {
     laz::ChunkTable table = laz::decode_chunk_table(data + 1, size - 1, variable);

@@ -283,6 +283,51 @@ TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
   }
 }
 
+// Variable chunks (COPC files use them: one chunk per octree node): the chunk table gives each
+// chunk's point count. simple.las's records in chunks of 700, 300 and 65 points, point-wise.
+TEST(Laz, VariableChunksAreReadByTheirTable) {
+  const std::string las = read_bytes(kData / "simple.las");
+  const std::size_t offset = get<std::uint32_t>(las, 96), record = get<std::uint16_t>(las, 105), n = get<std::uint32_t>(las, 107);
+  laz::LaszipVlr vlr;
+  vlr.version_major = 2;
+  vlr.version_minor = 2;
+  vlr.chunk_size = laz::kVariableChunks;
+  vlr.items = laz::pointwise_items(3, record - 34);
+  std::string body = vlr.body();
+  std::string vlr_bytes(54, '\0');
+  std::memcpy(vlr_bytes.data() + 2, "laszip encoded", 14);
+  put<std::uint16_t>(vlr_bytes, 18, laz::kLaszipRecordId);
+  put<std::uint16_t>(vlr_bytes, 20, static_cast<std::uint16_t>(body.size()));
+  vlr_bytes += body;
+  std::string header = las.substr(0, offset);  // simple.las has no VLR of its own
+  ASSERT_EQ(get<std::uint32_t>(header, 100), 0u);
+  put<std::uint32_t>(header, 100, 1);
+  put<std::uint32_t>(header, 96, static_cast<std::uint32_t>(offset + vlr_bytes.size()));
+  header[104] = static_cast<char>(header[104] | 0x80);
+  std::vector<unsigned char> chunks;
+  laz::ChunkEncoder encoder(vlr, chunks);
+  laz::ChunkTable table;
+  std::size_t first = 0;
+  for (std::size_t count : {std::size_t(700), std::size_t(300), std::size_t(65)}) {
+    const std::size_t before = chunks.size();
+    encoder.start();
+    for (std::size_t i = first; i < first + count; ++i) encoder.add(las.data() + offset + i * record);
+    encoder.finish();
+    table.points.push_back(count);
+    table.bytes.push_back(chunks.size() - before);
+    first += count;
+  }
+  ASSERT_EQ(first, n);
+  std::string file = header + vlr_bytes + std::string(8, '\0') + std::string(chunks.begin(), chunks.end());
+  put<std::int64_t>(file, header.size() + vlr_bytes.size(), static_cast<std::int64_t>(file.size()));
+  file += laz::encode_chunk_table(table, true);
+  const auto path = write_bytes(temp("variable.laz"), file);
+  const CloudReadResult read = read_point_cloud(path);
+  EXPECT_TRUE(test::contains(read.encoding, "variable chunks")) << read.encoding;
+  expect_same_clouds(read_point_cloud(kData / "simple.las").cloud, read.cloud);
+  std::filesystem::remove(path);
+}
+
 TEST(Laz, ChunkTablesOfFixedAndVariableChunksRoundTrip) {
   laz::ChunkTable table;
   table.points = {50000, 50000, 123, 1, 7000000};
