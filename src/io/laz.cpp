@@ -106,8 +106,8 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
     const std::uint64_t first = header.point_offset + 8;
     if (table_at == -1 && file_size >= first + 8) file.read(file_size - 8, 8, &table_at);  // written last by a streaming writer
     if (table_at < static_cast<std::int64_t>(first) || static_cast<std::uint64_t>(table_at) + 8 > file_size)
-      throw InputError(fmt::format("{}: chunk table offset {} (byte {}) lies outside the file's {} bytes of point data", name, table_at,
-                                   header.point_offset, file_size));
+      throw InputError(fmt::format("{}: chunk table offset {} (byte {}) lies outside the file ({} bytes): truncated or corrupt", name,
+                                   table_at, header.point_offset, file_size));
     const std::size_t table_size = static_cast<std::size_t>(std::min<std::uint64_t>(file_size - table_at, std::uint64_t(64) << 20));
     const std::string table_bytes = file.read(static_cast<std::uint64_t>(table_at), table_size);
     const bool variable = lz.chunk_size == laz::kVariableChunks;
@@ -140,22 +140,22 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
   std::vector<unsigned char> chunk;
   std::uint64_t i = 0;
   for (std::size_t c = 0; c < chunk_start.size() && i < n; ++c) {
+    const std::uint64_t first = i;
     const auto fail = [&](std::string_view what) {
-      return InputError(fmt::format("{}: chunk {} of {} (points {} to {}, {} bytes at byte {}): {}", name, c, chunk_start.size(), i,
-                                    i + chunk_points[c] - 1, chunk_bytes[c], chunk_start[c], what));
+      return InputError(fmt::format("{}: chunk {} of {} (points {} to {}, {} bytes at byte {}): {}", name, c, chunk_start.size(), first,
+                                    first + chunk_points[c] - 1, chunk_bytes[c], chunk_start[c], what));
     };
     chunk.resize(static_cast<std::size_t>(chunk_bytes[c]));
     if (!file.read(chunk_start[c], chunk.size(), chunk.data())) throw fail(fmt::format("file ends at byte {}", file_size));
     decoder->start(chunk.data(), chunk.size());
     const std::uint64_t end = std::min(n, i + chunk_points[c]);
+    bool intact = true;
     try {
-      for (; i < end; ++i) {
-        if (!decoder->next(record.data())) throw fail("truncated or corrupt: the compressed data ends before the chunk's points do");
-        records.read(static_cast<std::size_t>(i), record.data());
-      }
-    } catch (const std::runtime_error& e) {
+      for (; i < end && (intact = decoder->next(record.data())); ++i) records.read(static_cast<std::size_t>(i), record.data());
+    } catch (const std::runtime_error& e) {  // from the decoder: what it found corrupt
       throw fail(fmt::format("corrupt: {}", e.what()));
     }
+    if (!intact) throw fail(fmt::format("truncated or corrupt: the compressed data ends at point {}", i));
   }
   records.finish();
   return raw;

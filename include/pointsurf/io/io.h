@@ -3,7 +3,8 @@
 // Reading and writing clouds and meshes in every common scan format.
 //
 // Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
-// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4).
+// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4),
+// LAZ (LASzip-compressed LAS: formats 0-3 and 6-8 read, written as format 6/7).
 // The format of a file being read is detected from its content (magic bytes, header); the
 // extension is only a hint for headerless text. The format written follows the extension of
 // the output path unless WriteOptions::format says otherwise.
@@ -25,9 +26,9 @@
 
 namespace pointsurf {
 
-/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las".
+/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las", "laz".
 /// Returns the format of `path` from its first bytes, falling back on the extension for text
-/// without a header; throws InputError for an empty or unrecognised file (and for LAZ).
+/// without a header; throws InputError for an empty or unrecognised file.
 std::string detect_format(const std::filesystem::path& path);
 
 /// Format implied by the extension of `path` (".ply" -> "ply", ".txt"/".pts"/".csv" -> "xyz",
