@@ -168,6 +168,44 @@ void expect_round_trip(const laz::LaszipVlr& vlr, const std::string& records, st
   EXPECT_LT(coded.size(), records.size()) << "format " << format;
 }
 
+// Random records with the structure the predictors exploit: a walk in x and y, z with jumps,
+// intensity in runs, GPS time in pulse steps with repeats and jumps between sequences, grey and
+// coloured points.
+struct RecordWalk {
+  explicit RecordWalk(unsigned seed) : rng(seed) {}
+  void xyz_intensity(char* r) {
+    x += static_cast<std::int32_t>(rng() % 200) - 100;
+    y += static_cast<std::int32_t>(rng() % 2000) - 1000;
+    z = static_cast<std::int32_t>(rng() % 7 == 0 ? rng() : z + rng() % 50);
+    std::memcpy(r, &x, 4);
+    std::memcpy(r + 4, &y, 4);
+    std::memcpy(r + 8, &z, 4);
+    const auto intensity = static_cast<std::uint16_t>(rng() % 3 ? 500 + rng() % 20 : rng());
+    std::memcpy(r + 12, &intensity, 2);
+  }
+  void time(char* r) {
+    const unsigned kind = rng() % 20;
+    if (kind == 0) t += 1e7;
+    else if (kind == 1) t -= 5e6;
+    else if (kind > 3) t += 1e-5 * (1 + rng() % 3);
+    std::memcpy(r, &t, 8);
+  }
+  void colour(char* r, int channels) {
+    const auto grey = static_cast<std::uint16_t>(rng() % 65536);
+    for (int c = 0; c < channels; ++c) {
+      const auto v = static_cast<std::uint16_t>(rng() % 2 ? grey : grey + rng() % 300);
+      std::memcpy(r + 2 * c, &v, 2);
+    }
+  }
+  void source(char* r) {
+    const auto id = static_cast<std::uint16_t>(rng() % 50 ? 7 : rng());
+    std::memcpy(r, &id, 2);
+  }
+  std::mt19937 rng;
+  std::int32_t x = 0, y = 0, z = 0;
+  double t = 1000.0;
+};
+
 // Records of point formats 0-3 with extra bytes: random values with the structure the
 // predictors exploit (runs, several GPS time sequences, grey and coloured points), through
 // several chunks, decode to the same bytes.
@@ -177,44 +215,26 @@ TEST(Laz, EveryPointwiseFormatRoundTripsBitForBit) {
       laz::LaszipVlr vlr;
       vlr.items = laz::pointwise_items(format, extra);
       const std::size_t record = vlr.record_size();
-      std::mt19937 rng(static_cast<unsigned>(17 + format * 10 + extra));
+      RecordWalk walk(static_cast<unsigned>(17 + format * 10 + extra));
+      auto& rng = walk.rng;
       const std::size_t n = 3000;
       std::string records(n * record, '\0');
-      double t = 1000.0;
-      std::int32_t x = 0, y = 0, z = 0;
       for (std::size_t i = 0; i < n; ++i) {
         char* r = records.data() + i * record;
-        x += static_cast<std::int32_t>(rng() % 200) - 100;
-        y += static_cast<std::int32_t>(rng() % 2000) - 1000;
-        z = static_cast<std::int32_t>(rng() % 7 == 0 ? rng() : z + rng() % 50);
-        std::memcpy(r, &x, 4);
-        std::memcpy(r + 4, &y, 4);
-        std::memcpy(r + 8, &z, 4);
-        const auto intensity = static_cast<std::uint16_t>(rng() % 3 ? 500 + rng() % 20 : rng());
-        std::memcpy(r + 12, &intensity, 2);
+        walk.xyz_intensity(r);
         const unsigned rets = 1 + rng() % 5, ret = 1 + rng() % rets;
         r[14] = static_cast<char>(ret | (rets << 3) | ((rng() % 9 == 0) << 6) | ((rng() % 31 == 0) << 7));
         r[15] = static_cast<char>(rng() % 4 ? 2 : rng());
         r[16] = static_cast<char>(static_cast<int>(rng() % 181) - 90);
         r[17] = static_cast<char>(rng() % 10 ? 0 : rng());
-        const auto source = static_cast<std::uint16_t>(rng() % 50 ? 7 : rng());
-        std::memcpy(r + 18, &source, 2);
+        walk.source(r + 18);
         std::size_t at = 20;
         if (format == 1 || format == 3) {
-          // Steps of the pulse rate, repeats, jumps back to older sequences and huge jumps.
-          const unsigned kind = rng() % 20;
-          if (kind == 0) t += 1e7;
-          else if (kind == 1) t -= 5e6;
-          else if (kind > 3) t += 1e-5 * (1 + rng() % 3);
-          std::memcpy(r + at, &t, 8);
+          walk.time(r + at);
           at += 8;
         }
         if (format == 2 || format == 3) {
-          const auto grey = static_cast<std::uint16_t>(rng() % 65536);
-          for (int c = 0; c < 3; ++c) {
-            const auto v = static_cast<std::uint16_t>(rng() % 2 ? grey : grey + rng() % 300);
-            std::memcpy(r + at + 2 * c, &v, 2);
-          }
+          walk.colour(r + at, 3);
           at += 6;
         }
         for (std::size_t e = 0; e < extra; ++e) r[at + e] = static_cast<char>(e == 0 ? rng() : i / 7);
@@ -234,23 +254,15 @@ TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
         vlr.compressor = 3;
         vlr.items = laz::layered_items(format, extra);
         const std::size_t record = vlr.record_size();
-        std::mt19937 rng(static_cast<unsigned>(5 + format * 10 + extra + channels));
+        RecordWalk walk(static_cast<unsigned>(5 + format * 10 + extra + channels));
+        auto& rng = walk.rng;
         const std::size_t n = 3000;
         std::string records(n * record, '\0');
-        double t = 5000.0;
-        std::int32_t x = 0, y = 0, z = 0;
         std::int16_t angle = 0;
         unsigned channel = 0;
         for (std::size_t i = 0; i < n; ++i) {
           char* r = records.data() + i * record;
-          x += static_cast<std::int32_t>(rng() % 200) - 100;
-          y += static_cast<std::int32_t>(rng() % 2000) - 1000;
-          z = static_cast<std::int32_t>(rng() % 7 == 0 ? rng() : z + rng() % 50);
-          std::memcpy(r, &x, 4);
-          std::memcpy(r + 4, &y, 4);
-          std::memcpy(r + 8, &z, 4);
-          const auto intensity = static_cast<std::uint16_t>(rng() % 3 ? 500 + rng() % 20 : rng());
-          std::memcpy(r + 12, &intensity, 2);
+          walk.xyz_intensity(r);
           const unsigned rets = rng() % 20 == 0 ? rng() % 16 : 1 + rng() % 4, ret = rng() % 20 == 0 ? rng() % 16 : 1 + rng() % (rets ? rets : 1);
           r[14] = static_cast<char>(ret | (rets << 4));
           if (channels && rng() % 40 == 0) channel = rng() % 4;
@@ -259,20 +271,11 @@ TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
           r[17] = static_cast<char>(rng() % 10 ? 0 : rng());
           if (rng() % 5 == 0) angle = static_cast<std::int16_t>(angle + static_cast<int>(rng() % 2001) - 1000);
           std::memcpy(r + 18, &angle, 2);
-          const auto source = static_cast<std::uint16_t>(rng() % 50 ? 7 : rng());
-          std::memcpy(r + 20, &source, 2);
-          const unsigned kind = rng() % 20;
-          if (kind == 0) t += 1e7;
-          else if (kind == 1) t -= 5e6;
-          else if (kind > 5) t += 1e-5 * (1 + rng() % 3);
-          std::memcpy(r + 22, &t, 8);
+          walk.source(r + 20);
+          walk.time(r + 22);
           std::size_t at = 30;
           if (format >= 7) {
-            const auto grey = static_cast<std::uint16_t>(rng() % 65536);
-            for (int c = 0; c < (format == 8 ? 4 : 3); ++c) {
-              const auto v = static_cast<std::uint16_t>(rng() % 2 ? grey : grey + rng() % 300);
-              std::memcpy(r + at + 2 * c, &v, 2);
-            }
+            walk.colour(r + at, format == 8 ? 4 : 3);
             at += format == 8 ? 8 : 6;
           }
           for (std::size_t e = 0; e < extra; ++e) r[at + e] = static_cast<char>(e == 0 ? rng() : i / 7);
