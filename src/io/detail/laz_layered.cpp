@@ -4,8 +4,7 @@
 // compatible implementation keeps: the items after POINT14 get scanner channel 0 as their
 // context on every point where the channel did not change, and on a switch to a context already
 // in use they keep predicting from the previous context's last item. The encoder mirrors the
-// decoder and writes every layer (LASzip leaves out layers whose values never change in a
-// chunk; a decoder treats both alike).
+// decoder; like LASzip it leaves out (size 0) a layer whose values never change in a chunk.
 #include "io/detail/laz_layered.h"
 
 #include <array>
@@ -127,9 +126,16 @@ public:
       buffers_[i].clear();
       enc_[i]->init();
     }
+    changed_.assign(buffers_.size(), false);
   }
+  // Encoder side: layer i's value differs from the last one at some point of the chunk.
+  void mark(std::size_t i, bool changed) { changed_[i] = changed_[i] || changed; }
+  // An unchanged layer is left out: the decoder then keeps the first point's values.
   void finish() {
-    for (auto& e : enc_) e->done();
+    for (std::size_t i = 0; i < enc_.size(); ++i) {
+      enc_[i]->done();
+      if (!changed_[i]) buffers_[i].clear();
+    }
   }
   const std::vector<unsigned char>& bytes(std::size_t i) const { return buffers_[i]; }
   bool decoder() const { return decoder_; }
@@ -140,6 +146,7 @@ private:
   std::vector<bool> present_;
   std::vector<std::vector<unsigned char>> buffers_;
   std::vector<std::unique_ptr<Encoder>> enc_;
+  std::vector<bool> changed_;
 };
 
 class LayeredItem {
@@ -341,6 +348,15 @@ public:
     c->dy.compress(xy, c->y_median[mg].get(), diff, (n == 1) + (k < 20 ? k & ~1u : 20));
     c->y_median[mg].add(diff);
     k = (c->dx.k() + c->dy.k()) / 2;
+    layers_.mark(kXY, true);
+    layers_.mark(kZ, p.z != last.z);
+    layers_.mark(kClass, p.classification != last.classification);
+    layers_.mark(kFlags, p.flags() != last.flags());
+    layers_.mark(kIntensity, p.intensity != last.intensity);
+    layers_.mark(kScanAngle, p.scan_angle != last.scan_angle);
+    layers_.mark(kUserData, p.user_data != last.user_data);
+    layers_.mark(kSource, p.source != last.source);
+    layers_.mark(kGpsTime, gps_change);
     c->z.compress(layers_.enc(kZ), c->last_z[l], p.z, (n == 1) + (k < 18 ? k & ~1u : 18));
     c->last_z[l] = p.z;
     const unsigned ccc = ((last.classification & 0x1Fu) << 1) + (cpr == 3 ? 1 : 0);
@@ -461,10 +477,12 @@ public:
     std::uint16_t* last = owner->last.data();
     std::uint16_t v[4];
     std::memcpy(v, item, size_);
+    layers_.mark(0, std::memcmp(v, last, 6) != 0);
     c.rgb.write(layers_.enc(0), last, v);
     std::memcpy(last, v, 6);
     if (nir_) {
       Encoder& enc = layers_.enc(1);
+      layers_.mark(1, v[3] != last[3]);
       const std::uint32_t sym = unsigned((last[3] & 0xFF) != (v[3] & 0xFF)) | (unsigned((last[3] & 0xFF00) != (v[3] & 0xFF00)) << 1);
       enc.encode_symbol(c.nir_used, sym);
       if (sym & 1) enc.encode_symbol(c.nir[0], static_cast<std::uint32_t>(fold((v[3] & 255) - (last[3] & 255))));
@@ -511,6 +529,7 @@ public:
     unsigned char* last = owner->last.data();
     for (std::size_t i = 0; i < size_; ++i) {
       const auto b = static_cast<unsigned char>(item[i]);
+      layers_.mark(i, b != last[i]);
       layers_.enc(i).encode_symbol(c.models[i], static_cast<unsigned char>(b - last[i]));
       last[i] = b;
     }
