@@ -202,6 +202,20 @@ std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& 
 
 }  // namespace
 
+namespace {
+
+// The points inside the box min..max (xmin, ymin, zmin, xmax, ymax, zmax), with their attributes.
+void keep_inside(PointCloud& cloud, const std::array<double, 6>& box) {
+  std::vector<std::size_t> inside;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Vector3d& p = cloud.positions[i];
+    if (p.x() >= box[0] && p.y() >= box[1] && p.z() >= box[2] && p.x() <= box[3] && p.y() <= box[4] && p.z() <= box[5]) inside.push_back(i);
+  }
+  if (inside.size() != cloud.size()) cloud = cloud.select(inside);
+}
+
+}  // namespace
+
 CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOptions& options) {
   CloudReadResult result;
   io::detail::RawData raw = read_raw(path, options, result.format);
@@ -213,6 +227,9 @@ CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOp
     throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
                                  display_name(path), raw.dropped_nonfinite));
   drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, false);
+  if (options.copc_level >= 0 && result.format != "laz")
+    throw UsageError(fmt::format("{}: an octree level is a COPC (LAZ) option; this file is {}", display_name(path), result.format));
+  if (options.bounds) keep_inside(raw.cloud, *options.bounds);
   raw.cloud.validate();
   result.cloud = std::move(raw.cloud);
   return result;

@@ -4,8 +4,11 @@
 // LASzip item coders (detail/laz_items.cpp), followed by a chunk table of their sizes. The file
 // is read chunk by chunk: memory holds one chunk's bytes besides the cloud.
 #include <algorithm>
+#include <array>
+#include <cstring>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -60,9 +63,63 @@ std::string describe(const laz::LaszipVlr& v) {
                      v.chunk_size == laz::kVariableChunks ? std::string("variable chunks") : fmt::format("chunk size {}", v.chunk_size));
 }
 
+// COPC: the "copc" info VLR (record 1) gives the octree's root cube; the hierarchy pages give
+// each node's key (level d and integer position x, y, z) and the file offset of its chunk.
+struct CopcNode {
+  int level = 0;
+  std::array<int, 3> key{};
+};
+
+struct CopcOctree {
+  std::array<double, 3> center{};
+  double halfsize = 0;
+  std::map<std::uint64_t, CopcNode> nodes;  // by chunk offset
+  // Whether the node's cube meets the box (xmin, ymin, zmin, xmax, ymax, zmax).
+  bool meets(const CopcNode& node, const std::array<double, 6>& box) const {
+    if (node.level > 60) return true;
+    const double side = 2.0 * halfsize / double(std::uint64_t(1) << node.level);
+    for (int a = 0; a < 3; ++a) {
+      const double lo = center[a] - halfsize + side * node.key[a];
+      if (lo > box[3 + a] || lo + side < box[a]) return false;
+    }
+    return true;
+  }
+};
+
+CopcOctree read_copc(InputFile& file, std::string_view info, const std::string& name) {
+  if (info.size() < 56) throw InputError(fmt::format("{}: COPC info VLR has {} bytes, needs 160", name, info.size()));
+  CopcOctree tree;
+  for (int a = 0; a < 3; ++a) std::memcpy(&tree.center[a], info.data() + 8 * a, 8);
+  std::memcpy(&tree.halfsize, info.data() + 24, 8);
+  std::uint64_t root_offset = 0, root_size = 0;
+  std::memcpy(&root_offset, info.data() + 40, 8);
+  std::memcpy(&root_size, info.data() + 48, 8);
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> pages{{root_offset, root_size}};
+  // Each page holds 32-byte entries; a page is read once, so the walk ends within the file.
+  std::uint64_t read_bytes = 0;
+  for (std::size_t p = 0; p < pages.size(); ++p) {
+    const auto [offset, size] = pages[p];
+    read_bytes += size;
+    if (size % 32 != 0 || offset > file.size() || size > file.size() - offset || read_bytes > file.size())
+      throw InputError(fmt::format("{}: COPC hierarchy page of {} bytes at byte {} lies outside the file or is not whole entries", name, size, offset));
+    const std::string page = file.read(offset, static_cast<std::size_t>(size));
+    for (std::size_t e = 0; e < page.size(); e += 32) {
+      std::int32_t key[4], bytes = 0, points = 0;
+      std::uint64_t at = 0;
+      std::memcpy(key, page.data() + e, 16);
+      std::memcpy(&at, page.data() + e + 16, 8);
+      std::memcpy(&bytes, page.data() + e + 24, 4);
+      std::memcpy(&points, page.data() + e + 28, 4);
+      if (points == -1) pages.emplace_back(at, static_cast<std::uint64_t>(bytes));
+      else if (points > 0) tree.nodes[at] = {key[0], {key[1], key[2], key[3]}};
+    }
+  }
+  return tree;
+}
+
 }  // namespace
 
-RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
+RawData read_laz(const std::filesystem::path& path, const ReadOptions& options) {
   const std::string name = display_name(path);
   InputFile file(path, name);
   const std::uint64_t file_size = file.size();
@@ -135,12 +192,34 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
 
   RawData raw;
   raw.encoding = fmt::format("LAZ {}.{} point format {} ({})", header.major, header.minor, header.format, describe(lz));
+
+  // COPC: the chunks of the octree nodes asked for (levels, bounds); the rest is not decoded.
+  std::vector<bool> wanted(chunk_start.size(), true);
+  const auto copc = std::find_if(vlrs.begin(), vlrs.end(), [](const LasVlr& v) { return v.user_id == "copc" && v.record_id == 1; });
+  if (options.copc_level >= 0 && copc == vlrs.end())
+    throw UsageError(fmt::format("{}: an octree level needs a COPC file; this LAZ file has no COPC info VLR", name));
+  if (copc != vlrs.end() && (options.copc_level >= 0 || options.bounds)) {
+    const CopcOctree tree = read_copc(file, copc->body, name);
+    std::uint64_t nodes = 0;
+    for (std::size_t c = 0; c < chunk_start.size(); ++c) {
+      const auto node = tree.nodes.find(chunk_start[c]);
+      if (node == tree.nodes.end()) continue;
+      wanted[c] = (options.copc_level < 0 || node->second.level <= options.copc_level) && (!options.bounds || tree.meets(node->second, *options.bounds));
+      nodes += wanted[c];
+    }
+    raw.encoding += fmt::format(", COPC octree: {} of {} nodes read", nodes, tree.nodes.size());
+    header.count = 0;
+    for (std::size_t c = 0; c < chunk_start.size(); ++c)
+      if (wanted[c]) header.count += chunk_points[c];
+  }
+  const std::uint64_t n_read = header.count;
   LasRecordReader records(header, head, name, raw);
   std::vector<char> record(header.record_length);
   std::vector<unsigned char> chunk;
-  std::uint64_t i = 0;
-  for (std::size_t c = 0; c < chunk_start.size() && i < n; ++c) {
-    const std::uint64_t first = i;
+  std::uint64_t i = 0, total = 0;  // points read, points before this chunk in the file
+  for (std::size_t c = 0; c < chunk_start.size() && i < n_read; total += chunk_points[c], ++c) {
+    if (!wanted[c]) continue;
+    const std::uint64_t first = total, first_read = i;
     const auto fail = [&](std::string_view what) {
       return InputError(fmt::format("{}: chunk {} of {} (points {} to {}, {} bytes at byte {}): {}", name, c, chunk_start.size(), first,
                                     first + chunk_points[c] - 1, chunk_bytes[c], chunk_start[c], what));
@@ -148,14 +227,14 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions&) {
     chunk.resize(static_cast<std::size_t>(chunk_bytes[c]));
     if (!file.read(chunk_start[c], chunk.size(), chunk.data())) throw fail(fmt::format("file ends at byte {}", file_size));
     decoder->start(chunk.data(), chunk.size());
-    const std::uint64_t end = std::min(n, i + chunk_points[c]);
+    const std::uint64_t end = std::min(n_read, i + chunk_points[c]);
     bool intact = true;
     try {
       for (; i < end && (intact = decoder->next(record.data())); ++i) records.read(static_cast<std::size_t>(i), record.data());
     } catch (const std::runtime_error& e) {  // from the decoder: what it found corrupt
       throw fail(fmt::format("corrupt: {}", e.what()));
     }
-    if (!intact) throw fail(fmt::format("truncated or corrupt: the compressed data ends at point {}", i));
+    if (!intact) throw fail(fmt::format("truncated or corrupt: the compressed data ends at point {}", first + (i - first_read)));
   }
   records.finish();
   return raw;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -286,48 +287,131 @@ TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
   }
 }
 
-// Variable chunks (COPC files use them: one chunk per octree node): the chunk table gives each
-// chunk's point count. simple.las's records in chunks of 700, 300 and 65 points, point-wise.
-TEST(Laz, VariableChunksAreReadByTheirTable) {
-  const std::string las = read_bytes(kData / "simple.las");
-  const std::size_t offset = get<std::uint32_t>(las, 96), record = get<std::uint16_t>(las, 105), n = get<std::uint32_t>(las, 107);
-  laz::LaszipVlr vlr;
-  vlr.version_major = 2;
-  vlr.version_minor = 2;
-  vlr.chunk_size = laz::kVariableChunks;
-  vlr.items = laz::pointwise_items(3, record - 34);
-  std::string body = vlr.body();
-  std::string vlr_bytes(54, '\0');
-  std::memcpy(vlr_bytes.data() + 2, "laszip encoded", 14);
-  put<std::uint16_t>(vlr_bytes, 18, laz::kLaszipRecordId);
-  put<std::uint16_t>(vlr_bytes, 20, static_cast<std::uint16_t>(body.size()));
-  vlr_bytes += body;
-  std::string header = las.substr(0, offset);  // simple.las has no VLR of its own
-  ASSERT_EQ(get<std::uint32_t>(header, 100), 0u);
-  put<std::uint32_t>(header, 100, 1);
-  put<std::uint32_t>(header, 96, static_cast<std::uint32_t>(offset + vlr_bytes.size()));
-  header[104] = static_cast<char>(header[104] | 0x80);
-  std::vector<unsigned char> chunks;
-  laz::ChunkEncoder encoder(vlr, chunks);
-  laz::ChunkTable table;
-  std::size_t first = 0;
-  for (std::size_t count : {std::size_t(700), std::size_t(300), std::size_t(65)}) {
-    const std::size_t before = chunks.size();
-    encoder.start();
-    for (std::size_t i = first; i < first + count; ++i) encoder.add(las.data() + offset + i * record);
-    encoder.finish();
-    table.points.push_back(count);
-    table.bytes.push_back(chunks.size() - before);
-    first += count;
+// simple.las recompressed by hand in variable chunks: each chunk the records of `chunks`, point-
+// wise; `vlr` (a whole VLR) appended to the header's; `tail` (which starts at the returned
+// file's size at call time, `tail_at`) after the chunk table. The chunk offsets go to `starts`.
+struct HandmadeLaz {
+  std::vector<std::vector<std::size_t>> chunks;
+  std::string vlr;
+  std::string bytes;
+  std::vector<std::size_t> starts;
+  std::size_t tail_at = 0;
+  void build(const std::string& las, const std::function<std::string(const HandmadeLaz&)>& tail = {}) {
+    const std::size_t offset = get<std::uint32_t>(las, 96), record = get<std::uint16_t>(las, 105);
+    laz::LaszipVlr lz;
+    lz.version_major = 2;
+    lz.version_minor = 2;
+    lz.chunk_size = laz::kVariableChunks;
+    lz.items = laz::pointwise_items(3, record - 34);
+    const std::string body = lz.body();
+    std::string lz_vlr(54, '\0');
+    std::memcpy(lz_vlr.data() + 2, "laszip encoded", 14);
+    put<std::uint16_t>(lz_vlr, 18, laz::kLaszipRecordId);
+    put<std::uint16_t>(lz_vlr, 20, static_cast<std::uint16_t>(body.size()));
+    lz_vlr += body + vlr;
+    std::string header = las.substr(0, offset);  // simple.las has no VLR of its own
+    put<std::uint32_t>(header, 100, vlr.empty() ? 1 : 2);
+    put<std::uint32_t>(header, 96, static_cast<std::uint32_t>(offset + lz_vlr.size()));
+    header[104] = static_cast<char>(header[104] | 0x80);
+    std::vector<unsigned char> coded;
+    laz::ChunkEncoder encoder(lz, coded);
+    laz::ChunkTable table;
+    bytes = header + lz_vlr + std::string(8, '\0');
+    for (const auto& chunk : chunks) {
+      const std::size_t before = coded.size();
+      starts.push_back(bytes.size() + before);
+      encoder.start();
+      for (std::size_t i : chunk) encoder.add(las.data() + offset + i * record);
+      encoder.finish();
+      table.points.push_back(chunk.size());
+      table.bytes.push_back(coded.size() - before);
+    }
+    bytes += std::string(coded.begin(), coded.end());
+    put<std::int64_t>(bytes, header.size() + lz_vlr.size(), static_cast<std::int64_t>(bytes.size()));
+    bytes += laz::encode_chunk_table(table, true);
+    tail_at = bytes.size();
+    if (tail) bytes += tail(*this);
   }
-  ASSERT_EQ(first, n);
-  std::string file = header + vlr_bytes + std::string(8, '\0') + std::string(chunks.begin(), chunks.end());
-  put<std::int64_t>(file, header.size() + vlr_bytes.size(), static_cast<std::int64_t>(file.size()));
-  file += laz::encode_chunk_table(table, true);
-  const auto path = write_bytes(temp("variable.laz"), file);
+};
+
+// Variable chunks (COPC files use them: one chunk per octree node): the chunk table gives each
+// chunk's point count. simple.las's records in chunks of 700, 300 and 65 points.
+TEST(Laz, VariableChunksAreReadByTheirTable) {
+  HandmadeLaz file;
+  file.chunks.resize(3);
+  for (std::size_t i = 0; i < 1065; ++i) file.chunks[i < 700 ? 0 : i < 1000 ? 1 : 2].push_back(i);
+  file.build(read_bytes(kData / "simple.las"));
+  const auto path = write_bytes(temp("variable.laz"), file.bytes);
   const CloudReadResult read = read_point_cloud(path);
   EXPECT_TRUE(test::contains(read.encoding, "variable chunks")) << read.encoding;
   expect_same_clouds(read_point_cloud(kData / "simple.las").cloud, read.cloud);
+  std::filesystem::remove(path);
+}
+
+// COPC: an octree over simple.las (level 0: every tenth point; level 1: the rest by octant of the
+// root cube), one chunk per node, the hierarchy page after the chunk table. Read by level and by
+// bounds, decoding only the nodes asked for.
+TEST(Laz, CopcIsReadByOctreeLevelAndBounds) {
+  const std::string las_bytes = read_bytes(kData / "simple.las");
+  const PointCloud las = read_point_cloud(kData / "simple.las").cloud;
+  const BoundingBox box = bounding_box(las.positions);
+  const Vector3d center = (box.min + box.max) / 2;
+  const double halfsize = (box.max - box.min).maxCoeff() / 2 * 1.01;
+  HandmadeLaz file;
+  file.chunks.resize(9);
+  std::vector<std::array<int, 4>> keys{{0, 0, 0, 0}};
+  for (int o = 0; o < 8; ++o) keys.push_back({1, o & 1, (o >> 1) & 1, o >> 2});
+  for (std::size_t i = 0; i < las.size(); ++i) {
+    const Vector3d& p = las.positions[i];
+    file.chunks[i % 10 == 0 ? 0 : 1 + (p.x() >= center.x()) + 2 * (p.y() >= center.y()) + 4 * (p.z() >= center.z())].push_back(i);
+  }
+  // The COPC info VLR: center, halfsize, spacing, then the root hierarchy page's offset and size.
+  std::string info(160, '\0');
+  for (int a = 0; a < 3; ++a) put<double>(info, 8 * a, center[a]);
+  put<double>(info, 24, halfsize);
+  std::string info_vlr(54, '\0');
+  std::memcpy(info_vlr.data() + 2, "copc", 4);
+  put<std::uint16_t>(info_vlr, 18, 1);
+  put<std::uint16_t>(info_vlr, 20, 160);
+  file.vlr = info_vlr + info;
+  const std::size_t info_at = 227 + 54 + 34 + 6 * 3 + 54;  // header, LASzip VLR (3 items), VLR header
+  file.build(las_bytes, [&](const HandmadeLaz& f) {
+    std::string page(32 * keys.size(), '\0');
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      std::memcpy(page.data() + 32 * k, keys[k].data(), 16);
+      put<std::uint64_t>(page, 32 * k + 16, f.starts[k]);
+      put<std::int32_t>(page, 32 * k + 24, static_cast<std::int32_t>((k + 1 < f.starts.size() ? f.starts[k + 1] : f.tail_at) - f.starts[k]));
+      put<std::int32_t>(page, 32 * k + 28, static_cast<std::int32_t>(f.chunks[k].size()));
+    }
+    return page;
+  });
+  put<std::uint64_t>(file.bytes, info_at + 40, file.tail_at);
+  put<std::uint64_t>(file.bytes, info_at + 48, 32 * keys.size());
+  const auto path = write_bytes(temp("octree.copc.laz"), file.bytes);
+
+  ReadOptions options;
+  EXPECT_EQ(read_point_cloud(path, options).cloud.size(), las.size());
+  options.copc_level = 0;
+  const CloudReadResult level0 = read_point_cloud(path, options);
+  EXPECT_TRUE(test::contains(level0.encoding, "COPC octree: 1 of 9 nodes read")) << level0.encoding;
+  ASSERT_EQ(level0.cloud.size(), file.chunks[0].size());
+  for (std::size_t k = 0; k < level0.cloud.size(); ++k) ASSERT_EQ(level0.cloud.positions[k], las.positions[10 * k]);
+
+  // Bounds: the low-x half; only the nodes meeting it are decoded, the points are those inside.
+  options.copc_level = -1;
+  options.bounds = std::array<double, 6>{box.min.x(), box.min.y(), box.min.z(), center.x() - 1.0, box.max.y(), box.max.z()};
+  const CloudReadResult half = read_point_cloud(path, options);
+  EXPECT_TRUE(test::contains(half.encoding, "COPC octree: 5 of 9 nodes read")) << half.encoding;
+  std::size_t inside = 0;
+  for (const Vector3d& p : las.positions) inside += p.x() <= center.x() - 1.0;
+  EXPECT_EQ(half.cloud.size(), inside);
+  for (const Vector3d& p : half.cloud.positions) ASSERT_LE(p.x(), center.x() - 1.0);
+
+  // A level is a COPC option: refused for plain LAZ and for other formats.
+  ReadOptions level;
+  level.copc_level = 2;
+  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(kData / "simple.laz", level); }), "needs a COPC file"));
+  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(kData / "simple.las", level); }), "COPC (LAZ) option"));
   std::filesystem::remove(path);
 }
 

@@ -15,6 +15,7 @@
 // Writes go to a temporary file in the target directory that is renamed when complete, so an
 // output is whole or absent.
 // Thread-safety: all functions are reentrant; concurrent calls on different files are safe.
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -58,6 +59,11 @@ struct ReadOptions {
   // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
   // chosen from the column count, or taken from a header line of names.
   std::string columns;
+  // COPC (LAZ with an octree hierarchy): read the octree levels 0..copc_level only; -1: all.
+  int copc_level = -1;
+  // Keep only the points with min <= p <= max (xmin, ymin, zmin, xmax, ymax, zmax); COPC files
+  // skip the octree nodes outside without decoding them.
+  std::optional<std::array<double, 6>> bounds;
 };
 
 struct CloudReadResult {
