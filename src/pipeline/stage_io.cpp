@@ -12,7 +12,7 @@
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "off", "obj", "stl"};
+const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "laz", "off", "obj", "stl"};
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -141,7 +141,7 @@ void run_write(StageRun& run) {
 StageSpec read_stage() {
   StageSpec s;
   s.name = "read";
-  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, OFF, OBJ, STL; format from the content)";
+  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)";
   s.description = "A file name at the start of a pipeline is a reader. Mesh files keep their faces.";
   s.order = 0;
   s.produces = Slot{"cloud", DataKind::Any};
