@@ -153,6 +153,8 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions& options) 
   const std::uint64_t n = header.count;
   std::vector<std::uint64_t> chunk_start, chunk_bytes, chunk_points;
   if (lz.compressor == 1) {
+    if (n > 1 + 4096 * (file_size - header.point_offset))
+      throw InputError(fmt::format("{}: {} points cannot fit in the file's {} bytes of point data", name, n, file_size - header.point_offset));
     chunk_start.push_back(header.point_offset);
     chunk_bytes.push_back(file_size - header.point_offset);
     chunk_points.push_back(n);
@@ -180,6 +182,12 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions& options) 
       if (at + table.bytes[c] > static_cast<std::uint64_t>(table_at))
         throw InputError(fmt::format("{}: chunk {} of {}: the chunk table gives it {} bytes from byte {}, past the chunk table at byte {}", name,
                                      c, table.bytes.size(), table.bytes[c], at, table_at));
+      // Every point after a chunk's first costs at least one symbol of a 64- or 128-symbol model,
+      // over 0.002 bits: more than 4096 points a byte cannot be intact (and would only make the
+      // reader allocate for points that are not there).
+      if (count > 1 + 4096 * (table.bytes[c] > header.record_length ? table.bytes[c] - header.record_length : 0))
+        throw InputError(fmt::format("{}: chunk {} of {}: {} points cannot fit in its {} bytes: the chunk table or header is corrupt", name, c,
+                                     table.bytes.size(), count, table.bytes[c]));
       chunk_start.push_back(at);
       chunk_bytes.push_back(table.bytes[c]);
       chunk_points.push_back(count);

@@ -528,6 +528,14 @@ TEST_F(LazCorruption, WrongChunkTableNamesTheChunk) {
   EXPECT_TRUE(test::contains(message, "bad.laz: chunk 0 of 3")) << message;
 }
 
+TEST_F(LazCorruption, PointCountBeyondWhatTheChunksCanHoldIsRefusedBeforeAllocating) {
+  std::string b = bytes_;
+  put<std::uint64_t>(b, 247, std::uint64_t(1) << 40);  // LAS 1.4's 64-bit point count
+  put<std::uint32_t>(b, vlr_ + 54 + 12, 0xFFFFFFF0u);  // the LASzip VLR's chunk size
+  const std::string message = error_of(b);
+  EXPECT_TRUE(test::contains(message, "points cannot fit in its")) << message;
+}
+
 TEST_F(LazCorruption, ChunkTableBeyondTheFileIsRefused) {
   std::string b = bytes_;
   put<std::int64_t>(b, points_, static_cast<std::int64_t>(b.size() + 100));
