@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target for the LAZ decoders: arbitrary bytes as a chunk of point records (the first
-// byte picks the compressor, point-wise for formats 0-3 or layered for 6-8, the format and the
+// byte picks the compressor, point-wise for formats 0-5 or layered for 6-10, the format and the
 // extra bytes) and as a chunk table. The decoder must
 // stay inside its input and stop within the points asked for, whatever the bytes. The records it
 // decodes are then encoded and decoded again: they must come back bit for bit (the encoders run
@@ -20,9 +20,9 @@ namespace laz = pointsurf::io::detail::laz;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  const int format = data[0] & 3;
+  const int format = (data[0] & 3) + 2 * (data[0] >> 7);  // 0-5
   const std::size_t extra = (data[0] >> 2) & 15;
-  const bool variable = (data[0] & 0x80) != 0;
+  const bool variable = (data[0] & 1) != 0;
   try {
     laz::ChunkTable table = laz::decode_chunk_table(data + 1, size - 1, variable);
     (void)table;
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   laz::LaszipVlr vlr;
   if (data[0] & 0x40) {
     vlr.compressor = 3;
-    vlr.items = laz::layered_items(6 + format % 3, extra);
+    vlr.items = laz::layered_items(6 + format % 5, extra);
   } else {
     vlr.items = laz::pointwise_items(format, extra);
   }

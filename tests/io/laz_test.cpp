@@ -198,6 +198,22 @@ struct RecordWalk {
       std::memcpy(r + 2 * c, &v, 2);
     }
   }
+  // A wave packet descriptor: index, waveform offset (repeated, following, near or far), size,
+  // return point and direction.
+  void wave(char* r) {
+    r[0] = static_cast<char>(1 + rng() % 3);
+    const unsigned kind = rng() % 4;
+    if (kind == 1) offset += size;
+    else if (kind == 2) offset += rng() % 5000;
+    else if (kind == 3) offset = (std::uint64_t(rng()) << 32) | rng();
+    if (rng() % 5 == 0) size = 256 + rng() % 64;
+    const float f[4] = {float(rng() % 1000) * 0.5f, 1e-4f * float(rng() % 100), -2e-4f, 0.9f};
+    std::memcpy(r + 1, &offset, 8);
+    std::memcpy(r + 9, &size, 4);
+    std::memcpy(r + 13, f, 16);
+  }
+  std::uint64_t offset = 1000;
+  std::uint32_t size = 256;
   void source(char* r) {
     const auto id = static_cast<std::uint16_t>(rng() % 50 ? 7 : rng());
     std::memcpy(r, &id, 2);
@@ -207,11 +223,11 @@ struct RecordWalk {
   double t = 1000.0;
 };
 
-// Records of point formats 0-3 with extra bytes: random values with the structure the
+// Records of point formats 0-5 with extra bytes: random values with the structure the
 // predictors exploit (runs, several GPS time sequences, grey and coloured points), through
 // several chunks, decode to the same bytes.
 TEST(Laz, EveryPointwiseFormatRoundTripsBitForBit) {
-  for (int format = 0; format <= 3; ++format) {
+  for (int format = 0; format <= 5; ++format) {
     for (std::size_t extra : {std::size_t(0), std::size_t(5)}) {
       laz::LaszipVlr vlr;
       vlr.items = laz::pointwise_items(format, extra);
@@ -230,13 +246,17 @@ TEST(Laz, EveryPointwiseFormatRoundTripsBitForBit) {
         r[17] = static_cast<char>(rng() % 10 ? 0 : rng());
         walk.source(r + 18);
         std::size_t at = 20;
-        if (format == 1 || format == 3) {
+        if (format == 1 || format >= 3) {
           walk.time(r + at);
           at += 8;
         }
-        if (format == 2 || format == 3) {
+        if (format == 2 || format == 3 || format == 5) {
           walk.colour(r + at, 3);
           at += 6;
+        }
+        if (format >= 4) {
+          walk.wave(r + at);
+          at += 29;
         }
         for (std::size_t e = 0; e < extra; ++e) r[at + e] = static_cast<char>(e == 0 ? rng() : i / 7);
       }
@@ -245,10 +265,10 @@ TEST(Laz, EveryPointwiseFormatRoundTripsBitForBit) {
   }
 }
 
-// Point formats 6-8 (layered compressor): returns up to 15, classes up to 255, flags, 16-bit
+// Point formats 6-10 (layered compressor): returns up to 15, classes up to 255, flags, 16-bit
 // scan angles, NIR, and scanner channel switches (each channel has its own models).
 TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
-  for (int format = 6; format <= 8; ++format) {
+  for (int format = 6; format <= 10; ++format) {
     for (std::size_t extra : {std::size_t(0), std::size_t(3)}) {
       for (bool channels : {false, true}) {
         laz::LaszipVlr vlr;
@@ -275,9 +295,13 @@ TEST(Laz, EveryLayeredFormatRoundTripsBitForBit) {
           walk.source(r + 20);
           walk.time(r + 22);
           std::size_t at = 30;
-          if (format >= 7) {
-            walk.colour(r + at, format == 8 ? 4 : 3);
-            at += format == 8 ? 8 : 6;
+          if (format == 7 || format == 8 || format == 10) {
+            walk.colour(r + at, format == 7 ? 3 : 4);
+            at += format == 7 ? 6 : 8;
+          }
+          if (format >= 9) {
+            walk.wave(r + at);
+            at += 29;
           }
           for (std::size_t e = 0; e < extra; ++e) r[at + e] = static_cast<char>(e == 0 ? rng() : i / 7);
         }

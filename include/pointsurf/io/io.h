@@ -4,7 +4,7 @@
 //
 // Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
 // binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4),
-// LAZ (LASzip-compressed LAS: formats 0-3 and 6-8 read, written as format 6/7).
+// LAZ (LASzip-compressed LAS: formats 0-10 read, written as format 6/7).
 // The format of a file being read is detected from its content (magic bytes, header); the
 // extension is only a hint for headerless text. The format written follows the extension of
 // the output path unless WriteOptions::format says otherwise.

@@ -193,6 +193,11 @@ public:
     const std::uint32_t high = read_short();
     return (high << 16) | low;
   }
+  std::uint64_t read_int64() {
+    const std::uint64_t low = read_int();
+    const std::uint64_t high = read_int();
+    return (high << 32) | low;
+  }
 
 private:
   std::uint32_t byte() {
@@ -260,6 +265,10 @@ public:
   void write_int(std::uint32_t sym) {
     write_short(sym & 0xFFFF);
     write_short(sym >> 16);
+  }
+  void write_int64(std::uint64_t sym) {
+    write_int(static_cast<std::uint32_t>(sym));
+    write_int(static_cast<std::uint32_t>(sym >> 32));
   }
   /// Flushes the interval and the padding bytes LASzip's decoder expects.
   void done() {

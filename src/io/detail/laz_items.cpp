@@ -252,6 +252,23 @@ private:
   std::uint16_t last_[3]{};
 };
 
+// WAVEPACKET13 (item version 1, the version LASzip writes in point-wise files).
+class WavePacket13 final : public ItemCoder {
+public:
+  explicit WavePacket13(bool decoder) : coder_(decoder) {}
+  std::size_t size() const override { return 29; }
+  void init(const char* item) override {
+    coder_.init();
+    std::memcpy(last_, item, 29);
+  }
+  void read(Decoder& dec, char* item) override { coder_.read(dec, last_, item); }
+  void write(Encoder& enc, const char* item) override { coder_.write(enc, last_, item); }
+
+private:
+  WavePacketCoder coder_;
+  char last_[29]{};
+};
+
 // BYTE v2: each extra byte as its difference from the same byte of the last point.
 class Bytes final : public ItemCoder {
 public:
@@ -293,6 +310,7 @@ std::vector<std::unique_ptr<ItemCoder>> make_coders(const LaszipVlr& vlr, bool d
     if (item.type == kPoint10 && item.size == 20 && v2) coders.push_back(std::make_unique<Point10>(decoder));
     else if (item.type == kGpsTime11 && item.size == 8 && v2) coders.push_back(std::make_unique<GpsTime11>(decoder));
     else if (item.type == kRgb12 && item.size == 6 && v2) coders.push_back(std::make_unique<Rgb12>(decoder));
+    else if (item.type == kWavePacket13 && item.size == 29 && item.version == 1) coders.push_back(std::make_unique<WavePacket13>(decoder));
     else if (item.type == kByte && item.size > 0 && v2) coders.push_back(std::make_unique<Bytes>(decoder, item.size));
     else
       throw std::runtime_error(fmt::format("LASzip item type {} ({} bytes) version {} is not supported (point10, gpstime11, rgb12 and "

@@ -495,6 +495,39 @@ private:
   bool nir_;
 };
 
+// WAVEPACKET14: one layer; without it (never changing in the chunk) the last packet repeats.
+struct WaveContext {
+  WaveContext(bool d, std::size_t) : coder(d) {}
+  void init(const void* item) {
+    coder.init();
+    std::memcpy(last.data(), item, 29);
+    unused = false;
+  }
+  bool unused = true;
+  WavePacketCoder coder;
+  std::array<char, 29> last{};
+};
+
+class WaveItem final : public ContextItem<WaveContext> {
+public:
+  explicit WaveItem(bool decoder) : ContextItem(decoder, 1, 29) {}
+  void read(char* item, unsigned& context) override {
+    WaveContext* owner = nullptr;
+    WaveContext& c = prepare(context, owner);
+    if (layers_.present(0)) {
+      c.coder.read(layers_.dec(0), owner->last.data(), item);
+    } else {
+      std::memcpy(item, owner->last.data(), 29);
+    }
+  }
+  void write(const char* item, unsigned& context) override {
+    WaveContext* owner = nullptr;
+    WaveContext& c = prepare(context, owner);
+    layers_.mark(0, std::memcmp(item, owner->last.data(), 29) != 0);
+    c.coder.write(layers_.enc(0), owner->last.data(), item);
+  }
+};
+
 // BYTE14: one layer per extra byte.
 struct BytesContext {
   BytesContext(bool d, std::size_t size) : last(size, 0) {
@@ -546,9 +579,10 @@ std::vector<std::unique_ptr<LayeredItem>> make_items(const LaszipVlr& vlr, bool 
     else if (item.type == kRgb14 && item.size == 6 && v3 && i > 0) items.push_back(std::make_unique<RgbItem>(decoder, false));
     else if (item.type == kRgbNir14 && item.size == 8 && v3 && i > 0) items.push_back(std::make_unique<RgbItem>(decoder, true));
     else if (item.type == kByte14 && item.size > 0 && v3 && i > 0) items.push_back(std::make_unique<BytesItem>(decoder, item.size));
+    else if (item.type == kWavePacket14 && item.size == 29 && v3 && i > 0) items.push_back(std::make_unique<WaveItem>(decoder));
     else
       throw std::runtime_error(fmt::format("LASzip item type {} ({} bytes) version {} is not supported by the layered compressor "
-                                           "(point14 first, then rgb14, rgbnir14 and byte14 items, version 3, are)",
+                                           "(point14 first, then rgb14, rgbnir14, wavepacket14 and byte14 items, version 3, are)",
                                            item.type, item.size, item.version));
   }
   if (items.empty()) throw std::runtime_error("the LASzip VLR lists no items");
@@ -560,7 +594,8 @@ std::vector<std::unique_ptr<LayeredItem>> make_items(const LaszipVlr& vlr, bool 
 std::vector<Item> layered_items(int format, std::size_t extra) {
   std::vector<Item> items{{kPoint14, 30, 3}};
   if (format == 7) items.push_back({kRgb14, 6, 3});
-  if (format == 8) items.push_back({kRgbNir14, 8, 3});
+  if (format == 8 || format == 10) items.push_back({kRgbNir14, 8, 3});
+  if (format == 9 || format == 10) items.push_back({kWavePacket14, 29, 3});
   if (extra) items.push_back({kByte14, static_cast<std::uint16_t>(extra), 3});
   return items;
 }

@@ -372,4 +372,75 @@ private:
   SymbolModel diff_[6];
 };
 
+// Wave packet descriptor (29 bytes: descriptor index, byte offset of the waveform, its size,
+// return point location and x, y, z(t) as float bits): the offset predicted as unchanged, as
+// following the last packet, or as the last difference; the rest from the last packet.
+class WavePacketCoder {
+public:
+  explicit WavePacketCoder(bool d)
+      : index_(256, d), offset_diff_{SymbolModel(4, d), SymbolModel(4, d), SymbolModel(4, d), SymbolModel(4, d)}, offset_(d, 32), size_(d, 32),
+        return_point_(d, 32), xyz_(d, 32, 3) {}
+  void init() {
+    index_.init();
+    for (auto& m : offset_diff_) m.init();
+    offset_.init();
+    size_.init();
+    return_point_.init();
+    xyz_.init();
+    last_diff_ = 0;
+    last_sym_ = 0;
+  }
+  // The packet after `last` (29 bytes, updated to it).
+  void read(Decoder& dec, char* last, char* item) {
+    item[0] = static_cast<char>(dec.decode_symbol(index_));
+    last_sym_ = dec.decode_symbol(offset_diff_[last_sym_]);
+    const auto last_offset = get<std::uint64_t>(last + 1);
+    const auto last_size = get<std::uint32_t>(last + 9);
+    std::uint64_t offset = last_offset;
+    if (last_sym_ == 1) {
+      offset = last_offset + last_size;
+    } else if (last_sym_ == 2) {
+      last_diff_ = offset_.decompress(dec, last_diff_);
+      offset = last_offset + static_cast<std::uint64_t>(static_cast<std::int64_t>(last_diff_));
+    } else if (last_sym_ == 3) {
+      offset = dec.read_int64();
+    }
+    put<std::uint64_t>(item + 1, offset);
+    put<std::int32_t>(item + 9, size_.decompress(dec, get<std::int32_t>(last + 9)));
+    put<std::int32_t>(item + 13, return_point_.decompress(dec, get<std::int32_t>(last + 13)));
+    for (unsigned a = 0; a < 3; ++a) put<std::int32_t>(item + 17 + 4 * a, xyz_.decompress(dec, get<std::int32_t>(last + 17 + 4 * a), a));
+    std::memcpy(last, item, 29);
+  }
+  void write(Encoder& enc, char* last, const char* item) {
+    enc.encode_symbol(index_, static_cast<unsigned char>(item[0]));
+    const auto offset = get<std::uint64_t>(item + 1);
+    const auto last_offset = get<std::uint64_t>(last + 1);
+    const auto diff64 = static_cast<std::int64_t>(offset - last_offset);
+    const auto diff32 = static_cast<std::int32_t>(diff64);
+    const std::uint32_t sym = diff64 == 0                                                           ? 0
+                              : offset == last_offset + get<std::uint32_t>(last + 9)               ? 1
+                              : diff64 == diff32                                                    ? 2
+                                                                                                    : 3;
+    enc.encode_symbol(offset_diff_[last_sym_], sym);
+    last_sym_ = sym;
+    if (sym == 2) {
+      offset_.compress(enc, last_diff_, diff32);
+      last_diff_ = diff32;
+    } else if (sym == 3) {
+      enc.write_int64(offset);
+    }
+    size_.compress(enc, get<std::int32_t>(last + 9), get<std::int32_t>(item + 9));
+    return_point_.compress(enc, get<std::int32_t>(last + 13), get<std::int32_t>(item + 13));
+    for (unsigned a = 0; a < 3; ++a) xyz_.compress(enc, get<std::int32_t>(last + 17 + 4 * a), get<std::int32_t>(item + 17 + 4 * a), a);
+    std::memcpy(last, item, 29);
+  }
+
+private:
+  SymbolModel index_;
+  SymbolModel offset_diff_[4];
+  IntegerCoder offset_, size_, return_point_, xyz_;
+  std::int32_t last_diff_ = 0;
+  std::uint32_t last_sym_ = 0;
+};
+
 }  // namespace pointsurf::io::detail::laz
