@@ -25,6 +25,8 @@ BUILD_PACKAGES=(
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
+# Node.js runs laz-perf (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ.
+LAZ_CHECK_PACKAGES=(nodejs npm)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
@@ -50,7 +52,7 @@ install_missing() {
 }
 
 build() {
-  install_missing "${BUILD_PACKAGES[@]}"
+  install_missing "${BUILD_PACKAGES[@]}" "${LAZ_CHECK_PACKAGES[@]}"
   local generator=()
   if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
     command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
@@ -60,6 +62,8 @@ build() {
     cmake -S "$ROOT" -B "$BUILD_DIR" "$@"
   fi
   cmake --build "$BUILD_DIR" --parallel "$JOBS"
+  [ -d "$BUILD_DIR/npm/node_modules/laz-perf" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund laz-perf@0.0.7 >/dev/null 2>&1 ||
+    log "could not install laz-perf from npm (no network?): the LAZ cross-check will skip"
 }
 
 demo() {

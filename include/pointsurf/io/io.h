@@ -3,7 +3,8 @@
 // Reading and writing clouds and meshes in every common scan format.
 //
 // Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
-// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4).
+// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4),
+// LAZ (LASzip-compressed LAS: formats 0-10 read, written as format 6/7).
 // The format of a file being read is detected from its content (magic bytes, header); the
 // extension is only a hint for headerless text. The format written follows the extension of
 // the output path unless WriteOptions::format says otherwise.
@@ -15,6 +16,7 @@
 // Writes go to a temporary file in the target directory that is renamed when complete, so an
 // output is whole or absent.
 // Thread-safety: all functions are reentrant; concurrent calls on different files are safe.
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -28,9 +30,9 @@
 
 namespace pointsurf {
 
-/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las".
+/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las", "laz".
 /// Returns the format of `path` from its first bytes, falling back on the extension for text
-/// without a header; throws InputError for an empty or unrecognised file (and for LAZ).
+/// without a header; throws InputError for an empty or unrecognised file.
 std::string detect_format(const std::filesystem::path& path);
 
 /// Format implied by the extension of `path` (".ply" -> "ply", ".txt"/".pts"/".csv" -> "xyz",
@@ -70,6 +72,11 @@ struct ReadOptions {
   // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
   // chosen from the column count, or taken from a header line of names.
   std::string columns;
+  // COPC (LAZ with an octree hierarchy): read the octree levels 0..copc_level only; -1: all.
+  int copc_level = -1;
+  // Keep only the points with min <= p <= max (xmin, ymin, zmin, xmax, ymax, zmax); COPC files
+  // skip the octree nodes outside without decoding them.
+  std::optional<std::array<double, 6>> bounds;
 };
 
 struct CloudReadResult {

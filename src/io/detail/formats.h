@@ -33,6 +33,7 @@ RawData read_ply(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_pcd(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_las(const std::filesystem::path& path, const ReadOptions& options);
+RawData read_laz(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_off(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_obj(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_stl(const std::filesystem::path& path, const ReadOptions& options);
@@ -47,6 +48,7 @@ void write_xyz(const std::filesystem::path& tmp_path, const PointCloud& cloud, c
 // `notes` gets what the user should know about a choice the writer made (PCD: double positions).
 void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
 void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
+void write_laz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 void write_off(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_obj(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_stl(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
