@@ -1,0 +1,555 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Octree iso-surface extraction (reconstruct/detail/iso_surface.h).
+//
+// Method: marching cubes on the finest lattice, restricted to the cells the surface crosses.
+// Every finest leaf of the octree is a seed; a coarser leaf whose corners change sign along one
+// of its edges seeds the finest cells around the finest sub-edge that carries the change (found
+// by bisection). From the seeds the surface is followed: every finest cell with a crossed edge
+// pulls in the other three cells around that edge, so each crossed edge ends up with all four
+// of its cells meshed. The surface is therefore uniform at the finest level wherever it goes
+// (inside coarse leaves too), which makes it crack-free by construction: there are no cells of
+// two sizes to stitch.
+//
+// Each cell is meshed without a 256-case table: on each of its six faces the crossings are
+// joined by marching squares, ambiguous faces decided by the asymptotic decider evaluated in a
+// canonical corner order (both cells sharing a face compute the same expression, so they join the
+// same crossings); the oriented face segments close into loops, and each loop is triangulated
+// with diagonals between crossings that share no cell face (such a diagonal belongs to this cell
+// alone), or fanned around a centre vertex when no such triangulation exists. Each crossing is
+// then on exactly one loop per cell and each segment on exactly two cells, so the surface is
+// closed, edge- and vertex-manifold and consistently oriented. Corner values equal to the
+// iso-value count as outside, so no vertex sits on a corner shared by several crossings.
+//
+// Vertices are keyed by the finest edge they lie on and numbered in key order; triangles come in
+// cell-key order from fixed chunks, so the output is the same for any thread count.
+#include "reconstruct/detail/iso_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "pointsurf/core/error.h"
+
+namespace pointsurf::detail {
+namespace {
+
+using Key = std::uint64_t;
+constexpr int kMaxDepth = 19;  // 20 bits per coordinate, 2 bits of axis in an edge key
+constexpr int kBits = 20;
+constexpr Key kMask = (Key{1} << kBits) - 1;
+constexpr Key kEmpty = ~Key{0};
+constexpr std::size_t kChunk = 2048;
+
+Key pack(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  return Key{x} | (Key{y} << kBits) | (Key{z} << (2 * kBits));
+}
+std::array<std::uint32_t, 3> unpack(Key k) {
+  return {static_cast<std::uint32_t>(k & kMask), static_cast<std::uint32_t>((k >> kBits) & kMask),
+          static_cast<std::uint32_t>((k >> (2 * kBits)) & kMask)};
+}
+Key edge_key(Key corner, int axis) { return (corner << 2) | static_cast<Key>(axis); }
+
+/// Open-addressing hash map from lattice keys to values; inserts are serial, lookups concurrent.
+class ValueMap {
+ public:
+  const double* find(Key k) const {
+    if (keys_.empty()) return nullptr;
+    for (std::size_t i = slot(k);; i = (i + 1) & (keys_.size() - 1)) {
+      if (keys_[i] == k) return &values_[i];
+      if (keys_[i] == kEmpty) return nullptr;
+    }
+  }
+  void insert(Key k, double v) {
+    if (2 * (size_ + 1) > keys_.size()) grow();
+    std::size_t i = slot(k);
+    while (keys_[i] != kEmpty && keys_[i] != k) i = (i + 1) & (keys_.size() - 1);
+    if (keys_[i] == kEmpty) ++size_;
+    keys_[i] = k;
+    values_[i] = v;
+  }
+  void reserve_more(std::size_t n) {
+    while (2 * (size_ + n) > keys_.size()) grow();
+  }
+
+ private:
+  std::size_t slot(Key k) const {
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdULL;
+    k ^= k >> 33;
+    return static_cast<std::size_t>(k) & (keys_.size() - 1);
+  }
+  void grow() {
+    std::vector<Key> old_keys = std::move(keys_);
+    std::vector<double> old_values = std::move(values_);
+    const std::size_t capacity = std::max<std::size_t>(64, 2 * old_keys.size());
+    keys_.assign(capacity, kEmpty);
+    values_.assign(capacity, 0.0);
+    size_ = 0;
+    for (std::size_t i = 0; i < old_keys.size(); ++i)
+      if (old_keys[i] != kEmpty) insert(old_keys[i], old_values[i]);
+  }
+  std::vector<Key> keys_;
+  std::vector<double> values_;
+  std::size_t size_ = 0;
+};
+
+void sort_unique(std::vector<Key>& keys) {
+  tbb::parallel_sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
+std::vector<Key> gather(tbb::enumerable_thread_specific<std::vector<Key>>& buffers) {
+  std::vector<Key> all;
+  for (std::vector<Key>& b : buffers) {
+    all.insert(all.end(), b.begin(), b.end());
+    b.clear();
+  }
+  sort_unique(all);
+  return all;
+}
+
+// ---- Cell combinatorics: corner i = x | y << 1 | z << 2; edge a * 4 + bit(a+1) + 2 bit(a+2).
+struct CellTables {
+  std::array<std::array<int, 2>, 12> edge_corners{};  // low, high corner of each edge
+  std::array<std::array<int, 4>, 6> face_corners{};    // face 2a+s: q0..q3 in (u, v) order
+  std::array<std::array<int, 4>, 6> face_edges{};      // q_k -> q_k+1
+  std::array<std::array<bool, 12>, 12> share_face{};
+
+  CellTables() {
+    auto edge_of = [](int c0, int c1) {
+      const int axis = c0 ^ c1 ? (((c0 ^ c1) == 1) ? 0 : ((c0 ^ c1) == 2 ? 1 : 2)) : -1;
+      const int lo = std::min(c0, c1);
+      const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+      return axis * 4 + ((lo >> b) & 1) + 2 * ((lo >> c) & 1);
+    };
+    for (int e = 0; e < 12; ++e) {
+      const int axis = e / 4, b = (axis + 1) % 3, c = (axis + 2) % 3;
+      const int lo = (((e & 3) & 1) << b) | (((e & 3) >> 1) << c);
+      edge_corners[e] = {lo, lo | (1 << axis)};
+    }
+    for (int a = 0; a < 3; ++a) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      for (int s = 0; s < 2; ++s) {
+        const int f = 2 * a + s;
+        const int uv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+        for (int k = 0; k < 4; ++k) face_corners[f][k] = (s << a) | (uv[k][0] << u) | (uv[k][1] << v);
+        for (int k = 0; k < 4; ++k) face_edges[f][k] = edge_of(face_corners[f][k], face_corners[f][(k + 1) % 4]);
+        for (int i = 0; i < 4; ++i)
+          for (int j = 0; j < 4; ++j) share_face[face_edges[f][i]][face_edges[f][j]] = true;
+      }
+    }
+  }
+};
+const CellTables& tables() {
+  static const CellTables t;
+  return t;
+}
+
+/// The oriented face segments of one cell closed into loops of local edge ids, each loop
+/// counter-clockwise seen from outside the surface. `w` holds corner values minus the iso-value,
+/// sign-adjusted so that inside is positive.
+int cell_loops(const std::array<double, 8>& w, std::array<int, 12>& loop_edges, std::array<int, 5>& loop_start) {
+  const CellTables& t = tables();
+  std::array<int, 12> next;
+  next.fill(-1);
+  for (int f = 0; f < 6; ++f) {
+    const bool outward_positive = (f & 1) != 0;  // s = 1: looking from +axis sees q0..q3 CCW
+    std::array<bool, 4> in;
+    for (int k = 0; k < 4; ++k) in[k] = w[t.face_corners[f][k]] > 0.0;
+    auto add = [&](int from_k, int to_k) {  // segment entering edge -> leaving edge for s = 1
+      const int a = t.face_edges[f][from_k], b = t.face_edges[f][to_k];
+      if (outward_positive) next[a] = b;
+      else next[b] = a;
+    };
+    const int count = int(in[0]) + int(in[1]) + int(in[2]) + int(in[3]);
+    if (count == 0 || count == 4) continue;
+    if (count == 2 && in[0] == in[2]) {  // ambiguous face: asymptotic decider, canonical order
+      const double q0 = w[t.face_corners[f][0]], q1 = w[t.face_corners[f][1]];
+      const double q2 = w[t.face_corners[f][2]], q3 = w[t.face_corners[f][3]];
+      const bool inside_02 = in[0];
+      const double inside_product = inside_02 ? q0 * q2 : q1 * q3;
+      const double outside_product = inside_02 ? q1 * q3 : q0 * q2;
+      const bool inside_connected = inside_product > outside_product;
+      for (int k = 0; k < 4; ++k) {
+        const int prev = (k + 3) % 4;
+        if (inside_connected && !in[k]) add(k, prev);  // around an outside corner
+        if (!inside_connected && in[k]) add(prev, k);  // around an inside corner
+      }
+      continue;
+    }
+    int entering = -1, leaving = -1;
+    for (int k = 0; k < 4; ++k) {
+      if (!in[k] && in[(k + 1) % 4]) entering = k;
+      if (in[k] && !in[(k + 1) % 4]) leaving = k;
+    }
+    add(entering, leaving);
+  }
+  int loops = 0, n = 0;
+  std::array<bool, 12> used{};
+  for (int e = 0; e < 12; ++e) {
+    if (next[e] < 0 || used[e]) continue;
+    loop_start[loops++] = n;
+    for (int x = e; !used[x]; x = next[x]) {
+      used[x] = true;
+      loop_edges[n++] = x;
+    }
+  }
+  loop_start[loops] = n;
+  return loops;
+}
+
+struct Sign {
+  double iso;
+  bool inside_positive;
+  double operator()(double v) const { return inside_positive ? v - iso : iso - v; }
+};
+
+struct ChunkOutput {
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // centre vertices flagged with kCentre
+  std::vector<Eigen::Vector3d> centres, centre_normals;
+};
+constexpr std::uint32_t kCentre = 0x80000000u;
+
+}  // namespace
+
+IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, const IsoSurfaceParams& params,
+                               const ProgressCallback& progress) {
+  const int depth = lattice.depth;
+  if (depth < 0 || depth > kMaxDepth)
+    throw UsageError("extract_iso_surface: lattice depth " + std::to_string(depth) + " outside [0, " +
+                     std::to_string(kMaxDepth) + "]");
+  if (!(lattice.size > 0.0) || !std::isfinite(lattice.size))
+    throw UsageError("extract_iso_surface: lattice size must be positive and finite");
+  auto report = [&](double fraction) {
+    if (progress && !progress(fraction)) throw CancelledError();
+  };
+  const CellTables& t = tables();
+  const Sign sign{params.iso_value, params.inside_positive};
+  const std::uint32_t cells_per_side = std::uint32_t{1} << depth;
+  const double h = lattice.size / static_cast<double>(cells_per_side);
+  auto position = [&](Key corner) {
+    const auto c = unpack(corner);
+    return Eigen::Vector3d(lattice.origin + h * Eigen::Vector3d(c[0], c[1], c[2]));
+  };
+
+  // Values at finest-lattice corners, evaluated in batches.
+  ValueMap values;
+  auto evaluate = [&](const std::vector<Key>& corners, std::vector<double>& out) {
+    out.resize(corners.size());
+    const std::size_t chunks = (corners.size() + kChunk - 1) / kChunk;
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+      const std::size_t begin = c * kChunk, end = std::min(corners.size(), begin + kChunk);
+      std::vector<std::uint32_t> triples(3 * (end - begin));
+      for (std::size_t i = begin; i < end; ++i) {
+        const auto p = unpack(corners[i]);
+        std::copy(p.begin(), p.end(), triples.begin() + 3 * (i - begin));
+      }
+      f.corner_values(depth, triples.data(), end - begin, out.data() + begin);
+    });
+  };
+  auto value_at = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    const std::uint32_t c[3] = {x, y, z};
+    double v = 0.0;
+    f.corner_values(depth, c, 1, &v);
+    return v;
+  };
+
+  // 1. Leaves of the octree, level by level in key order.
+  std::vector<Key> seeds;  // finest cells
+  std::vector<std::pair<int, Key>> coarse_leaves;
+  {
+    std::vector<Key> nodes{pack(0, 0, 0)};
+    for (int level = 0; level < depth && !nodes.empty(); ++level) {
+      std::vector<char> refined(nodes.size());
+      tbb::parallel_for(std::size_t(0), nodes.size(), [&](std::size_t i) { refined[i] = f.refined(level, unpack(nodes[i])); });
+      std::vector<Key> children;
+      for (std::size_t i = 0; i < nodes.size(); ++i) {
+        if (!refined[i]) {
+          coarse_leaves.emplace_back(level, nodes[i]);
+          continue;
+        }
+        const auto c = unpack(nodes[i]);
+        for (int k = 0; k < 8; ++k)
+          children.push_back(pack(2 * c[0] + (k & 1), 2 * c[1] + ((k >> 1) & 1), 2 * c[2] + ((k >> 2) & 1)));
+      }
+      nodes = std::move(children);
+    }
+    seeds = std::move(nodes);
+  }
+  report(0.05);
+
+  // 2. Coarse leaves whose edges change sign seed the finest cells at the change.
+  auto cells_around_edge = [&](Key corner, int axis, std::vector<Key>& out) {
+    const auto p = unpack(corner);
+    const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+    for (int k = 0; k < 4; ++k) {
+      std::array<std::int64_t, 3> q = {p[0], p[1], p[2]};
+      q[b] -= (k & 1);
+      q[c] -= (k >> 1);
+      bool inside = true;
+      for (int i = 0; i < 3; ++i) inside = inside && q[i] >= 0 && q[i] < std::int64_t{cells_per_side};
+      if (inside) out.push_back(pack(std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])));
+    }
+  };
+  if (!coarse_leaves.empty()) {
+    std::vector<Key> corners;
+    corners.reserve(8 * coarse_leaves.size());
+    for (const auto& [level, cell] : coarse_leaves) {
+      const auto c = unpack(cell);
+      const int shift = depth - level;
+      for (int k = 0; k < 8; ++k)
+        corners.push_back(pack((c[0] + (k & 1)) << shift, (c[1] + ((k >> 1) & 1)) << shift, (c[2] + ((k >> 2) & 1)) << shift));
+    }
+    sort_unique(corners);
+    std::vector<double> corner_values;
+    evaluate(corners, corner_values);
+    auto lookup = [&](Key k) { return corner_values[std::lower_bound(corners.begin(), corners.end(), k) - corners.begin()]; };
+    tbb::enumerable_thread_specific<std::vector<Key>> found;
+    tbb::parallel_for(std::size_t(0), coarse_leaves.size(), [&](std::size_t i) {
+      const auto [level, cell] = coarse_leaves[i];
+      const auto c = unpack(cell);
+      const int shift = depth - level;
+      const std::uint32_t span = std::uint32_t{1} << shift;
+      for (int e = 0; e < 12; ++e) {
+        const int lo = t.edge_corners[e][0], axis = e / 4;
+        std::array<std::uint32_t, 3> p = {(c[0] + (lo & 1)) << shift, (c[1] + ((lo >> 1) & 1)) << shift,
+                                          (c[2] + ((lo >> 2) & 1)) << shift};
+        std::array<std::uint32_t, 3> q = p;
+        q[axis] += span;
+        const bool in_p = sign(lookup(pack(p[0], p[1], p[2]))) > 0.0;
+        const bool in_q = sign(lookup(pack(q[0], q[1], q[2]))) > 0.0;
+        if (in_p == in_q) continue;
+        std::uint32_t a = p[axis], b = q[axis];  // invariant: inside(a) == in_p != inside(b)
+        while (b - a > 1) {
+          const std::uint32_t m = a + (b - a) / 2;
+          std::array<std::uint32_t, 3> r = p;
+          r[axis] = m;
+          if ((sign(value_at(r[0], r[1], r[2])) > 0.0) == in_p) a = m;
+          else b = m;
+        }
+        p[axis] = a;
+        cells_around_edge(pack(p[0], p[1], p[2]), axis, found.local());
+      }
+    });
+    std::vector<Key> more = gather(found);
+    seeds.insert(seeds.end(), more.begin(), more.end());
+  }
+  coarse_leaves = {};
+  sort_unique(seeds);
+  report(0.1);
+
+  // 3. Follow the surface: process the frontier, pull in the cells around every crossed edge.
+  auto corner_of = [](Key cell, int k) {
+    const auto c = unpack(cell);
+    return pack(c[0] + (k & 1), c[1] + ((k >> 1) & 1), c[2] + ((k >> 2) & 1));
+  };
+  ValueMap visited;  // cells already processed (value unused)
+  std::vector<Key> active;
+  std::vector<Key> frontier = std::move(seeds);
+  while (!frontier.empty()) {
+    visited.reserve_more(frontier.size());
+    for (Key k : frontier) visited.insert(k, 0.0);
+    tbb::enumerable_thread_specific<std::vector<Key>> missing;
+    tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t i) {
+      for (int k = 0; k < 8; ++k) {
+        const Key c = corner_of(frontier[i], k);
+        if (!values.find(c)) missing.local().push_back(c);
+      }
+    });
+    const std::vector<Key> corners = gather(missing);
+    std::vector<double> corner_values;
+    evaluate(corners, corner_values);
+    values.reserve_more(corners.size());
+    for (std::size_t i = 0; i < corners.size(); ++i) values.insert(corners[i], corner_values[i]);
+
+    tbb::enumerable_thread_specific<std::vector<Key>> crossed, next;
+    tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t i) {
+      const Key cell = frontier[i];
+      int mask = 0;
+      for (int k = 0; k < 8; ++k) mask |= (sign(*values.find(corner_of(cell, k))) > 0.0) << k;
+      if (mask == 0 || mask == 255) return;
+      crossed.local().push_back(cell);
+      std::vector<Key>& out = next.local();
+      const std::size_t before = out.size();
+      for (int e = 0; e < 12; ++e) {
+        const int lo = t.edge_corners[e][0], hi = t.edge_corners[e][1];
+        if (((mask >> lo) & 1) != ((mask >> hi) & 1)) cells_around_edge(corner_of(cell, lo), e / 4, out);
+      }
+      std::size_t kept = before;
+      for (std::size_t j = before; j < out.size(); ++j)
+        if (!visited.find(out[j])) out[kept++] = out[j];
+      out.resize(kept);
+    });
+    for (std::vector<Key>& b : crossed) active.insert(active.end(), b.begin(), b.end());
+    frontier = gather(next);
+  }
+  visited = ValueMap();
+  sort_unique(active);
+  report(0.5);
+
+  // 4. One vertex per crossed finest edge, numbered in key order.
+  auto cell_signs = [&](Key cell, std::array<double, 8>& w) {
+    int mask = 0;
+    for (int k = 0; k < 8; ++k) {
+      w[k] = sign(*values.find(corner_of(cell, k)));
+      mask |= (w[k] > 0.0) << k;
+    }
+    return mask;
+  };
+  std::vector<Key> edges;
+  {
+    tbb::enumerable_thread_specific<std::vector<Key>> found;
+    tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t i) {
+      std::array<double, 8> w;
+      const int mask = cell_signs(active[i], w);
+      for (int e = 0; e < 12; ++e) {
+        const int lo = t.edge_corners[e][0], hi = t.edge_corners[e][1];
+        if (((mask >> lo) & 1) != ((mask >> hi) & 1)) found.local().push_back(edge_key(corner_of(active[i], lo), e / 4));
+      }
+    });
+    edges = gather(found);
+  }
+  IsoSurface out;
+  out.vertices.resize(edges.size());
+  out.normals.resize(edges.size());
+  auto unit_normal = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& fallback) {
+    const Eigen::Vector3d g = f.gradient(p);
+    const Eigen::Vector3d n = params.inside_positive ? Eigen::Vector3d(-g) : g;
+    const double len = n.norm();
+    return len > 0.0 && std::isfinite(len) ? Eigen::Vector3d(n / len) : fallback;
+  };
+  tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t i) {
+    const Key c0 = edges[i] >> 2;
+    const int axis = static_cast<int>(edges[i] & 3);
+    auto p1c = unpack(c0);
+    ++p1c[axis];
+    const Key c1 = pack(p1c[0], p1c[1], p1c[2]);
+    Eigen::Vector3d a = position(c0), b = position(c1);
+    double wa = sign(*values.find(c0)), wb = sign(*values.find(c1));
+    Eigen::Vector3d outward = Eigen::Vector3d::Zero();
+    outward[axis] = wa > 0.0 ? 1.0 : -1.0;
+    Eigen::Vector3d p = a + (wa / (wa - wb)) * (b - a);
+    int kept = 0;  // Illinois false position: halve the value of an end kept twice in a row
+    for (int step = 0; step < params.root_refinement_steps; ++step) {
+      const double wp = sign(f.value(p));
+      if (!std::isfinite(wp) || wp == 0.0) break;
+      if ((wp > 0.0) == (wa > 0.0)) {
+        a = p, wa = wp;
+        if (kept == 2) wb *= 0.5;
+        kept = 2;
+      } else {
+        b = p, wb = wp;
+        if (kept == 1) wa *= 0.5;
+        kept = 1;
+      }
+      p = a + (wa / (wa - wb)) * (b - a);
+    }
+    out.vertices[i] = p;
+    out.normals[i] = unit_normal(p, outward);
+  });
+  report(0.75);
+
+  // 5. Triangles per cell, in fixed chunks of cells.
+  auto vertex_of = [&](Key cell, int e) {
+    const Key k = edge_key(corner_of(cell, t.edge_corners[e][0]), e / 4);
+    return static_cast<std::uint32_t>(std::lower_bound(edges.begin(), edges.end(), k) - edges.begin());
+  };
+  const std::size_t chunks = (active.size() + kChunk - 1) / kChunk;
+  std::vector<ChunkOutput> outputs(chunks);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
+    ChunkOutput& o = outputs[chunk];
+    const std::size_t end = std::min(active.size(), (chunk + 1) * kChunk);
+    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+      std::array<double, 8> w;
+      cell_signs(active[i], w);
+      std::array<int, 12> loop_edges;
+      std::array<int, 5> loop_start;
+      const int loops = cell_loops(w, loop_edges, loop_start);
+      for (int l = 0; l < loops; ++l) {
+        const int n = loop_start[l + 1] - loop_start[l];
+        const int* L = loop_edges.data() + loop_start[l];
+        std::array<std::uint32_t, 12> v;
+        for (int j = 0; j < n; ++j) v[j] = vertex_of(active[i], L[j]);
+        // Minimum total diagonal length over triangulations using only diagonals that join
+        // crossings on no common cell face.
+        constexpr double kInf = std::numeric_limits<double>::infinity();
+        double cost[12][12];
+        int split[12][12];
+        auto chord = [&](int a, int b) {
+          if (b == a + 1 || (a == 0 && b == n - 1)) return 0.0;
+          if (t.share_face[L[a]][L[b]]) return kInf;
+          return (out.vertices[v[a]] - out.vertices[v[b]]).squaredNorm();
+        };
+        for (int len = 1; len < n; ++len)
+          for (int a = 0; a + len < n; ++a) {
+            const int b = a + len;
+            cost[a][b] = len == 1 ? 0.0 : kInf;
+            split[a][b] = -1;
+            if (len == 1) continue;
+            const double own = chord(a, b);
+            if (own == kInf) continue;
+            for (int k = a + 1; k < b; ++k) {
+              const double c = cost[a][k] + cost[k][b] + own;
+              if (c < cost[a][b]) cost[a][b] = c, split[a][b] = k;
+            }
+          }
+        if (cost[0][n - 1] < kInf) {
+          int stack[24][2], top = 0;
+          stack[top][0] = 0, stack[top][1] = n - 1, ++top;
+          while (top > 0) {
+            --top;
+            const int a = stack[top][0], b = stack[top][1];
+            if (b - a < 2) continue;
+            const int k = split[a][b];
+            o.triangles.push_back({v[a], v[k], v[b]});
+            stack[top][0] = a, stack[top][1] = k, ++top;
+            stack[top][0] = k, stack[top][1] = b, ++top;
+          }
+          continue;
+        }
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero(), normal_sum = Eigen::Vector3d::Zero();
+        for (int j = 0; j < n; ++j) centre += out.vertices[v[j]], normal_sum += out.normals[v[j]];
+        centre /= n;
+        const Eigen::Vector3d g = f.gradient(centre);
+        const double wc = f.value(centre) - params.iso_value;
+        if (g.squaredNorm() > 0.0 && std::isfinite(wc)) {
+          Eigen::Vector3d step = wc * g / g.squaredNorm();
+          if (step.norm() > 0.5 * h) step *= 0.5 * h / step.norm();
+          if (step.allFinite()) centre -= step;
+        }
+        const double sum_len = normal_sum.norm();
+        const std::uint32_t id = kCentre | static_cast<std::uint32_t>(o.centres.size());
+        o.centres.push_back(centre);
+        o.centre_normals.push_back(unit_normal(centre, sum_len > 0.0 ? Eigen::Vector3d(normal_sum / sum_len) : Eigen::Vector3d::UnitZ()));
+        for (int j = 0; j < n; ++j) o.triangles.push_back({v[j], v[(j + 1) % n], id});
+      }
+    }
+  });
+  report(0.95);
+  std::size_t triangle_count = 0, vertex_count = out.vertices.size();
+  for (const ChunkOutput& o : outputs) triangle_count += o.triangles.size(), vertex_count += o.centres.size();
+  out.triangles.reserve(triangle_count);
+  out.vertices.reserve(vertex_count);
+  out.normals.reserve(vertex_count);
+  for (ChunkOutput& o : outputs) {
+    const auto offset = static_cast<std::uint32_t>(out.vertices.size());
+    for (auto tri : o.triangles) {
+      for (std::uint32_t& x : tri)
+        if (x & kCentre) x = offset + (x & ~kCentre);
+      out.triangles.push_back(tri);
+    }
+    out.vertices.insert(out.vertices.end(), o.centres.begin(), o.centres.end());
+    out.normals.insert(out.normals.end(), o.centre_normals.begin(), o.centre_normals.end());
+    o = ChunkOutput();
+  }
+  report(1.0);
+  return out;
+}
+
+}  // namespace pointsurf::detail
