@@ -25,7 +25,7 @@ DEPTHS="${3:-8 9 10}"
 REPEATS="${4:-3}"
 TOOLS="${TOOLS:-pointsurf open3d pcl}"
 PEER_LIMIT="${PEER_LIMIT:-900}"
-CLI="$BUILD_DIR/pointsurf"
+CLI="${CLI:-$BUILD_DIR/pointsurf}"  # from another build: set COMMIT to name it
 TIMING="$WORK/time.txt"
 
 RESULTS="${RESULTS:-$WORK/results.jsonl}"
@@ -103,8 +103,10 @@ for MESH in $MESHES; do
   done
 done
 
-COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-git -C "$ROOT" diff --quiet HEAD -- src include 2>/dev/null || COMMIT="$COMMIT+dirty"
+if [ -z "${COMMIT:-}" ]; then  # COMMIT names the build of CLI when it is not this checkout
+  COMMIT=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+  git -C "$ROOT" diff --quiet HEAD -- src include 2>/dev/null || COMMIT="$COMMIT+dirty"
+fi
 PYTHONPATH="$ROOT/bench/reconstruct" "$PY" "$ROOT/bench/reconstruct/poisson_table.py" "$RESULTS" "${CSV:-$ROOT/bench/results/reconstruct_poisson.csv}" "$COMMIT" \
   | tee "$OUT/poisson.md"
 echo "results: $OUT/poisson.md, bench/results/reconstruct_poisson.csv" >&2
