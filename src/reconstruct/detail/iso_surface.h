@@ -57,7 +57,8 @@ class IsoFunction {
 struct IsoSurfaceParams {
   double iso_value = 0.0;
   bool inside_positive = true;   // the function is larger than iso_value inside the surface
-  int root_refinement_steps = 0; // secant steps on value() per edge crossing; 0: linear only
+  int root_refinement_steps = 3; // secant steps on value() per edge crossing; 0: linear only
+                                 // (3: Poisson elephant 100k depth 8 Chamfer -11 %)
 };
 
 /// The extracted surface: closed (watertight) wherever it does not leave the lattice, edge- and
