@@ -83,8 +83,10 @@ for MESH in $MESHES; do
                 vtk="$WORK/pcl.vtk"
                 if timeout "$PEER_LIMIT" /usr/bin/time -f '%e %M' -o "$TIMING" pcl_poisson_reconstruction "$WORK/${MESH}_${n}_${kind}.pcd" "$vtk" -depth "$depth" > "$WORK/pcl.log" 2>&1; then
                   t=$(time_fields)
-                  ms=$(sed -n 's/.*Computing ...\[Done, \([0-9.]*\) ms\].*/\1/p' "$WORK/pcl.log")
-                  record "$t" "${tags[@]}" seconds="$("$PY" -c "print($ms/1000)")"
+                  # "Computing ...[Done, X ms]", possibly split by its "Vertex pair not in list" lines
+                  ms=$(grep -o '\[Done, [0-9.]* ms\]' "$WORK/pcl.log" | head -1 | tr -dc '0-9.')
+                  if [ -n "$ms" ]; then record "$t" "${tags[@]}" seconds="$("$PY" -c "print($ms/1000)")"
+                  else record "$t" "${tags[@]}" seconds="$("$PY" -c "import json; print(json.loads('$t')['process_seconds'])")"; fi
                   pcl_vtk2ply "$vtk" "$out" > /dev/null
                 else
                   record '{}' "${tags[@]}" failed="timeout ${PEER_LIMIT}s or error"

@@ -204,7 +204,7 @@ constexpr std::uint32_t kCentre = 0x80000000u;
 
 IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, const IsoSurfaceParams& params,
                                const ProgressCallback& progress) {
-  const int depth = lattice.depth;
+  int depth = lattice.depth;  // lowered below to the deepest level that has leaves
   if (depth < 0 || depth > kMaxDepth)
     throw UsageError("extract_iso_surface: lattice depth " + std::to_string(depth) + " outside [0, " +
                      std::to_string(kMaxDepth) + "]");
@@ -215,8 +215,8 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
   };
   const CellTables& t = tables();
   const Sign sign{params.iso_value, params.inside_positive};
-  const std::uint32_t cells_per_side = std::uint32_t{1} << depth;
-  const double h = lattice.size / static_cast<double>(cells_per_side);
+  std::uint32_t cells_per_side = std::uint32_t{1} << depth;
+  double h = lattice.size / static_cast<double>(cells_per_side);
   auto position = [&](Key corner) {
     const auto c = unpack(corner);
     return Eigen::Vector3d(lattice.origin + h * Eigen::Vector3d(c[0], c[1], c[2]));
@@ -264,6 +264,17 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
       nodes = std::move(children);
     }
     seeds = std::move(nodes);
+  }
+  if (seeds.empty() && !coarse_leaves.empty()) {
+    // No leaf at the lattice's depth (an adaptive octree stopped earlier): mesh at the deepest
+    // level that has leaves, whose leaves are then the finest cells.
+    depth = coarse_leaves.back().first;
+    while (!coarse_leaves.empty() && coarse_leaves.back().first == depth) {
+      seeds.push_back(coarse_leaves.back().second);
+      coarse_leaves.pop_back();
+    }
+    cells_per_side = std::uint32_t{1} << depth;
+    h = lattice.size / static_cast<double>(cells_per_side);
   }
   report(0.05);
 

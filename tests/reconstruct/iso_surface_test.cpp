@@ -221,11 +221,22 @@ TEST(IsoSurface, LevelJumpsAcrossTheSurfaceStayCrackFree) {
   EXPECT_LE(max_abs(s, f), 0.05 * lattice.size / 128);
 }
 
+TEST(IsoSurface, OctreeShallowerThanTheLatticeIsMeshedAtItsDeepestLevel) {
+  // Leaves stop at level 5 in a depth-7 lattice: the mesh is the depth-5 one.
+  const Field f = torus(0.5, 0.23);
+  const IsoLattice deep = unit_lattice(7), shallow = unit_lattice(5);
+  const IsoSurface a = extract_iso_surface(AnalyticIso(f, deep, near_surface(f, 5)), deep, {});
+  const IsoSurface b = extract_iso_surface(AnalyticIso(f, shallow, near_surface(f, 5)), shallow, {});
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(expect_closed_manifold(a).genus(), 1);
+}
+
 TEST(IsoSurface, CoarseOnlyOctreeIsSeededFromCoarseEdges) {
-  // No finest leaf at all near most of the sphere: refined to depth 2 everywhere, lattice depth 5.
+  // No finest leaf near the sphere: refined to level 2 everywhere, to 5 only along the face x = 1.
   const Field f = sphere(Vector3d(0.02, 0.01, 0.0), 0.55);
   const IsoLattice lattice = unit_lattice(5);
-  const Refine refine = [](int level, const Vector3d& c, double) { return level < 2 || (level < 5 && c.x() > 0.9); };
+  const Refine refine = [](int level, const Vector3d& c, double half) { return level < 2 || (level < 5 && c.x() + half > 0.99); };
   const IsoSurface s = extract_iso_surface(AnalyticIso(f, lattice, refine), lattice, {});
   const MeshTopology topo = expect_closed_manifold(s);
   EXPECT_EQ(topo.components, 1u);

@@ -71,8 +71,9 @@ struct IsoSurface {
 };
 
 /// Contours `f` at params.iso_value over the leaves of the octree that `f.refined` describes.
-/// The implementation (reconstruct/iso_surface.cpp) meshes at the finest level wherever the
-/// surface goes, coarse leaves included, which makes it crack-free by construction: every finest
+/// The implementation (reconstruct/iso_surface.cpp) meshes at the octree's finest level (the
+/// deepest level that has leaves, at most lattice.depth) wherever the surface goes, coarse leaves
+/// included, which makes it crack-free by construction: every finest
 /// leaf, and every finest cell where a coarse leaf's edge changes sign, seeds a search that follows
 /// the surface cell by cell. A surface part that crosses no edge of any leaf (a bubble smaller than
 /// the coarse leaf around it) is not found. Output order is deterministic: the same mesh for any
