@@ -2,7 +2,8 @@
 # Screened Poisson: pointsurf against Open3D 0.16 (create_from_point_cloud_poisson, PoissonRecon
 # inside) and PCL (pcl_poisson_reconstruction) in the same run, on the same clouds and normals.
 #   bench/reconstruct/run_poisson_bench.sh [MESHES] [SIZES] [DEPTHS] [REPEATS]
-#   (default: "elephant fandisk" 100000 "8 9 10" 3; TOOLS="pointsurf open3d pcl", PEER_LIMIT=900 s)
+#   (default: "elephant fandisk" 100000 "8 9 10" 3; TOOLS="pointsurf open3d pcl", KINDS="clean noisy",
+#   PEER_LIMIT=900 s)
 # Clouds: area-uniform samples (seed 1) of CGAL's MESH.off (libcgal-demo; elephant is smooth,
 # fandisk a CAD part with sharp edges) with the true face normals, clean and noisy (Gaussian noise
 # of 0.25 % of the bounding-box diagonal, plus 1 % outliers in the box with random normals:
@@ -24,6 +25,7 @@ SIZES="${2:-100000}"
 DEPTHS="${3:-8 9 10}"
 REPEATS="${4:-3}"
 TOOLS="${TOOLS:-pointsurf open3d pcl}"
+KINDS="${KINDS:-clean noisy}"
 PEER_LIMIT="${PEER_LIMIT:-900}"
 CLI="${CLI:-$BUILD_DIR/pointsurf}"  # from another build: set COMMIT to name it
 TIMING="$WORK/time.txt"
@@ -55,7 +57,7 @@ for MESH in $MESHES; do
     [ -f "$noisy" ] || "$PY" "$ROOT/bench/reconstruct/poisson_clouds.py" "$clean" "$noisy" "$WORK/${MESH}_${n}_clean.pcd" "$WORK/${MESH}_${n}_noisy.pcd"
     runs=$REPEATS
     [ "$n" -ge 1000000 ] && runs=1
-    for kind in clean noisy; do
+    for kind in $KINDS; do
       cloud=$clean; [ "$kind" = noisy ] && cloud=$noisy
       for depth in $DEPTHS; do
         for ((r = 0; r < runs; r++)); do

@@ -42,7 +42,7 @@ namespace pointsurf::detail {
 namespace {
 
 using Key = std::uint64_t;
-constexpr int kMaxDepth = 19;  // 20 bits per coordinate, 2 bits of axis in an edge key
+constexpr int kMaxDepth = 19;  // 20 bits per coordinate of a corner (up to 2^depth)
 constexpr int kBits = 20;
 constexpr Key kMask = (Key{1} << kBits) - 1;
 constexpr Key kEmpty = ~Key{0};
@@ -55,7 +55,6 @@ std::array<std::uint32_t, 3> unpack(Key k) {
   return {static_cast<std::uint32_t>(k & kMask), static_cast<std::uint32_t>((k >> kBits) & kMask),
           static_cast<std::uint32_t>((k >> (2 * kBits)) & kMask)};
 }
-Key edge_key(Key corner, int axis) { return (corner << 2) | static_cast<Key>(axis); }
 
 void sort_unique(std::vector<Key>& keys) {
   tbb::parallel_sort(keys.begin(), keys.end());
@@ -537,8 +536,8 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
         // Minimum total diagonal length over triangulations using only diagonals that join
         // crossings on no common cell face.
         constexpr double kInf = std::numeric_limits<double>::infinity();
-        double cost[12][12];
-        int split[12][12];
+        double cost[12][12] = {};
+        int split[12][12] = {};
         auto chord = [&](int a, int b) {
           if (b == a + 1 || (a == 0 && b == n - 1)) return 0.0;
           if (t.share_face[L[a]][L[b]]) return kInf;
