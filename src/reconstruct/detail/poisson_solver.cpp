@@ -206,6 +206,69 @@ double dot(const std::vector<double>& a, const std::vector<double>& b) {
       std::plus<double>());
 }
 
+// The values of `v` on the 6^3 cells around the children of block b (zero where no node):
+// everything the 5^3 stencils of the block's 8 nodes read.
+void load_window(const Level& L, std::size_t b, const std::vector<double>& v, double* win) {
+  std::fill(win, win + 216, 0.0);
+  const auto& nbs = L.nb[b];
+  for (int d = 0; d < 27; ++d) {
+    const std::int32_t n = nbs[std::size_t(d)];
+    if (n < 0) continue;
+    const int dx = d % 3, dy = d / 3 % 3, dz = d / 9;
+    const double* src = &v[8 * std::size_t(n)];
+    for (int k = 0; k < 8; ++k) win[(2 * dx + (k & 1)) + 6 * (2 * dy + (k >> 1 & 1)) + 36 * (2 * dz + (k >> 2))] = src[k];
+  }
+}
+
+// out[k] = sum over the 5^3 neighbours j of child k of the block:
+//   Kx My Mz + Mx Ky Mz + Mx My Kz (the Laplacian), or with `single`, Tx Ty Tz (one product),
+// computed separably on the window: about 150 multiplications per node instead of 1000.
+using Table = std::vector<std::array<double, 5>>;
+void stencil_block(const std::array<int, 3>& bc, const Table& Mx_, const Table& Kx_, const Table& My_, const Table& Ky_, const Table& Mz_,
+                   const Table& Kz_, const double* win, double* out, bool single) {
+  double MX[2][6][6], KX[2][6][6];
+  for (int ax = 0; ax < 2; ++ax) {
+    const auto& m = Mx_[std::size_t(2 * bc[0] + ax)];
+    const auto& k = Kx_[std::size_t(2 * bc[0] + ax)];
+    for (int wz = 0; wz < 6; ++wz)
+      for (int wy = 0; wy < 6; ++wy) {
+        const double* row = win + 6 * wy + 36 * wz + ax;
+        double sm = 0.0, sk = 0.0;
+        for (int o = 0; o < 5; ++o) sm += m[std::size_t(o)] * row[o], sk += k[std::size_t(o)] * row[o];
+        MX[ax][wy][wz] = sm;
+        KX[ax][wy][wz] = sk;
+      }
+  }
+  double MM[2][2][6], KM[2][2][6], MK[2][2][6];
+  for (int ax = 0; ax < 2; ++ax)
+    for (int ay = 0; ay < 2; ++ay) {
+      const auto& m = My_[std::size_t(2 * bc[1] + ay)];
+      const auto& k = Ky_[std::size_t(2 * bc[1] + ay)];
+      for (int wz = 0; wz < 6; ++wz) {
+        double mm = 0.0, km = 0.0, mk = 0.0;
+        for (int o = 0; o < 5; ++o) {
+          mm += m[std::size_t(o)] * MX[ax][ay + o][wz];
+          km += m[std::size_t(o)] * KX[ax][ay + o][wz];
+          mk += k[std::size_t(o)] * MX[ax][ay + o][wz];
+        }
+        MM[ax][ay][wz] = mm, KM[ax][ay][wz] = km, MK[ax][ay][wz] = mk;
+      }
+    }
+  for (int az = 0; az < 2; ++az) {
+    const auto& m = Mz_[std::size_t(2 * bc[2] + az)];
+    const auto& k = Kz_[std::size_t(2 * bc[2] + az)];
+    for (int ay = 0; ay < 2; ++ay)
+      for (int ax = 0; ax < 2; ++ax) {
+        double sum = 0.0;
+        if (single)
+          for (int o = 0; o < 5; ++o) sum += m[std::size_t(o)] * MM[ax][ay][az + o];
+        else
+          for (int o = 0; o < 5; ++o) sum += m[std::size_t(o)] * (KM[ax][ay][az + o] + MK[ax][ay][az + o]) + k[std::size_t(o)] * MM[ax][ay][az + o];
+        out[ax | ay << 1 | az << 2] = sum;
+      }
+  }
+}
+
 }  // namespace
 
 struct PoissonFunction::Impl {
@@ -223,7 +286,7 @@ struct PoissonFunction::Impl {
   void build_tables(Level& L) const;
   void estimate_density();
   void splat_and_restrict();
-  PoissonLevelReport solve_level(int l, std::vector<double>& G);
+  PoissonLevelReport solve_level(int l);
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
   double gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const;
@@ -358,33 +421,59 @@ void PoissonFunction::Impl::build_levels(const std::vector<Key>& finest_keys) {
   }
 }
 
-double PoissonFunction::Impl::gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const {
-  const Weights1D wx = weights_1d(p.x(), L.n, s), wy = weights_1d(p.y(), L.n, s), wz = weights_1d(p.z(), L.n, s);
-  const auto& ax = d == 1 ? wx.dw : wx.w;
-  const auto& ay = d == 2 ? wy.dw : wy.w;
-  const auto& az = d == 3 ? wz.dw : wz.w;
+namespace {
+
+// The 27 nodes around p at level L (weights w): false when some is missing (-1 there).
+bool nodes_around(const Level& L, const std::array<Weights1D, 3>& w, std::array<std::int32_t, 27>& out) {
+  int base[3];
+  for (int a = 0; a < 3; ++a) base[a] = w[std::size_t(a)].idx[0] >> 1;
+  std::int32_t blocks[2][2][2];
+  bool looked[2][2][2] = {};
+  bool complete = true;
+  for (int t = 0; t < 27; ++t) {
+    const int ix = w[0].idx[std::size_t(t % 3)], iy = w[1].idx[std::size_t(t / 3 % 3)], iz = w[2].idx[std::size_t(t / 9)];
+    const int dx = (ix >> 1) - base[0], dy = (iy >> 1) - base[1], dz = (iz >> 1) - base[2];
+    if (!looked[dz][dy][dx]) {
+      blocks[dz][dy][dx] = L.block(ix >> 1, iy >> 1, iz >> 1);
+      looked[dz][dy][dx] = true;
+    }
+    const std::int32_t b = blocks[dz][dy][dx];
+    out[std::size_t(t)] = b < 0 ? -1 : 8 * b + ((ix & 1) | (iy & 1) << 1 | (iz & 1) << 2);
+    complete = complete && b >= 0;
+  }
+  return complete;
+}
+
+double weighted_sum(const std::array<Weights1D, 3>& w, const std::array<std::int32_t, 27>& nodes, const std::vector<double>& c, int d) {
+  const auto& ax = d == 1 ? w[0].dw : w[0].w;
+  const auto& ay = d == 2 ? w[1].dw : w[1].w;
+  const auto& az = d == 3 ? w[2].dw : w[2].w;
   double sum = 0.0;
-  for (int tz = 0; tz < 3; ++tz)
-    for (int ty = 0; ty < 3; ++ty)
-      for (int tx = 0; tx < 3; ++tx) {
-        const std::int32_t i = L.node(wx.idx[std::size_t(tx)], wy.idx[std::size_t(ty)], wz.idx[std::size_t(tz)]);
-        if (i < 0) {
-          complete = false;
-          continue;
-        }
-        sum += c[std::size_t(i)] * ax[std::size_t(tx)] * ay[std::size_t(ty)] * az[std::size_t(tz)];
-      }
+  for (int t = 0; t < 27; ++t)
+    if (nodes[std::size_t(t)] >= 0)
+      sum += c[std::size_t(nodes[std::size_t(t)])] * ax[std::size_t(t % 3)] * ay[std::size_t(t / 3 % 3)] * az[std::size_t(t / 9)];
   return sum;
 }
 
+}  // namespace
+
+double PoissonFunction::Impl::gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const {
+  const std::array<Weights1D, 3> w = {weights_1d(p.x(), L.n, s), weights_1d(p.y(), L.n, s), weights_1d(p.z(), L.n, s)};
+  std::array<std::int32_t, 27> nodes;
+  complete = nodes_around(L, w, nodes) && complete;
+  return weighted_sum(w, nodes, c, d);
+}
+
 double PoissonFunction::Impl::evaluate(const Eigen::Vector3d& p, int d) const {
+  // from the finest level down: where all 27 nodes exist, the cumulative coefficients F hold
+  // every coarser level; above that, each level's own part (x) where its nodes exist
   double sum = 0.0;
+  std::array<std::int32_t, 27> nodes;
   for (int l = params.depth; l >= 1; --l) {
     const Level& L = levels[std::size_t(l)];
-    bool complete = true;
-    const double partial = gather(L, L.x, p, d, complete);
-    if (complete) return sum + gather(L, L.F, p, d, complete);
-    sum += partial;
+    const std::array<Weights1D, 3> w = {weights_1d(p.x(), L.n, s), weights_1d(p.y(), L.n, s), weights_1d(p.z(), L.n, s)};
+    if (nodes_around(L, w, nodes)) return sum + weighted_sum(w, nodes, L.F, d);
+    sum += weighted_sum(w, nodes, L.x, d);
   }
   return sum;
 }
@@ -426,29 +515,18 @@ void PoissonFunction::Impl::splat_and_restrict() {
           v[std::size_t(i)] += wx.w[std::size_t(tx)] * wy.w[std::size_t(ty)] * wz.w[std::size_t(tz)] * n;
         }
   }
-  // b_i = int V . grad B_i
-  tbb::parallel_for(std::size_t(0), L.block_cells.size(), [&](std::size_t b) {
-    const auto& bc = L.block_cells[b];
-    for (std::size_t k = 0; k < 8; ++k) {
-      const std::size_t i = 8 * b + k;
-      const auto c = L.node_cell(i);
-      double sum = 0.0;
-      for (int oz = -2; oz <= 2; ++oz)
-        for (int oy = -2; oy <= 2; ++oy)
-          for (int ox = -2; ox <= 2; ++ox) {
-            const std::int32_t j = L.near(std::int32_t(b), bc, c[0] + ox, c[1] + oy, c[2] + oz);
-            if (j < 0) continue;
-            const Eigen::Vector3d& vj = v[std::size_t(j)];
-            if (vj.isZero()) continue;
-            const auto &mx = L.M[std::size_t(c[0])][std::size_t(ox + 2)], my = L.M[std::size_t(c[1])][std::size_t(oy + 2)],
-                       mz = L.M[std::size_t(c[2])][std::size_t(oz + 2)];
-            const auto &dx = L.D[std::size_t(c[0])][std::size_t(ox + 2)], dy = L.D[std::size_t(c[1])][std::size_t(oy + 2)],
-                       dz = L.D[std::size_t(c[2])][std::size_t(oz + 2)];
-            sum += vj.x() * dx * my * mz + vj.y() * mx * dy * mz + vj.z() * mx * my * dz;
-          }
-      L.b[i] = sum;
-    }
-  });
+  // b_i = int V . grad B_i = sum_j v_j . int B_j grad B_i: per axis a product of the 1-D tables
+  std::vector<double> va(L.nodes());
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < va.size(); ++i) va[i] = v[i][a];
+    tbb::parallel_for(std::size_t(0), L.block_cells.size(), [&](std::size_t b) {
+      double win[216], out[8];
+      load_window(L, b, va, win);
+      const auto& bc = L.block_cells[b];
+      stencil_block(bc, a == 0 ? L.D : L.M, L.K, a == 1 ? L.D : L.M, L.K, a == 2 ? L.D : L.M, L.K, win, out, true);
+      for (int k = 0; k < 8; ++k) L.b[8 * b + std::size_t(k)] += out[k];
+    });
+  }
   // restriction: b(coarse k) = sum over fine j of P(j, k) b(fine j)
   for (int l = depth; l >= 2; --l) {
     const Level& Fl = levels[std::size_t(l)];
@@ -478,20 +556,40 @@ void PoissonFunction::Impl::splat_and_restrict() {
   }
 }
 
-PoissonLevelReport PoissonFunction::Impl::solve_level(int l, std::vector<double>& G) {
+PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
   Level& L = levels[std::size_t(l)];
   const std::size_t nodes = L.nodes(), nblocks = L.block_cells.size();
   PoissonLevelReport report;
   report.level = l;
   report.nodes = nodes;
-  // the samples' 1-D weights and their 27 nodes at this level
-  const std::size_t ns = q.size();
+  // The screening points of this level: the samples of each cell merged into their
+  // area-weighted mean (PoissonRecon's approximate point interpolation). At the finest level a
+  // cell holds one or two samples; at coarse levels this keeps the work per iteration at the
+  // number of cells.
+  std::vector<std::int32_t> cells;
+  for (std::size_t i = 0; i < nodes; ++i)
+    if (L.first[i] < L.last[i]) cells.push_back(std::int32_t(i));
+  const std::size_t ns = cells.size();
+  std::vector<Eigen::Vector3d> pos(ns);
+  std::vector<double> weight(ns), G(ns, 0.0);
   std::vector<std::array<Weights1D, 3>> sw(ns);
   std::vector<std::array<std::int32_t, 27>> snode(ns);
-  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) {
-    for (int a = 0; a < 3; ++a) sw[p][std::size_t(a)] = weights_1d(q[p][a], L.n, s);
-    const auto& w = sw[p];
-    for (int t = 0; t < 27; ++t) snode[p][std::size_t(t)] = L.node(w[0].idx[std::size_t(t % 3)], w[1].idx[std::size_t(t / 3 % 3)], w[2].idx[std::size_t(t / 9)]);
+  const Level* C = l > 1 ? &levels[std::size_t(l - 1)] : nullptr;
+  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t k) {
+    const std::size_t cell = std::size_t(cells[k]);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double w = 0.0;
+    for (std::uint32_t p = L.first[cell]; p < L.last[cell]; ++p) sum += area[p] * q[p], w += area[p];
+    pos[k] = sum / w;
+    weight[k] = w;
+    for (int a = 0; a < 3; ++a) sw[k][std::size_t(a)] = weights_1d(pos[k][a], L.n, s);
+    const auto& ww = sw[k];
+    for (int t = 0; t < 27; ++t) snode[k][std::size_t(t)] = L.node(ww[0].idx[std::size_t(t % 3)], ww[1].idx[std::size_t(t / 3 % 3)], ww[2].idx[std::size_t(t / 9)]);
+    if (C) {  // the coarser levels' function there
+      bool complete = true;
+      G[k] = gather(*C, C->F, pos[k], 0, complete);
+      assert(complete);
+    }
   });
   auto sample_value = [&](std::size_t p, const std::vector<double>& c) {
     const auto& w = sw[p];
@@ -500,53 +598,29 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l, std::vector<double>
       v += c[std::size_t(snode[p][std::size_t(t)])] * w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
     return v;
   };
-  auto basis_at = [&](std::size_t p, const std::array<int, 3>& c) {  // B_c(q_p)
-    double r = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      const Weights1D& w = sw[p][std::size_t(a)];
-      double v = 0.0;
-      for (int t = 0; t < 3; ++t)
-        if (w.idx[std::size_t(t)] == c[std::size_t(a)]) v += w.w[std::size_t(t)];
-      r *= v;
-    }
-    return r;
-  };
-  // f(i) over the samples in the support of node i: sum_p A_p B_i(p) sv(p)
-  auto screen = [&](std::size_t b, std::size_t i, const std::array<int, 3>& c, auto&& sv) {
-    const auto& bc = L.block_cells[b];
-    double sum = 0.0;
-    for (int oz = -1; oz <= 1; ++oz)
-      for (int oy = -1; oy <= 1; ++oy)
-        for (int ox = -1; ox <= 1; ++ox) {
-          const std::int32_t j = L.near(std::int32_t(b), bc, c[0] + ox, c[1] + oy, c[2] + oz);
-          if (j < 0) continue;
-          for (std::uint32_t p = L.first[std::size_t(j)]; p < L.last[std::size_t(j)]; ++p) sum += area[p] * basis_at(p, c) * sv(p);
+  // The screening, sample by sample into its 27 nodes: the cells are coloured by their
+  // coordinates mod 3, and two cells of one colour share no node, so each colour scatters in
+  // parallel without races (and in the same order for any thread count).
+  std::array<std::vector<std::uint32_t>, 27> colours;
+  for (std::size_t k = 0; k < ns; ++k) {
+    const auto c = L.node_cell(std::size_t(cells[k]));
+    colours[std::size_t(c[0] % 3 + 3 * (c[1] % 3) + 9 * (c[2] % 3))].push_back(std::uint32_t(k));
+  }
+  // out_i += alpha sum_p A_p B_i(p) sv(p) (squared: B_i(p)^2 per function, the diagonal)
+  auto scatter = [&](auto&& sv, std::vector<double>& out, bool squared) {
+    for (const auto& points : colours)
+      tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t k) {
+        const std::size_t p = points[k];
+        const double f = alpha * weight[p] * sv(p);
+        const auto& w = sw[p];
+        for (int t = 0; t < 27; ++t) {
+          const double wt = w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
+          out[std::size_t(snode[p][std::size_t(t)])] += f * (squared ? wt * wt : wt);
         }
-    (void)i;
-    return alpha * sum;
-  };
-  auto laplacian = [&](std::size_t b, const std::array<int, 3>& c, const std::vector<double>& v) {
-    const auto& bc = L.block_cells[b];
-    double sum = 0.0;
-    for (int oz = -2; oz <= 2; ++oz) {
-      const double mz = L.M[std::size_t(c[2])][std::size_t(oz + 2)], kz = L.K[std::size_t(c[2])][std::size_t(oz + 2)];
-      if (mz == 0.0 && kz == 0.0) continue;
-      for (int oy = -2; oy <= 2; ++oy) {
-        const double my = L.M[std::size_t(c[1])][std::size_t(oy + 2)], ky = L.K[std::size_t(c[1])][std::size_t(oy + 2)];
-        if (my == 0.0 && ky == 0.0) continue;
-        for (int ox = -2; ox <= 2; ++ox) {
-          const std::int32_t j = L.near(std::int32_t(b), bc, c[0] + ox, c[1] + oy, c[2] + oz);
-          if (j < 0) continue;
-          const double mx = L.M[std::size_t(c[0])][std::size_t(ox + 2)], kx = L.K[std::size_t(c[0])][std::size_t(ox + 2)];
-          sum += v[std::size_t(j)] * (kx * my * mz + mx * ky * mz + mx * my * kz);
-        }
-      }
-    }
-    return sum;
+      });
   };
   // right-hand side: b minus the coarser levels' part
   std::vector<double> r(nodes, 0.0), diag(nodes, 0.0);
-  const Level* C = l > 1 ? &levels[std::size_t(l - 1)] : nullptr;
   tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
     const auto& bc = L.block_cells[b];
     const std::int32_t cb = C ? C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1) : -1;
@@ -572,24 +646,26 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l, std::vector<double>
           }
         }
       }
-      r[i] = L.b[i] - cross - screen(b, i, c, [&](std::size_t p) { return G[p]; });
+      r[i] = L.b[i] - cross;
       diag[i] = L.K[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
                 L.M[std::size_t(c[0])][2] * L.K[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
                 L.M[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.K[std::size_t(c[2])][2];
-      diag[i] += screen(b, i, c, [&](std::size_t p) { return basis_at(p, c); });
     }
   });
+  std::vector<double> tmp(nodes, 0.0);
+  scatter([&](std::size_t p) { return G[p]; }, tmp, false);
+  for (std::size_t i = 0; i < nodes; ++i) r[i] -= tmp[i];
+  scatter([](std::size_t) { return 1.0; }, diag, true);
   // (L + S) v
   std::vector<double> sv(ns);
   auto apply = [&](const std::vector<double>& v, std::vector<double>& out) {
     tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) { sv[p] = sample_value(p, v); });
     tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
-      for (std::size_t k = 0; k < 8; ++k) {
-        const std::size_t i = 8 * b + k;
-        const auto c = L.node_cell(i);
-        out[i] = laplacian(b, c, v) + screen(b, i, c, [&](std::size_t p) { return sv[p]; });
-      }
+      double win[216];
+      load_window(L, b, v, win);
+      stencil_block(L.block_cells[b], L.M, L.K, L.M, L.K, L.M, L.K, win, &out[8 * b], false);
     });
+    scatter([&](std::size_t p) { return sv[p]; }, out, false);
   };
   // Jacobi-preconditioned conjugate gradients from x = 0
   std::vector<double>& x = L.x;
@@ -652,7 +728,6 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l, std::vector<double>
       L.F[i] = pro + x[i];
     }
   });
-  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) { G[p] += sample_value(p, x); });
   return report;
 }
 
@@ -707,16 +782,21 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   std::size_t bytes = 0;
   for (const Level& L : m.levels) bytes += L.bytes();
   bytes += ns * (2 * sizeof(Eigen::Vector3d) + sizeof(double) * 2 + sizeof(std::uint32_t) + sizeof(Key));
-  std::vector<double> G(ns, 0.0);
   std::size_t largest = 0;
   for (int l = 1; l <= depth; ++l) {
-    reports_.push_back(m.solve_level(l, G));
+    reports_.push_back(m.solve_level(l));
     // the level's solver work arrays: 27 nodes and 9 weights per sample, 5 doubles per node
     largest = std::max(largest, ns * (27 * sizeof(std::int32_t) + sizeof(std::array<Weights1D, 3>) + sizeof(double)) +
                                     m.levels[std::size_t(l)].nodes() * 5 * sizeof(double));
     report(0.2 + 0.8 * double(l) / depth);
   }
   peak_bytes_ = bytes + largest;
+  std::vector<double> G(ns);
+  const Level& finest = m.levels[std::size_t(depth)];
+  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) {
+    bool complete = true;
+    G[p] = m.gather(finest, finest.F, m.q[p], 0, complete);
+  });
   double wsum = 0.0, vsum = 0.0;
   for (std::size_t p = 0; p < ns; ++p) wsum += m.area[p], vsum += m.area[p] * G[p];
   iso_value_ = wsum > 0.0 ? vsum / wsum : 0.0;
