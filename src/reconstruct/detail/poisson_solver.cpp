@@ -21,10 +21,12 @@
 // level solved by Jacobi-preconditioned conjugate gradients.
 //
 // Which nodes exist (poisson_solver.h): level l has the children of the cells of level l-1
-// within 2 cells of a sample's cell (all cells for l <= full_depth). Then every level holds the
-// 5^3 neighbours of the nodes whose supports hold samples, the coarser level holds the 4^3
-// coarse functions that overlap each fine node, and F is exact on every node: checked by the
-// chain  children(S(l-1) + 2) contains S(l) + 4  (S(l): sample cells at level l).
+// within 2 cells of a sample's cell (all cells for l <= full_depth; within 1 cell for the
+// finest level). Then every level holds the 5^3 neighbours of the nodes whose supports hold
+// samples, the coarser level holds the 4^3 coarse functions that overlap each fine node, and F
+// is exact on every node: checked by the chain  children(S(l-1) + 2) contains S(l) + 4
+// (S(l): sample cells at level l). The finest level's b reaches S(depth) + 3, beyond its
+// nodes, so the level above takes its b from V directly rather than by restriction.
 #include "reconstruct/detail/poisson_solver.h"
 
 #include <algorithm>
@@ -162,7 +164,7 @@ struct Level {
   // 1-D tables: [i][o + 2] for the function i + o, o in -2..2: mass, stiffness, int B_{i+o} B_i'.
   std::vector<std::array<double, 5>> M, K, D;
   // Cross-level: [i][t] against the coarse function k = (i >> 1) - 2 + (i & 1) + t, t in 0..3.
-  std::vector<std::array<double, 4>> Mc, Kc;
+  std::vector<std::array<double, 4>> Mc, Kc, Gc;  // Gc: int B_i (B^c_k)'
   // Refinement: fine function i gets w0 of coarse k0 and w1 of coarse k1 (k1 < 0: none).
   std::vector<std::array<int, 2>> pk;
   std::vector<std::array<double, 2>> pw;
@@ -312,12 +314,14 @@ void PoissonFunction::Impl::build_tables(Level& L) const {
   const int nc = n / 2;
   L.Mc.assign(std::size_t(n), {});
   L.Kc.assign(std::size_t(n), {});
+  L.Gc.assign(std::size_t(n), {});
   for (int i = 0; i < n; ++i) {
     for (int t = 0; t < 4; ++t) {
       const int k = (i >> 1) - 2 + (i & 1) + t;
       if (k < 0 || k >= nc) continue;
       L.Mc[std::size_t(i)][std::size_t(t)] = integrate(n, i, false, nc, k, false, s);
       L.Kc[std::size_t(i)][std::size_t(t)] = integrate(n, i, true, nc, k, true, s);
+      L.Gc[std::size_t(i)][std::size_t(t)] = integrate(n, i, false, nc, k, true, s);
     }
     const int m = i >> 1;
     int k0 = m, k1 = (i & 1) ? m + 1 : m - 1;
@@ -361,13 +365,15 @@ void PoissonFunction::Impl::build_levels(const std::vector<Key>& finest_keys) {
         for (int y = 0; y < np; ++y)
           for (int x = 0; x < np; ++x) blocks.push_back(morton(x, y, z));
     } else {
-      // the sample cells of level l-1 dilated by 2, separably (x, then y, then z)
+      // the sample cells of level l-1 dilated by 2 (the finest level: by 1, see
+      // splat_and_restrict), separably (x, then y, then z)
+      const int radius = l == depth ? 1 : 2;
       std::vector<std::array<int, 3>> set = cells[std::size_t(l - 1)];
       for (int a = 0; a < 3; ++a) {
         std::vector<std::array<int, 3>> grown;
         grown.reserve(set.size() * 3);
         for (const auto& c : set)
-          for (int o = -2; o <= 2; ++o) {
+          for (int o = -radius; o <= radius; ++o) {
             auto d = c;
             d[std::size_t(a)] += o;
             if (d[std::size_t(a)] >= 0 && d[std::size_t(a)] < np) grown.push_back(d);
@@ -527,8 +533,38 @@ void PoissonFunction::Impl::splat_and_restrict() {
       for (int k = 0; k < 8; ++k) L.b[8 * b + std::size_t(k)] += out[k];
     });
   }
+  // The level above the finest directly from V: the finest level's b reaches 3 cells beyond
+  // the samples, one more than its nodes, so restricting it would lose a part.
+  if (depth >= 2) {
+    Level& C = levels[std::size_t(depth - 1)];
+    tbb::parallel_for(std::size_t(0), C.nodes(), [&](std::size_t k) {
+      const auto c = C.node_cell(k);
+      std::int32_t fine_blocks[27];  // the finest level's blocks at cells c-1..c+1
+      for (int d = 0; d < 27; ++d) fine_blocks[d] = L.block(c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1);
+      double sum = 0.0;
+      for (int jz = 2 * c[2] - 2; jz <= 2 * c[2] + 3; ++jz) {
+        if (jz < 0 || jz >= L.n) continue;
+        const std::size_t tz = std::size_t(c[2] - ((jz >> 1) - 2 + (jz & 1)));
+        for (int jy = 2 * c[1] - 2; jy <= 2 * c[1] + 3; ++jy) {
+          if (jy < 0 || jy >= L.n) continue;
+          const std::size_t ty = std::size_t(c[1] - ((jy >> 1) - 2 + (jy & 1)));
+          for (int jx = 2 * c[0] - 2; jx <= 2 * c[0] + 3; ++jx) {
+            if (jx < 0 || jx >= L.n) continue;
+            const std::int32_t fb = fine_blocks[((jx >> 1) - c[0] + 1) + 3 * ((jy >> 1) - c[1] + 1) + 9 * ((jz >> 1) - c[2] + 1)];
+            if (fb < 0) continue;
+            const Eigen::Vector3d& vj = v[8 * std::size_t(fb) + std::size_t((jx & 1) | (jy & 1) << 1 | (jz & 1) << 2)];
+            if (vj.isZero()) continue;
+            const std::size_t tx = std::size_t(c[0] - ((jx >> 1) - 2 + (jx & 1)));
+            const double mx = L.Mc[std::size_t(jx)][tx], my = L.Mc[std::size_t(jy)][ty], mz = L.Mc[std::size_t(jz)][tz];
+            sum += vj.x() * L.Gc[std::size_t(jx)][tx] * my * mz + vj.y() * mx * L.Gc[std::size_t(jy)][ty] * mz + vj.z() * mx * my * L.Gc[std::size_t(jz)][tz];
+          }
+        }
+      }
+      C.b[k] = sum;
+    });
+  }
   // restriction: b(coarse k) = sum over fine j of P(j, k) b(fine j)
-  for (int l = depth; l >= 2; --l) {
+  for (int l = depth - 1; l >= 2; --l) {
     const Level& Fl = levels[std::size_t(l)];
     Level& C = levels[std::size_t(l - 1)];
     tbb::parallel_for(std::size_t(0), C.nodes(), [&](std::size_t k) {

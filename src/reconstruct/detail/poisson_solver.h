@@ -8,7 +8,8 @@
 //
 // The octree: level l has the nodes (B-spline functions, one per cell, centred on it) that are
 // the 8 children of its "refined" cells at level l - 1. Levels 1..full_depth are complete; below,
-// a cell is refined when it lies within 2 cells of a cell that holds a sample. This is the band
+// a cell is refined when it lies within 2 cells (1 above the finest level) of a cell that holds
+// a sample. This is the band
 // the B-spline supports of the samples reach, plus what the 5^3 Laplacian stencil and the
 // exact prolongation between levels need (see poisson_solver.cpp), and nothing else: no dense
 // grid below full_depth.
