@@ -27,7 +27,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include <tbb/enumerable_thread_specific.h>
@@ -54,50 +56,6 @@ std::array<std::uint32_t, 3> unpack(Key k) {
           static_cast<std::uint32_t>((k >> (2 * kBits)) & kMask)};
 }
 Key edge_key(Key corner, int axis) { return (corner << 2) | static_cast<Key>(axis); }
-
-/// Open-addressing hash map from lattice keys to values; inserts are serial, lookups concurrent.
-class ValueMap {
- public:
-  const double* find(Key k) const {
-    if (keys_.empty()) return nullptr;
-    for (std::size_t i = slot(k);; i = (i + 1) & (keys_.size() - 1)) {
-      if (keys_[i] == k) return &values_[i];
-      if (keys_[i] == kEmpty) return nullptr;
-    }
-  }
-  void insert(Key k, double v) {
-    if (2 * (size_ + 1) > keys_.size()) grow();
-    std::size_t i = slot(k);
-    while (keys_[i] != kEmpty && keys_[i] != k) i = (i + 1) & (keys_.size() - 1);
-    if (keys_[i] == kEmpty) ++size_;
-    keys_[i] = k;
-    values_[i] = v;
-  }
-  void reserve_more(std::size_t n) {
-    while (2 * (size_ + n) > keys_.size()) grow();
-  }
-
- private:
-  std::size_t slot(Key k) const {
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    return static_cast<std::size_t>(k) & (keys_.size() - 1);
-  }
-  void grow() {
-    std::vector<Key> old_keys = std::move(keys_);
-    std::vector<double> old_values = std::move(values_);
-    const std::size_t capacity = std::max<std::size_t>(64, 2 * old_keys.size());
-    keys_.assign(capacity, kEmpty);
-    values_.assign(capacity, 0.0);
-    size_ = 0;
-    for (std::size_t i = 0; i < old_keys.size(); ++i)
-      if (old_keys[i] != kEmpty) insert(old_keys[i], old_values[i]);
-  }
-  std::vector<Key> keys_;
-  std::vector<double> values_;
-  std::size_t size_ = 0;
-};
 
 void sort_unique(std::vector<Key>& keys) {
   tbb::parallel_sort(keys.begin(), keys.end());
@@ -204,6 +162,32 @@ int cell_loops(const std::array<double, 8>& w, std::array<int, 12>& loop_edges, 
   return loops;
 }
 
+constexpr int kB = 8;           // finest cells per brick side
+constexpr int kC = kB + 1;      // corners per brick side
+constexpr std::uint8_t kQueued = 1, kActive = 2;
+
+/// 8^3 finest cells and their corners' values (minus the iso-value, inside positive; NaN until
+/// evaluated), with the cells' state and the crossed edges the brick owns.
+struct Brick {
+  Brick() { w.fill(std::numeric_limits<float>::quiet_NaN()); }
+  Key key = 0;  // brick coordinates, packed
+  std::array<float, kC * kC * kC> w;
+  std::array<std::uint8_t, kB * kB * kB> state{};
+  std::vector<std::uint16_t> pending;
+  std::vector<Key> outbox;           // cells of other bricks reached in the last round
+  std::vector<std::uint16_t> edges;  // owned crossed edges: 3 x local corner + axis, sorted
+  std::uint32_t first_vertex = 0;
+};
+
+int corner_local(int cell, int k) {
+  return (cell % kB + (k & 1)) + kC * ((cell / kB) % kB + ((k >> 1) & 1)) + kC * kC * (cell / (kB * kB) + ((k >> 2) & 1));
+}
+int brick_mask(const Brick& b, int cell) {
+  int mask = 0;
+  for (int k = 0; k < 8; ++k) mask |= (b.w[corner_local(cell, k)] > 0.0f) << k;
+  return mask;
+}
+
 struct Sign {
   double iso;
   bool inside_positive;
@@ -239,7 +223,6 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
   };
 
   // Values at finest-lattice corners, evaluated in batches.
-  ValueMap values;
   auto evaluate = [&](const std::vector<Key>& corners, std::vector<double>& out) {
     out.resize(corners.size());
     const std::size_t chunks = (corners.size() + kChunk - 1) / kChunk;
@@ -344,130 +327,189 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
   sort_unique(seeds);
   report(0.1);
 
-  // 3. Follow the surface: process the frontier, pull in the cells around every crossed edge.
-  auto corner_of = [](Key cell, int k) {
-    const auto c = unpack(cell);
-    return pack(c[0] + (k & 1), c[1] + ((k >> 1) & 1), c[2] + ((k >> 2) & 1));
+  // 3. Follow the surface brick by brick: a brick holds 8^3 finest cells and its 9^3 corner
+  //    values (evaluated on first use); each round processes every brick with pending cells in
+  //    parallel, following crossed edges inside the brick and posting cells of other bricks.
+  std::vector<std::unique_ptr<Brick>> bricks;
+  std::unordered_map<Key, std::uint32_t> brick_of;
+  auto brick_at = [&](Key brick_key) -> Brick& {
+    const auto [it, inserted] = brick_of.emplace(brick_key, static_cast<std::uint32_t>(bricks.size()));
+    if (inserted) {
+      bricks.push_back(std::make_unique<Brick>());
+      bricks.back()->key = brick_key;
+    }
+    return *bricks[it->second];
   };
-  ValueMap visited;  // cells already processed (value unused)
-  std::vector<Key> active;
-  std::vector<Key> frontier = std::move(seeds);
-  while (!frontier.empty()) {
-    visited.reserve_more(frontier.size());
-    for (Key k : frontier) visited.insert(k, 0.0);
-    tbb::enumerable_thread_specific<std::vector<Key>> missing;
-    tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t i) {
-      for (int k = 0; k < 8; ++k) {
-        const Key c = corner_of(frontier[i], k);
-        if (!values.find(c)) missing.local().push_back(c);
+  auto enqueue = [&](Key cell) {
+    const auto c = unpack(cell);
+    Brick& b = brick_at(pack(c[0] / kB, c[1] / kB, c[2] / kB));
+    const int local = int(c[0] % kB) + kB * int(c[1] % kB) + kB * kB * int(c[2] % kB);
+    if (b.state[local] & kQueued) return;
+    b.state[local] |= kQueued;
+    b.pending.push_back(static_cast<std::uint16_t>(local));
+  };
+  for (Key cell : seeds) enqueue(cell);
+  seeds = {};
+  auto process = [&](Brick& b) {
+    const auto origin = unpack(b.key);
+    const std::array<std::uint32_t, 3> base = {origin[0] * kB, origin[1] * kB, origin[2] * kB};
+    std::vector<std::uint16_t> wave = std::move(b.pending), next_wave, missing;
+    std::vector<std::uint32_t> triples;
+    std::vector<double> values;
+    b.pending.clear();
+    while (!wave.empty()) {
+      missing.clear();
+      for (std::uint16_t cell : wave)
+        for (int k = 0; k < 8; ++k) {
+          const int corner = corner_local(cell, k);
+          if (std::isnan(b.w[corner])) {
+            b.w[corner] = 0.0f;  // claimed; written below
+            missing.push_back(static_cast<std::uint16_t>(corner));
+          }
+        }
+      triples.resize(3 * missing.size());
+      for (std::size_t i = 0; i < missing.size(); ++i) {
+        const int m = missing[i];
+        triples[3 * i] = base[0] + m % kC, triples[3 * i + 1] = base[1] + (m / kC) % kC, triples[3 * i + 2] = base[2] + m / (kC * kC);
       }
-    });
-    const std::vector<Key> corners = gather(missing);
-    std::vector<double> corner_values;
-    evaluate(corners, corner_values);
-    values.reserve_more(corners.size());
-    for (std::size_t i = 0; i < corners.size(); ++i) values.insert(corners[i], corner_values[i]);
-
-    tbb::enumerable_thread_specific<std::vector<Key>> crossed, next;
-    tbb::parallel_for(std::size_t(0), frontier.size(), [&](std::size_t i) {
-      const Key cell = frontier[i];
-      int mask = 0;
-      for (int k = 0; k < 8; ++k) mask |= (sign(*values.find(corner_of(cell, k))) > 0.0) << k;
-      if (mask == 0 || mask == 255) return;
-      crossed.local().push_back(cell);
-      std::vector<Key>& out = next.local();
-      const std::size_t before = out.size();
-      for (int e = 0; e < 12; ++e) {
-        const int lo = t.edge_corners[e][0], hi = t.edge_corners[e][1];
-        if (((mask >> lo) & 1) != ((mask >> hi) & 1)) cells_around_edge(corner_of(cell, lo), e / 4, out);
+      values.resize(missing.size());
+      if (!missing.empty()) f.corner_values(depth, triples.data(), missing.size(), values.data());
+      for (std::size_t i = 0; i < missing.size(); ++i) b.w[missing[i]] = static_cast<float>(sign(values[i]));
+      next_wave.clear();
+      for (std::uint16_t cell : wave) {
+        const int mask = brick_mask(b, cell);
+        if (mask == 0 || mask == 255) continue;
+        b.state[cell] |= kActive;
+        const std::array<std::uint32_t, 3> c = {base[0] + cell % kB, base[1] + (cell / kB) % kB, base[2] + cell / (kB * kB)};
+        for (int e = 0; e < 12; ++e) {
+          const int lo = t.edge_corners[e][0], hi = t.edge_corners[e][1];
+          if (((mask >> lo) & 1) == ((mask >> hi) & 1)) continue;
+          const int axis = e / 4, u = (axis + 1) % 3, v = (axis + 2) % 3;
+          const std::array<std::uint32_t, 3> corner = {c[0] + (lo & 1), c[1] + ((lo >> 1) & 1), c[2] + ((lo >> 2) & 1)};
+          for (int k = 0; k < 4; ++k) {
+            std::array<std::uint32_t, 3> q = corner;
+            if ((k & 1) && q[u] == 0) continue;
+            if ((k >> 1) && q[v] == 0) continue;
+            q[u] -= (k & 1), q[v] -= (k >> 1);
+            if (q[u] >= cells_per_side || q[v] >= cells_per_side) continue;
+            bool inside_brick = true;
+            for (int i = 0; i < 3; ++i) inside_brick = inside_brick && q[i] >= base[i] && q[i] < base[i] + kB;
+            if (!inside_brick) {
+              b.outbox.push_back(pack(q[0], q[1], q[2]));
+              continue;
+            }
+            const int local = int(q[0] - base[0]) + kB * int(q[1] - base[1]) + kB * kB * int(q[2] - base[2]);
+            if (b.state[local] & kQueued) continue;
+            b.state[local] |= kQueued;
+            next_wave.push_back(static_cast<std::uint16_t>(local));
+          }
+        }
       }
-      std::size_t kept = before;
-      for (std::size_t j = before; j < out.size(); ++j)
-        if (!visited.find(out[j])) out[kept++] = out[j];
-      out.resize(kept);
-    });
-    for (std::vector<Key>& b : crossed) active.insert(active.end(), b.begin(), b.end());
-    frontier = gather(next);
+      std::swap(wave, next_wave);
+    }
+  };
+  for (std::size_t round = 0;; ++round) {
+    std::vector<Brick*> busy;
+    for (const auto& b : bricks)
+      if (!b->pending.empty()) busy.push_back(b.get());
+    if (busy.empty()) break;
+    tbb::parallel_for(std::size_t(0), busy.size(), [&](std::size_t i) { process(*busy[i]); });
+    for (Brick* b : busy) {
+      std::vector<Key> outbox = std::move(b->outbox);
+      b->outbox.clear();
+      for (Key cell : outbox) enqueue(cell);
+    }
+    if (round % 16 == 15) report(0.1 + 0.4 * (1.0 - 1.0 / (1.0 + round / 64.0)));
   }
-  visited = ValueMap();
-  sort_unique(active);
+  std::sort(bricks.begin(), bricks.end(), [](const auto& a, const auto& b) { return a->key < b->key; });
+  for (std::uint32_t i = 0; i < bricks.size(); ++i) brick_of[bricks[i]->key] = i;
   report(0.5);
 
-  // 4. One vertex per crossed finest edge, numbered in key order.
-  auto cell_signs = [&](Key cell, std::array<double, 8>& w) {
-    int mask = 0;
-    for (int k = 0; k < 8; ++k) {
-      w[k] = sign(*values.find(corner_of(cell, k)));
-      mask |= (w[k] > 0.0) << k;
-    }
-    return mask;
+  // 4. One vertex per crossed finest edge, owned by the brick of the cell at the edge's lower
+  //    corner (clamped into the lattice); numbered brick by brick in key order.
+  auto owner_and_edge = [&](const Brick& b, int cell, int e, std::uint16_t& local_edge) -> const Brick* {
+    const auto origin = unpack(b.key);
+    const int lo = t.edge_corners[e][0];
+    std::array<std::uint32_t, 3> corner = {origin[0] * kB + cell % kB + (lo & 1), origin[1] * kB + (cell / kB) % kB + ((lo >> 1) & 1),
+                                           origin[2] * kB + cell / (kB * kB) + ((lo >> 2) & 1)};
+    std::array<std::uint32_t, 3> owner;
+    for (int i = 0; i < 3; ++i) owner[i] = std::min(corner[i], cells_per_side - 1) / kB;
+    const Brick* o = &b;
+    if (owner != origin) o = bricks[brick_of.at(pack(owner[0], owner[1], owner[2]))].get();
+    const int x = int(corner[0] - owner[0] * kB), y = int(corner[1] - owner[1] * kB), z = int(corner[2] - owner[2] * kB);
+    local_edge = static_cast<std::uint16_t>(3 * (x + kC * y + kC * kC * z) + e / 4);
+    return o;
   };
-  std::vector<Key> edges;
-  {
-    tbb::enumerable_thread_specific<std::vector<Key>> found;
-    tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t i) {
-      std::array<double, 8> w;
-      const int mask = cell_signs(active[i], w);
+  tbb::parallel_for(std::size_t(0), bricks.size(), [&](std::size_t i) {
+    Brick& b = *bricks[i];
+    for (int cell = 0; cell < kB * kB * kB; ++cell) {
+      if (!(b.state[cell] & kActive)) continue;
+      const int mask = brick_mask(b, cell);
       for (int e = 0; e < 12; ++e) {
         const int lo = t.edge_corners[e][0], hi = t.edge_corners[e][1];
-        if (((mask >> lo) & 1) != ((mask >> hi) & 1)) found.local().push_back(edge_key(corner_of(active[i], lo), e / 4));
+        if (((mask >> lo) & 1) == ((mask >> hi) & 1)) continue;
+        std::uint16_t local_edge;
+        if (owner_and_edge(b, cell, e, local_edge) == &b) b.edges.push_back(local_edge);
       }
-    });
-    edges = gather(found);
-  }
+    }
+    std::sort(b.edges.begin(), b.edges.end());
+    b.edges.erase(std::unique(b.edges.begin(), b.edges.end()), b.edges.end());
+    b.edges.shrink_to_fit();
+  });
+  std::size_t edge_count = 0;
+  for (auto& b : bricks) b->first_vertex = static_cast<std::uint32_t>(edge_count), edge_count += b->edges.size();
+  if (edge_count >= kCentre) throw ComputeError("extract_iso_surface: more than 2^31 vertices");
   IsoSurface out;
-  out.vertices.resize(edges.size());
-  out.normals.resize(edges.size());
+  out.vertices.resize(edge_count);
+  out.normals.resize(edge_count);
   auto unit_normal = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& fallback) {
     const Eigen::Vector3d g = f.gradient(p);
     const Eigen::Vector3d n = params.inside_positive ? Eigen::Vector3d(-g) : g;
     const double len = n.norm();
     return len > 0.0 && std::isfinite(len) ? Eigen::Vector3d(n / len) : fallback;
   };
-  tbb::parallel_for(std::size_t(0), edges.size(), [&](std::size_t i) {
-    const Key c0 = edges[i] >> 2;
-    const int axis = static_cast<int>(edges[i] & 3);
-    auto p1c = unpack(c0);
-    ++p1c[axis];
-    const Key c1 = pack(p1c[0], p1c[1], p1c[2]);
-    Eigen::Vector3d a = position(c0), b = position(c1);
-    double wa = sign(*values.find(c0)), wb = sign(*values.find(c1));
-    Eigen::Vector3d outward = Eigen::Vector3d::Zero();
-    outward[axis] = wa > 0.0 ? 1.0 : -1.0;
-    Eigen::Vector3d p = a + (wa / (wa - wb)) * (b - a);
-    int kept = 0;  // Illinois false position: halve the value of an end kept twice in a row
-    for (int step = 0; step < params.root_refinement_steps; ++step) {
-      const double wp = sign(f.value(p));
-      if (!std::isfinite(wp) || wp == 0.0) break;
-      if ((wp > 0.0) == (wa > 0.0)) {
-        a = p, wa = wp;
-        if (kept == 2) wb *= 0.5;
-        kept = 2;
-      } else {
-        b = p, wb = wp;
-        if (kept == 1) wa *= 0.5;
-        kept = 1;
+  tbb::parallel_for(std::size_t(0), bricks.size(), [&](std::size_t i) {
+    const Brick& b = *bricks[i];
+    const auto origin = unpack(b.key);
+    for (std::size_t j = 0; j < b.edges.size(); ++j) {
+      const int c0 = b.edges[j] / 3, axis = b.edges[j] % 3, c1 = c0 + (axis == 0 ? 1 : axis == 1 ? kC : kC * kC);
+      const Key k0 = pack(origin[0] * kB + c0 % kC, origin[1] * kB + (c0 / kC) % kC, origin[2] * kB + c0 / (kC * kC));
+      Eigen::Vector3d a = position(k0), bb = a;
+      bb[axis] += h;
+      double wa = b.w[c0], wb = b.w[c1];
+      Eigen::Vector3d outward = Eigen::Vector3d::Zero();
+      outward[axis] = wa > 0.0 ? 1.0 : -1.0;
+      Eigen::Vector3d p = a + (wa / (wa - wb)) * (bb - a);
+      int kept = 0;  // Illinois false position: halve the value of an end kept twice in a row
+      for (int step = 0; step < params.root_refinement_steps; ++step) {
+        const double wp = sign(f.value(p));
+        if (!std::isfinite(wp) || wp == 0.0) break;
+        if ((wp > 0.0) == (wa > 0.0)) {
+          a = p, wa = wp;
+          if (kept == 2) wb *= 0.5;
+          kept = 2;
+        } else {
+          bb = p, wb = wp;
+          if (kept == 1) wa *= 0.5;
+          kept = 1;
+        }
+        p = a + (wa / (wa - wb)) * (bb - a);
       }
-      p = a + (wa / (wa - wb)) * (b - a);
+      out.vertices[b.first_vertex + j] = p;
+      out.normals[b.first_vertex + j] = unit_normal(p, outward);
     }
-    out.vertices[i] = p;
-    out.normals[i] = unit_normal(p, outward);
   });
   report(0.75);
 
-  // 5. Triangles per cell, in fixed chunks of cells.
-  auto vertex_of = [&](Key cell, int e) {
-    const Key k = edge_key(corner_of(cell, t.edge_corners[e][0]), e / 4);
-    return static_cast<std::uint32_t>(std::lower_bound(edges.begin(), edges.end(), k) - edges.begin());
-  };
-  const std::size_t chunks = (active.size() + kChunk - 1) / kChunk;
-  std::vector<ChunkOutput> outputs(chunks);
-  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t chunk) {
-    ChunkOutput& o = outputs[chunk];
-    const std::size_t end = std::min(active.size(), (chunk + 1) * kChunk);
-    for (std::size_t i = chunk * kChunk; i < end; ++i) {
+  // 5. Triangles cell by cell, each brick into its own buffer.
+  std::vector<ChunkOutput> outputs(bricks.size());
+  tbb::parallel_for(std::size_t(0), bricks.size(), [&](std::size_t bi) {
+    const Brick& b = *bricks[bi];
+    ChunkOutput& o = outputs[bi];
+    for (int cell = 0; cell < kB * kB * kB; ++cell) {
+      if (!(b.state[cell] & kActive)) continue;
       std::array<double, 8> w;
-      cell_signs(active[i], w);
+      for (int k = 0; k < 8; ++k) w[k] = b.w[corner_local(cell, k)];
       std::array<int, 12> loop_edges;
       std::array<int, 5> loop_start;
       const int loops = cell_loops(w, loop_edges, loop_start);
@@ -475,7 +517,12 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
         const int n = loop_start[l + 1] - loop_start[l];
         const int* L = loop_edges.data() + loop_start[l];
         std::array<std::uint32_t, 12> v;
-        for (int j = 0; j < n; ++j) v[j] = vertex_of(active[i], L[j]);
+        for (int j = 0; j < n; ++j) {
+          std::uint16_t local_edge;
+          const Brick* owner = owner_and_edge(b, cell, L[j], local_edge);
+          v[j] = owner->first_vertex +
+                 static_cast<std::uint32_t>(std::lower_bound(owner->edges.begin(), owner->edges.end(), local_edge) - owner->edges.begin());
+        }
         // Minimum total diagonal length over triangulations using only diagonals that join
         // crossings on no common cell face.
         constexpr double kInf = std::numeric_limits<double>::infinity();

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -301,6 +302,23 @@ TEST(IsoSurface, RandomCornerValuesGiveClosedManifoldSurfaces) {
       // Every vertex is a crossing on a lattice edge (or a loop centre inside a cell).
       for (std::size_t i = 0; i < s.vertices.size(); ++i) EXPECT_NEAR(iso.value(s.vertices[i]), 0.0, 0.6);
     }
+}
+
+TEST(IsoSurface, AmbiguousFaceFollowsTheAsymptoticDecider) {
+  // On a 4^3 lattice at -1, two inside corners (a) diagonal on the face z = 1 of cell (1, 1, 0)
+  // and the face's other two corners at -b: the bilinear saddle is inside when a^2 > b^2, so one
+  // surface joins them; otherwise they are two separate spheres.
+  for (const auto& [a, b, components] : {std::tuple{1.0, 0.5, 1u}, std::tuple{0.5, 1.0, 2u}}) {
+    std::vector<double> v(125, -1.0);
+    auto at = [&](int x, int y, int z) -> double& { return v[std::size_t((z * 5 + y) * 5 + x)]; };
+    at(1, 1, 1) = a, at(2, 2, 1) = a, at(2, 1, 1) = -b, at(1, 2, 1) = -b;
+    IsoLattice lattice;
+    lattice.size = 4.0;
+    lattice.depth = 2;
+    const IsoSurface s = extract_iso_surface(LatticeIso(v, 4), lattice, {});
+    const MeshTopology topo = expect_closed_manifold(s, false);
+    EXPECT_EQ(topo.components, components) << "a " << a << " b " << b;
+  }
 }
 
 TEST(IsoSurface, RandomSmoothFieldIsClosedAndManifold) {
