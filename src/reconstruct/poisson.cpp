@@ -14,6 +14,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
+#include "reconstruct/detail/density_trim.h"
 #include "reconstruct/detail/iso_surface.h"
 #include "reconstruct/detail/poisson_solver.h"
 
@@ -150,9 +151,16 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
     for (std::size_t v = 0; v < nv; ++v) out.values[v] = field.values[nearest[v]];
   }
 
+  detail::TrimResult trim;
+  if (params.trim_depth > 0.0) {
+    trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
+    result.trimmed_triangles = trim.removed_triangles;
+  }
+
   result.topology = analyze_topology(mesh);
   result.stats.counts = {{"skipped_normals", result.skipped_normals}, {"depth", std::size_t(depth)},
-                         {"finest_nodes", result.nodes_per_level.back()}, {"trimmed_vertices", result.trimmed_vertices}};
+                         {"finest_nodes", result.nodes_per_level.back()}, {"trimmed_triangles", result.trimmed_triangles},
+                         {"trim_cut_triangles", trim.cut_triangles}, {"trim_removed_islands", trim.removed_islands}};
   result.stats.figures = {{"iso_value", result.iso_value}, {"peak_megabytes", double(result.peak_bytes) / 1e6}};
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress && !progress(1.0)) throw CancelledError("reconstruct_poisson: cancelled");

@@ -104,6 +104,42 @@ TEST(Poisson, TorusIsWatertightOfGenus1) {
   }
 }
 
+// An open surface: Poisson closes it far from the samples (here against the bounding cube),
+// where the density is low; trimming at a level below the samples' density leaves the dome
+// with exactly one boundary loop near its rim. The closed sphere loses nothing at that level.
+TEST(Poisson, TrimmedHemisphereHasExactlyOneBoundaryLoop) {
+  const PointCloud sphere = test::sample_sphere(20000, 1.0);
+  std::vector<std::size_t> upper;
+  for (std::size_t i = 0; i < sphere.size(); ++i)
+    if (sphere.positions[i].z() >= 0.0) upper.push_back(i);
+  const PointCloud dome = sphere.select(upper);
+  PoissonParams params;
+  params.depth = 7;
+  const PoissonResult untrimmed = reconstruct_poisson(dome, params);
+  double lowest = 0.0;
+  for (const Vector3d& v : untrimmed.mesh.vertices) lowest = std::min(lowest, v.z());
+  EXPECT_LT(lowest, -0.2);  // the closing part hangs below the rim
+  params.trim_depth = 5.0;  // the samples' density is about 5.7 (depth units)
+  const PoissonResult r = reconstruct_poisson(dome, params);
+  EXPECT_GT(r.trimmed_triangles, 0u);
+  EXPECT_EQ(r.topology.boundary_loops.size(), 1u);
+  EXPECT_EQ(r.topology.components, 1u);
+  EXPECT_EQ(r.topology.non_manifold_edges, 0u);
+  EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
+  for (const Vector3d& v : r.mesh.vertices) {
+    EXPECT_GT(v.z(), -0.2);
+    if (v.z() > 0.1) EXPECT_NEAR(v.norm(), 1.0, 0.01);
+  }
+  for (const int v : r.topology.boundary_loops.front().vertices) EXPECT_NEAR(r.mesh.vertices[std::size_t(v)].z(), 0.0, 0.2);
+  // the closed sphere is dense everywhere: nothing goes
+  PoissonParams closed;
+  closed.depth = 7;
+  closed.trim_depth = 5.0;
+  const PoissonResult whole = reconstruct_poisson(sphere, closed);
+  EXPECT_EQ(whole.trimmed_triangles, 0u);
+  EXPECT_TRUE(whole.topology.watertight());
+}
+
 TEST(Poisson, DirichletBoundaryAlsoGivesTheSphere) {
   const PointCloud sphere = test::sample_sphere(10000, 1.0);
   PoissonParams params;

@@ -57,7 +57,7 @@ struct PoissonResult : ReconstructionResult {
   std::vector<double> residual_per_level;      // final / initial residual per level (smaller is better)
   double iso_value = 0.0;                      // the weighted mean of the function at the samples
   std::size_t skipped_normals = 0;             // samples left out: zero or non-finite normal
-  std::size_t trimmed_vertices = 0;            // vertices removed by trimming (density, islands)
+  std::size_t trimmed_triangles = 0;           // triangles removed by trimming (below the density level)
   std::size_t peak_bytes = 0;                  // octree, coefficients and per-sample arrays at their largest
 };
 
