@@ -66,9 +66,11 @@ demo() {
   log "demo: aerial LiDAR tile data/b9_training.ply (22,300 points at x ~ 596,648 m)"
   "$cli" info data/b9_training.ply --report out/b9_info.json
   "$cli" run examples/b9_mesh.json --report out/b9_run.json
+  "$cli" run examples/b9_poisson.json --report out/b9_poisson_run.json  # screened Poisson, trimmed at density depth 6
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
   "$cli" run examples/kitten_mesh.json --report out/kitten_run.json
+  "$cli" reconstruct data/kitten.xyz out/kitten_poisson.ply --method poisson --report out/kitten_poisson.json
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
 }

@@ -215,6 +215,7 @@ void run_reconstruct(StageRun& run) {
   }
   record_stats(result.stats, rec);
   clean_and_label_faces(result, a, rec);
+  if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
   // Poisson's surface is closed but where trimming opened it: its loops are borders, and its
   // vertices are not the cloud's points, which the rim test reads
