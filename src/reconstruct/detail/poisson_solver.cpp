@@ -164,7 +164,7 @@ struct Level {
   // 1-D tables: [i][o + 2] for the function i + o, o in -2..2: mass, stiffness, int B_{i+o} B_i'.
   std::vector<std::array<double, 5>> M, K, D;
   // Cross-level: [i][t] against the coarse function k = (i >> 1) - 2 + (i & 1) + t, t in 0..3.
-  std::vector<std::array<double, 4>> Mc, Kc, Gc;  // Gc: int B_i (B^c_k)'
+  std::vector<std::array<double, 4>> Mc, Kc, Gc, Hc;  // Gc: int B_i (B^c_k)', Hc: int B_i' B^c_k
   // Refinement: fine function i gets w0 of coarse k0 and w1 of coarse k1 (k1 < 0: none).
   std::vector<std::array<int, 2>> pk;
   std::vector<std::array<double, 2>> pw;
@@ -284,10 +284,19 @@ struct PoissonFunction::Impl {
   std::vector<double> density;     // kernel-level unit-weight splat, per node of kernel level
   std::vector<std::uint32_t> order;  // sorted position -> given index
 
-  void build_levels(const std::vector<Key>& finest_keys);
+  std::vector<Key> keys;                // Morton codes of the samples' finest cells, sorted
+  std::vector<std::uint8_t> level_of;   // the level each sample's normal is splatted at
+  void build_level(int l);
+  std::vector<Eigen::Vector3d> splat(int l) const;
   void build_tables(Level& L) const;
   void estimate_density();
+  // The level at which a node holds samples_per_node samples, from the splatted unit weights
+  // w at the kernel level: a surface through a node holds about w / 0.55 samples there (the
+  // mean over offsets of the sum of squared B-spline weights across it is int beta^2 = 11/20),
+  // and 4 times fewer per level finer.
+  double depth_of(double w) const { return params.kernel_depth + 0.5 * std::log2(w / (0.55 * params.samples_per_node)); }
   void splat_and_restrict();
+  std::vector<Eigen::Vector3d> VF;  // the normals splatted at the levels solved so far, as coefficients of the last
   PoissonLevelReport solve_level(int l);
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
@@ -315,6 +324,7 @@ void PoissonFunction::Impl::build_tables(Level& L) const {
   L.Mc.assign(std::size_t(n), {});
   L.Kc.assign(std::size_t(n), {});
   L.Gc.assign(std::size_t(n), {});
+  L.Hc.assign(std::size_t(n), {});
   for (int i = 0; i < n; ++i) {
     for (int t = 0; t < 4; ++t) {
       const int k = (i >> 1) - 2 + (i & 1) + t;
@@ -322,6 +332,7 @@ void PoissonFunction::Impl::build_tables(Level& L) const {
       L.Mc[std::size_t(i)][std::size_t(t)] = integrate(n, i, false, nc, k, false, s);
       L.Kc[std::size_t(i)][std::size_t(t)] = integrate(n, i, true, nc, k, true, s);
       L.Gc[std::size_t(i)][std::size_t(t)] = integrate(n, i, false, nc, k, true, s);
+      L.Hc[std::size_t(i)][std::size_t(t)] = integrate(n, i, true, nc, k, false, s);
     }
     const int m = i >> 1;
     int k0 = m, k1 = (i & 1) ? m + 1 : m - 1;
@@ -329,101 +340,6 @@ void PoissonFunction::Impl::build_tables(Level& L) const {
     if (k1 < 0 || k1 >= nc) w0 += s * 0.25, k1 = -1, w1 = 0.0;
     L.pk[std::size_t(i)] = {k0, k1};
     L.pw[std::size_t(i)] = {w0, w1};
-  }
-}
-
-void PoissonFunction::Impl::build_levels(const std::vector<Key>& finest_keys) {
-  const int depth = params.depth;
-  levels.assign(std::size_t(depth + 1), Level{});
-  // sample cells per level, Morton-sorted and unique (finest_keys is sorted)
-  std::vector<std::vector<std::array<int, 3>>> cells(std::size_t(depth + 1));
-  {
-    std::vector<Key> keys = finest_keys;
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    for (int l = depth; l >= 0; --l) {
-      auto& out = cells[std::size_t(l)];
-      out.reserve(keys.size());
-      for (const Key k : keys) {
-        int c[3] = {0, 0, 0};
-        for (int b = 0; b < l; ++b)
-          for (int a = 0; a < 3; ++a) c[a] |= int((k >> (3 * b + a)) & 1) << b;
-        out.push_back({c[0], c[1], c[2]});
-      }
-      for (Key& k : keys) k >>= 3;
-      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    }
-  }
-  for (int l = 1; l <= depth; ++l) {
-    Level& L = levels[std::size_t(l)];
-    L.l = l;
-    L.n = 1 << l;
-    const int np = L.n / 2;  // cells of the parent level
-    std::vector<Key> blocks;
-    if (l - 1 < params.full_depth) {
-      blocks.reserve(std::size_t(np) * np * np);
-      for (int z = 0; z < np; ++z)
-        for (int y = 0; y < np; ++y)
-          for (int x = 0; x < np; ++x) blocks.push_back(morton(x, y, z));
-    } else {
-      // the sample cells of level l-1 dilated by 2 (the finest level: by 1, see
-      // splat_and_restrict), separably (x, then y, then z)
-      const int radius = l == depth ? 1 : 2;
-      std::vector<std::array<int, 3>> set = cells[std::size_t(l - 1)];
-      for (int a = 0; a < 3; ++a) {
-        std::vector<std::array<int, 3>> grown;
-        grown.reserve(set.size() * 3);
-        for (const auto& c : set)
-          for (int o = -radius; o <= radius; ++o) {
-            auto d = c;
-            d[std::size_t(a)] += o;
-            if (d[std::size_t(a)] >= 0 && d[std::size_t(a)] < np) grown.push_back(d);
-          }
-        tbb::parallel_sort(grown.begin(), grown.end());
-        grown.erase(std::unique(grown.begin(), grown.end()), grown.end());
-        set.swap(grown);
-      }
-      blocks.reserve(set.size());
-      for (const auto& c : set) blocks.push_back(morton(c[0], c[1], c[2]));
-    }
-    tbb::parallel_sort(blocks.begin(), blocks.end());
-    L.block_cells.resize(blocks.size());
-    for (std::size_t b = 0; b < blocks.size(); ++b) {
-      int c[3] = {0, 0, 0};
-      for (int bit = 0; bit < l - 1; ++bit)
-        for (int a = 0; a < 3; ++a) c[a] |= int((blocks[b] >> (3 * bit + a)) & 1) << bit;
-      L.block_cells[b] = {c[0], c[1], c[2]};
-    }
-    L.block_index.build(blocks);
-    L.nb.resize(blocks.size());
-    tbb::parallel_for(std::size_t(0), blocks.size(), [&](std::size_t b) {
-      const auto& c = L.block_cells[b];
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx)
-            L.nb[b][std::size_t((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1))] = L.block(c[0] + dx, c[1] + dy, c[2] + dz);
-    });
-    const std::size_t nodes = L.nodes();
-    L.x.assign(nodes, 0.0);
-    L.F.assign(nodes, 0.0);
-    L.b.assign(nodes, 0.0);
-    L.first.assign(nodes, 0);
-    L.last.assign(nodes, 0);
-    // each node's samples: consecutive in Morton order
-    const int shift = 3 * (depth - l);
-    for (std::size_t p = 0; p < finest_keys.size();) {
-      const Key cell = finest_keys[p] >> shift;
-      std::size_t e = p + 1;
-      while (e < finest_keys.size() && (finest_keys[e] >> shift) == cell) ++e;
-      const auto& c = cells[std::size_t(l)][std::size_t(std::lower_bound(cells[std::size_t(l)].begin(), cells[std::size_t(l)].end(), cell,
-                                                                          [](const std::array<int, 3>& a, Key k) { return morton(a[0], a[1], a[2]) < k; }) -
-                                                         cells[std::size_t(l)].begin())];
-      const std::int32_t i = L.node(c[0], c[1], c[2]);
-      if (i < 0) throw ComputeError("reconstruct_poisson: internal error: a sample's cell is not in the octree");
-      L.first[std::size_t(i)] = std::uint32_t(p);
-      L.last[std::size_t(i)] = std::uint32_t(e);
-      p = e;
-    }
-    build_tables(L);
   }
 }
 
@@ -461,7 +377,107 @@ double weighted_sum(const std::array<Weights1D, 3>& w, const std::array<std::int
   return sum;
 }
 
+std::array<int, 3> decode(Key k, int level) {
+  int c[3] = {0, 0, 0};
+  for (int bit = 0; bit < level; ++bit)
+    for (int a = 0; a < 3; ++a) c[a] |= int((k >> (3 * bit + a)) & 1) << bit;
+  return {c[0], c[1], c[2]};
+}
+
 }  // namespace
+
+void PoissonFunction::Impl::build_level(int l) {
+  const int depth = params.depth;
+  Level& L = levels[std::size_t(l)];
+  L.l = l;
+  L.n = 1 << l;
+  const int np = L.n / 2;  // cells of the parent level
+  std::vector<Key> blocks;
+  if (l - 1 < params.full_depth) {
+    blocks.reserve(std::size_t(np) * np * np);
+    for (int z = 0; z < np; ++z)
+      for (int y = 0; y < np; ++y)
+        for (int x = 0; x < np; ++x) blocks.push_back(morton(x, y, z));
+  } else {
+    // the level l-1 cells of the samples that reach level l, dilated by 2 (the finest level:
+    // by 1, see splat_and_restrict), separably (x, then y, then z)
+    const int radius = l == depth ? 1 : 2;
+    std::vector<std::array<int, 3>> set;
+    const int shift = 3 * (depth - l + 1);
+    Key last = kNoKey;
+    for (std::size_t p = 0; p < keys.size(); ++p)
+      if (level_of[p] >= l && (keys[p] >> shift) != last) {
+        last = keys[p] >> shift;
+        set.push_back(decode(last, l - 1));
+      }
+    for (int a = 0; a < 3; ++a) {
+      std::vector<std::array<int, 3>> grown;
+      grown.reserve(set.size() * 3);
+      for (const auto& c : set)
+        for (int o = -radius; o <= radius; ++o) {
+          auto d = c;
+          d[std::size_t(a)] += o;
+          if (d[std::size_t(a)] >= 0 && d[std::size_t(a)] < np) grown.push_back(d);
+        }
+      tbb::parallel_sort(grown.begin(), grown.end());
+      grown.erase(std::unique(grown.begin(), grown.end()), grown.end());
+      set.swap(grown);
+    }
+    blocks.reserve(set.size());
+    for (const auto& c : set) blocks.push_back(morton(c[0], c[1], c[2]));
+  }
+  tbb::parallel_sort(blocks.begin(), blocks.end());
+  L.block_cells.resize(blocks.size());
+  for (std::size_t b = 0; b < blocks.size(); ++b) L.block_cells[b] = decode(blocks[b], l - 1);
+  L.block_index.build(blocks);
+  L.nb.resize(blocks.size());
+  tbb::parallel_for(std::size_t(0), blocks.size(), [&](std::size_t b) {
+    const auto& c = L.block_cells[b];
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          L.nb[b][std::size_t((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1))] = L.block(c[0] + dx, c[1] + dy, c[2] + dz);
+  });
+  const std::size_t nodes = L.nodes();
+  L.x.assign(nodes, 0.0);
+  L.F.assign(nodes, 0.0);
+  L.b.assign(nodes, 0.0);
+  L.first.assign(nodes, 0);
+  L.last.assign(nodes, 0);
+  // the samples of each cell that one of them reaches: consecutive in Morton order
+  const int shift = 3 * (depth - l);
+  for (std::size_t p = 0; p < keys.size();) {
+    const Key cell = keys[p] >> shift;
+    std::size_t e = p + 1;
+    bool reached = level_of[p] >= l;
+    while (e < keys.size() && (keys[e] >> shift) == cell) reached = reached || level_of[e] >= l, ++e;
+    if (reached) {
+      const auto c = decode(cell, l);
+      const std::int32_t i = L.node(c[0], c[1], c[2]);
+      if (i < 0) throw ComputeError("reconstruct_poisson: internal error: a sample's cell is not in the octree");
+      L.first[std::size_t(i)] = std::uint32_t(p);
+      L.last[std::size_t(i)] = std::uint32_t(e);
+    }
+    p = e;
+  }
+  build_tables(L);
+}
+
+// The normals of the samples splatted at level l into its B-splines (area-weighted).
+std::vector<Eigen::Vector3d> PoissonFunction::Impl::splat(int l) const {
+  const Level& L = levels[std::size_t(l)];
+  std::vector<Eigen::Vector3d> v(L.nodes(), Eigen::Vector3d::Zero());
+  for (std::size_t p = 0; p < q.size(); ++p) {
+    if (level_of[p] != l) continue;
+    const std::array<Weights1D, 3> w = {weights_1d(q[p].x(), L.n, s), weights_1d(q[p].y(), L.n, s), weights_1d(q[p].z(), L.n, s)};
+    std::array<std::int32_t, 27> nodes;
+    nodes_around(L, w, nodes);
+    const Eigen::Vector3d n = area[p] * normals_[p];
+    for (int t = 0; t < 27; ++t)
+      v[std::size_t(nodes[std::size_t(t)])] += w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)] * n;
+  }
+  return v;
+}
 
 double PoissonFunction::Impl::gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const {
   const std::array<Weights1D, 3> w = {weights_1d(p.x(), L.n, s), weights_1d(p.y(), L.n, s), weights_1d(p.z(), L.n, s)};
@@ -500,28 +516,20 @@ void PoissonFunction::Impl::estimate_density() {
   }
   const double hk = 1.0 / L.n;
   area.resize(q.size());
+  level_of.resize(q.size());
   tbb::parallel_for(std::size_t(0), q.size(), [&](std::size_t p) {
     bool complete = true;
     const double w = std::max(gather(L, density, q[p], 0, complete), 1e-3);
     area[p] = hk * hk / w;
+    // PoissonRecon's adaptive depth: the normal goes to the level where a node holds about
+    // samples_per_node samples (4 times fewer per level finer on a surface), so sparse parts
+    // of the cloud are not refined beyond what their samples support
+    level_of[p] = std::uint8_t(std::clamp(int(std::lround(depth_of(w))), params.kernel_depth, params.depth));
   });
 }
 
-void PoissonFunction::Impl::splat_and_restrict() {
-  const int depth = params.depth;
-  Level& L = levels[std::size_t(depth)];
-  std::vector<Eigen::Vector3d> v(L.nodes(), Eigen::Vector3d::Zero());
-  for (std::size_t p = 0; p < q.size(); ++p) {
-    const Weights1D wx = weights_1d(q[p].x(), L.n, s), wy = weights_1d(q[p].y(), L.n, s), wz = weights_1d(q[p].z(), L.n, s);
-    const Eigen::Vector3d n = area[p] * normals_[p];
-    for (int tz = 0; tz < 3; ++tz)
-      for (int ty = 0; ty < 3; ++ty)
-        for (int tx = 0; tx < 3; ++tx) {
-          const std::int32_t i = L.node(wx.idx[std::size_t(tx)], wy.idx[std::size_t(ty)], wz.idx[std::size_t(tz)]);
-          v[std::size_t(i)] += wx.w[std::size_t(tx)] * wy.w[std::size_t(ty)] * wz.w[std::size_t(tz)] * n;
-        }
-  }
-  // b_i = int V . grad B_i = sum_j v_j . int B_j grad B_i: per axis a product of the 1-D tables
+// b_i = int V . grad B_i = sum_j v_j . int B_j grad B_i: per axis a product of the 1-D tables
+void add_divergence(Level& L, const std::vector<Eigen::Vector3d>& v) {
   std::vector<double> va(L.nodes());
   for (int a = 0; a < 3; ++a) {
     for (std::size_t i = 0; i < va.size(); ++i) va[i] = v[i][a];
@@ -533,6 +541,15 @@ void PoissonFunction::Impl::splat_and_restrict() {
       for (int k = 0; k < 8; ++k) L.b[8 * b + std::size_t(k)] += out[k];
     });
   }
+}
+
+// b at each level from the normals splatted at that level and finer ones (the coarser ones'
+// part is added level by level in solve_level, from their cumulative coefficients).
+void PoissonFunction::Impl::splat_and_restrict() {
+  const int depth = params.depth;
+  Level& L = levels[std::size_t(depth)];
+  const std::vector<Eigen::Vector3d> v = splat(depth);
+  add_divergence(L, v);
   // The level above the finest directly from V: the finest level's b reaches 3 cells beyond
   // the samples, one more than its nodes, so restricting it would lose a part.
   if (depth >= 2) {
@@ -562,6 +579,7 @@ void PoissonFunction::Impl::splat_and_restrict() {
       }
       C.b[k] = sum;
     });
+    add_divergence(C, splat(depth - 1));
   }
   // restriction: b(coarse k) = sum over fine j of P(j, k) b(fine j)
   for (int l = depth - 1; l >= 2; --l) {
@@ -589,6 +607,7 @@ void PoissonFunction::Impl::splat_and_restrict() {
       }
       C.b[k] = sum;
     });
+    if (l - 1 >= params.kernel_depth) add_divergence(C, splat(l - 1));
   }
 }
 
@@ -605,6 +624,10 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
   std::vector<std::int32_t> cells;
   for (std::size_t i = 0; i < nodes; ++i)
     if (L.first[i] < L.last[i]) cells.push_back(std::int32_t(i));
+  if (nodes == 0) {
+    VF.clear();
+    return report;
+  }
   const std::size_t ns = cells.size();
   std::vector<Eigen::Vector3d> pos(ns);
   std::vector<double> weight(ns), G(ns, 0.0);
@@ -615,7 +638,8 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
     const std::size_t cell = std::size_t(cells[k]);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     double w = 0.0;
-    for (std::uint32_t p = L.first[cell]; p < L.last[cell]; ++p) sum += area[p] * q[p], w += area[p];
+    for (std::uint32_t p = L.first[cell]; p < L.last[cell]; ++p)
+      if (level_of[p] >= l) sum += area[p] * q[p], w += area[p];  // the samples that reach this level
     pos[k] = sum / w;
     weight[k] = w;
     for (int a = 0; a < 3; ++a) sw[k][std::size_t(a)] = weights_1d(pos[k][a], L.n, s);
@@ -663,7 +687,7 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
     for (std::size_t k = 0; k < 8; ++k) {
       const std::size_t i = 8 * b + k;
       const auto c = L.node_cell(i);
-      double cross = 0.0;
+      double cross = 0.0, up = 0.0;
       if (cb >= 0) {
         const auto& cbc = C->block_cells[std::size_t(cb)];
         for (int tz = 0; tz < 4; ++tz) {
@@ -678,11 +702,16 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
               const auto &Kx = L.Kc[std::size_t(c[0])], &Ky = L.Kc[std::size_t(c[1])], &Kz = L.Kc[std::size_t(c[2])];
               const std::size_t ux = std::size_t(tx), uy = std::size_t(ty), uz = std::size_t(tz);
               cross += C->F[std::size_t(j)] * (Kx[ux] * My[uy] * Mz[uz] + Mx[ux] * Ky[uy] * Mz[uz] + Mx[ux] * My[uy] * Kz[uz]);
+              if (!VF.empty()) {  // the coarser levels' normals: int V . grad B_i
+                const Eigen::Vector3d& vf = VF[std::size_t(j)];
+                const auto &Hx = L.Hc[std::size_t(c[0])], &Hy = L.Hc[std::size_t(c[1])], &Hz = L.Hc[std::size_t(c[2])];
+                up += vf.x() * Hx[ux] * My[uy] * Mz[uz] + vf.y() * Mx[ux] * Hy[uy] * Mz[uz] + vf.z() * Mx[ux] * My[uy] * Hz[uz];
+              }
             }
           }
         }
       }
-      r[i] = L.b[i] - cross;
+      r[i] = L.b[i] + up - cross;
       diag[i] = L.K[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
                 L.M[std::size_t(c[0])][2] * L.K[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
                 L.M[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.K[std::size_t(c[2])][2];
@@ -764,6 +793,31 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
       L.F[i] = pro + x[i];
     }
   });
+  // the normals splatted so far, as coefficients of this level: for the next level's b
+  std::vector<Eigen::Vector3d> vf = splat(l);
+  if (!VF.empty())
+    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
+      const auto& bc = L.block_cells[b];
+      const std::int32_t cb = C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1);
+      if (cb < 0) return;
+      const auto& cbc = C->block_cells[std::size_t(cb)];
+      for (std::size_t k = 0; k < 8; ++k) {
+        const std::size_t i = 8 * b + k;
+        const auto c = L.node_cell(i);
+        for (int uz = 0; uz < 2; ++uz)
+          for (int uy = 0; uy < 2; ++uy)
+            for (int ux = 0; ux < 2; ++ux) {
+              const int kx = L.pk[std::size_t(c[0])][std::size_t(ux)], ky = L.pk[std::size_t(c[1])][std::size_t(uy)],
+                        kz = L.pk[std::size_t(c[2])][std::size_t(uz)];
+              if (kx < 0 || ky < 0 || kz < 0) continue;
+              const std::int32_t j = C->near(cb, cbc, kx, ky, kz);
+              if (j < 0) continue;
+              vf[i] += VF[std::size_t(j)] * (L.pw[std::size_t(c[0])][std::size_t(ux)] * L.pw[std::size_t(c[1])][std::size_t(uy)] *
+                                             L.pw[std::size_t(c[2])][std::size_t(uz)]);
+            }
+      }
+    });
+  VF.swap(vf);
   return report;
 }
 
@@ -797,7 +851,8 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
     const auto &na = samples[a].normal, &nb = samples[b].normal;
     return std::tie(na.x(), na.y(), na.z()) < std::tie(nb.x(), nb.y(), nb.z());
   });
-  std::vector<Key> sorted(ns);
+  std::vector<Key>& sorted = m.keys;
+  sorted.resize(ns);
   m.q.resize(ns);
   m.normals_.resize(ns);
   for (std::size_t p = 0; p < ns; ++p) {
@@ -810,9 +865,12 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   auto report = [&](double f) {
     if (progress && !progress(f)) throw CancelledError("reconstruct_poisson: cancelled");
   };
-  m.build_levels(sorted);
-  report(0.1);
+  m.levels.assign(std::size_t(depth + 1), Level{});
+  m.level_of.assign(ns, std::uint8_t(depth));  // every sample reaches the kernel level
+  for (int l = 1; l <= m.params.kernel_depth; ++l) m.build_level(l);
   m.estimate_density();
+  for (int l = m.params.kernel_depth + 1; l <= depth; ++l) m.build_level(l);
+  report(0.1);
   m.splat_and_restrict();
   report(0.2);
   std::size_t bytes = 0;
@@ -828,11 +886,7 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   }
   peak_bytes_ = bytes + largest;
   std::vector<double> G(ns);
-  const Level& finest = m.levels[std::size_t(depth)];
-  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) {
-    bool complete = true;
-    G[p] = m.gather(finest, finest.F, m.q[p], 0, complete);
-  });
+  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) { G[p] = m.evaluate(m.q[p], 0); });
   double wsum = 0.0, vsum = 0.0;
   for (std::size_t p = 0; p < ns; ++p) wsum += m.area[p], vsum += m.area[p] * G[p];
   iso_value_ = wsum > 0.0 ? vsum / wsum : 0.0;
@@ -868,7 +922,7 @@ double PoissonFunction::density_depth(const Eigen::Vector3d& world) const {
   bool complete = true;
   const double w = m.gather(L, m.density, p, 0, complete);
   if (!(w > 0.0)) return 0.0;
-  return std::clamp(m.params.kernel_depth + 0.5 * std::log2(w / m.params.samples_per_node), 0.0, double(m.params.depth));
+  return std::clamp(m.depth_of(w), 0.0, double(m.params.depth));
 }
 
 }  // namespace pointsurf::detail
