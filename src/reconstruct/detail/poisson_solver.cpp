@@ -301,7 +301,9 @@ struct PoissonFunction::Impl {
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
   double gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const;
-  double evaluate(const Eigen::Vector3d& p, int d) const;
+  double evaluate(const Eigen::Vector3d& p, int d) const { return evaluate_all(p, d, d)[d]; }
+  // the value (0) and the gradient (1..3) from `first` to `last`
+  Eigen::Vector4d evaluate_all(const Eigen::Vector3d& p, int first, int last) const;
 };
 
 void PoissonFunction::Impl::build_tables(Level& L) const {
@@ -486,16 +488,17 @@ double PoissonFunction::Impl::gather(const Level& L, const std::vector<double>& 
   return weighted_sum(w, nodes, c, d);
 }
 
-double PoissonFunction::Impl::evaluate(const Eigen::Vector3d& p, int d) const {
+Eigen::Vector4d PoissonFunction::Impl::evaluate_all(const Eigen::Vector3d& p, int first, int last) const {
   // from the finest level down: where all 27 nodes exist, the cumulative coefficients F hold
   // every coarser level; above that, each level's own part (x) where its nodes exist
-  double sum = 0.0;
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();  // value, d/dx, d/dy, d/dz
   std::array<std::int32_t, 27> nodes;
   for (int l = params.depth; l >= 1; --l) {
     const Level& L = levels[std::size_t(l)];
     const std::array<Weights1D, 3> w = {weights_1d(p.x(), L.n, s), weights_1d(p.y(), L.n, s), weights_1d(p.z(), L.n, s)};
-    if (nodes_around(L, w, nodes)) return sum + weighted_sum(w, nodes, L.F, d);
-    sum += weighted_sum(w, nodes, L.x, d);
+    const bool complete = nodes_around(L, w, nodes);
+    for (int d = first; d <= last; ++d) sum[d] += weighted_sum(w, nodes, complete ? L.F : L.x, d);
+    if (complete) break;
   }
   return sum;
 }
@@ -906,7 +909,7 @@ double PoissonFunction::value(const Eigen::Vector3d& p) const { return impl_->ev
 
 Eigen::Vector3d PoissonFunction::gradient(const Eigen::Vector3d& p) const {
   const Eigen::Vector3d q = (p - frame_.origin) / frame_.size;
-  return Eigen::Vector3d(impl_->evaluate(q, 1), impl_->evaluate(q, 2), impl_->evaluate(q, 3)) / frame_.size;
+  return impl_->evaluate_all(q, 1, 3).tail<3>() / frame_.size;
 }
 
 bool PoissonFunction::refined(int level, const std::array<std::uint32_t, 3>& cell) const {
