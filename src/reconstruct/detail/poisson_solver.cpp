@@ -36,6 +36,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -895,6 +896,11 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   iso_value_ = wsum > 0.0 ? vsum / wsum : 0.0;
   sample_values_.resize(ns);
   for (std::size_t p = 0; p < ns; ++p) sample_values_[m.order[p]] = G[p];
+  // evaluation reads the coefficients, the octree and the density only: the rest goes before
+  // the extraction allocates
+  auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  for (Level& L : m.levels) release(L.b), release(L.first), release(L.last);
+  release(m.q), release(m.normals_), release(m.area), release(m.keys), release(m.level_of), release(m.order), release(m.VF);
 }
 
 PoissonFunction::~PoissonFunction() = default;
