@@ -124,6 +124,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   detail::IsoSurfaceParams iso;
   iso.iso_value = function.iso_value();
   iso.inside_positive = false;  // the function grows along the (outward) normals
+  iso.root_refinement_steps = 2;
   detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
 
   TriangleMesh& mesh = result.mesh;
