@@ -44,6 +44,8 @@ void PoissonParams::validate() const {
     throw UsageError(fmt::format("reconstruct_poisson: trim_depth must be in [0, {}] (0: off), got {}", kMaxDepth, trim_depth));
   if (!(island_area_ratio >= 0.0 && island_area_ratio <= 1.0))
     throw UsageError(fmt::format("reconstruct_poisson: island_area_ratio must be in [0, 1], got {}", island_area_ratio));
+  if (root_refinement_steps < 0 || root_refinement_steps > 20)
+    throw UsageError(fmt::format("reconstruct_poisson: root_refinement_steps must be in [0, 20], got {}", root_refinement_steps));
   if (max_iterations < 1) throw UsageError(fmt::format("reconstruct_poisson: max_iterations must be >= 1, got {}", max_iterations));
   if (!(tolerance > 0.0 && tolerance < 1.0))
     throw UsageError(fmt::format("reconstruct_poisson: tolerance must be in (0, 1), got {}", tolerance));
@@ -124,7 +126,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   detail::IsoSurfaceParams iso;
   iso.iso_value = function.iso_value();
   iso.inside_positive = false;  // the function grows along the (outward) normals
-  iso.root_refinement_steps = 2;
+  iso.root_refinement_steps = params.root_refinement_steps;
   detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
 
   TriangleMesh& mesh = result.mesh;
