@@ -18,10 +18,13 @@ BUILD_PACKAGES=(
   libeigen3-dev libnanoflann-dev libtbb-dev libcli11-dev nlohmann-json3-dev liblzf-dev libfmt-dev
   libgtest-dev libgmock-dev
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
 )
+# The browser test of the HTML report (tests/report): headless Chromium, driven from Python.
+TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
-BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo)
+BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
 
@@ -69,13 +72,20 @@ demo() {
   "$cli" run examples/b9_poisson.json --report out/b9_poisson_run.json  # screened Poisson, trimmed at density depth 6
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
-  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json
+  "$cli" run examples/kitten_mesh.json --report out/kitten_run.json --html out/kitten_report.html
   "$cli" reconstruct data/kitten.xyz out/kitten_poisson.ply --method poisson --report out/kitten_poisson.json
+  log "demo: pictures (pointsurf render) and the HTML report of the b9 run"
+  "$cli" render out/kitten_deviation.ply out/kitten_deviation.png --field deviation --view front --quiet
+  "$cli" render out/kitten_mesh.ply out/kitten_mesh.png --view front --quiet
+  "$cli" render out/kitten_poisson.ply out/kitten_poisson.png --view front --quiet
+  "$cli" report out/b9_run.json out/b9_report.html
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
+  log "open the report: $out/kitten_report.html (offline, one file; also $out/b9_report.html)"
 }
 
 run_tests() {
+  install_missing "${TEST_PACKAGES[@]}"
   build
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900

@@ -173,7 +173,7 @@ void write_text_atomically(const std::filesystem::path& path, const std::string&
   }
 }
 
-void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command) {
+void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command, std::string* report_text) {
   Context context;
   RunReport report;
   report.command = command;
@@ -209,6 +209,7 @@ void run_with_report(const Pipeline& pipeline, const CommonOptions& common, cons
     throw;
   }
   if (!common.report_path.empty()) write_text_atomically(common.report_path, report_json(report));
+  if (report_text) *report_text = report_json(report);
 }
 
 }  // namespace pointsurf::cli

@@ -11,6 +11,7 @@
 
 #include "pointsurf/core/progress.h"
 #include "pointsurf/pipeline/pipeline.h"
+#include "pointsurf/report/html_report.h"
 
 namespace pointsurf::cli {
 
@@ -63,8 +64,12 @@ private:
 };
 
 /// Runs `pipeline` with the CLI's progress bars, summary lines and warnings on stderr, then
-/// writes the report (also on failure) when asked. Rethrows the run's error.
-void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command);
+/// writes the report (also on failure) when asked. Rethrows the run's error. `report_text`, when
+/// given, receives the report's JSON after a successful run.
+void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command, std::string* report_text = nullptr);
+/// Writes the HTML report of a run (its JSON text, named `origin`) to `out_path` (cmd_report.cpp).
+void write_html_report(const std::string& run_json, const std::string& origin, const std::string& out_path, const HtmlReportParams& params,
+                       const CommonOptions& common);
 
 /// Writes `text` to `path` through a temporary file renamed at the end.
 void write_text_atomically(const std::filesystem::path& path, const std::string& text);
@@ -80,5 +85,6 @@ std::vector<Command> stage_commands();
 Command info_command();
 Command convert_command();
 Command run_command();
+Command report_command();
 
 }  // namespace pointsurf::cli

@@ -8,6 +8,7 @@
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
 
 namespace pointsurf::cli {
 namespace {
@@ -19,7 +20,8 @@ std::string run_help() {
          "with _ for -), and optionally \"tag\" (the name of its output) and \"inputs\" (tags it reads).\n"
          "Everything is checked before any work; a malformed pipeline exits 1, a bad input file 2.\n\n"
          "Options:\n"
-         "  --set STAGE.KEY=VALUE  Override or add a key; STAGE is a tag, or a type that occurs once (repeatable)\n\n" +
+         "  --set STAGE.KEY=VALUE  Override or add a key; STAGE is a tag, or a type that occurs once (repeatable)\n"
+         "  --html FILE.html       Also write the offline HTML report (as pointsurf report does)\n\n" +
          common_options_help() +
          "\nExample:\n"
          "  [\"scan.las\", {\"type\": \"clean\", \"method\": \"sor\"}, {\"type\": \"normals\", \"k\": 20},\n"
@@ -30,7 +32,9 @@ std::string run_help() {
 int run_run(const std::vector<std::string>& args) {
   CommonOptions common;
   std::vector<std::string> sets;
-  std::vector<OptionDef> options = {{"--set", false, "STAGE.KEY=VALUE", [&](const std::string& v) { sets.push_back(v); }}};
+  std::string html;
+  std::vector<OptionDef> options = {{"--set", false, "STAGE.KEY=VALUE", [&](const std::string& v) { sets.push_back(v); }},
+                                    {"--html", false, "FILE.html", [&](const std::string& v) { html = v; }}};
   add_common_options(options, common);
   const std::vector<std::string> positionals = scan_arguments(args, options);
   if (common.help) {
@@ -46,7 +50,10 @@ int run_run(const std::vector<std::string>& args) {
   std::stringstream text;
   text << in.rdbuf();
   const Pipeline pipeline = parse_pipeline(text.str(), file, sets);
-  run_with_report(pipeline, common, "run");
+  if (!html.empty()) check_output_path(html, common.no_clobber, "html");
+  std::string report;
+  run_with_report(pipeline, common, "run", &report);
+  if (!html.empty()) write_html_report(report, common.report_path.empty() ? file : common.report_path, html, {}, common);
   return 0;
 }
 

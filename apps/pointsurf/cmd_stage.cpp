@@ -73,7 +73,8 @@ std::string param_line(const std::string& stage, const ParamSpec& p, bool show_m
 
 std::string stage_help(const StageSpec& s) {
   const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
-  std::string out = s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
+  const bool own_file = !s.writes_param.empty();
+  std::string out = own_file ? fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary) : s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
                                : fmt::format("pointsurf {} {} OUT [options]\n{}\n", s.name, multi ? "IN1 IN2 [IN...]" : "IN", s.summary);
   if (!s.description.empty()) out += s.description + "\n";
   if (!s.params.empty() || !s.methods.empty()) out += "\nOptions (pipeline keys are the same with _ for -):\n";
@@ -84,6 +85,7 @@ std::string stage_help(const StageSpec& s) {
                     fmt::format("{} (default {})", s.method_list ? "Comma-separated methods, applied in order" : "Method", s.default_method));
   }
   for (const ParamSpec& p : s.params) {
+    if (own_file && p.name == s.writes_param) continue;  // OUT
     if (s.measures && p.name == "reference") out += help_row("--reference FILE", "The cloud or mesh to measure (required)");
     else out += param_line(s.name, p, !s.methods.empty());
   }
@@ -91,9 +93,9 @@ std::string stage_help(const StageSpec& s) {
   out += "\nInput options:\n";
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") out += param_line("read", p, false);
-  out += "\nOutput options:\n";
+  if (!own_file) out += "\nOutput options:\n";
   for (const ParamSpec& p : find_stage("write")->params)
-    if (p.name != "filename") out += param_line("write", p, false);
+    if (p.name != "filename" && !own_file) out += param_line("write", p, false);
   out += "\n" + common_options_help();
   if (!s.examples.empty()) {
     out += "\nExamples:\n";
@@ -213,11 +215,13 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
       seen.insert("--reference");
     }
   }
-  for (const ParamSpec& p : s.params) add(s.name, p, stage_params);
+  const bool own_file = !s.writes_param.empty();
+  for (const ParamSpec& p : s.params)
+    if (p.name != s.writes_param) add(s.name, p, stage_params);
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") add("read", p, read_params);
   for (const ParamSpec& p : find_stage("write")->params)
-    if (p.name != "filename") add("write", p, write_params);
+    if (p.name != "filename" && !own_file) add("write", p, write_params);
   add_common_options(options, common);
 
   std::vector<std::string> positionals;
@@ -245,6 +249,12 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
     steps.push_back(std::move(read));
   }
   StepText stage{s.name, s.name, multi ? inputs : std::vector<std::string>{}, stage_params};
+  if (own_file) {  // render IN OUT.png: the stage writes OUT itself
+    stage.params.emplace_back(s.writes_param, positionals.back());
+    steps.push_back(std::move(stage));
+    run_steps(s, steps, common);
+    return 0;
+  }
   steps.push_back(std::move(stage));
   StepText write{"write", "out", {}, write_params};
   write.params.emplace_back("filename", positionals.back());

@@ -23,6 +23,7 @@ std::vector<pointsurf::cli::Command> all_commands() {
   std::vector<Command> commands = {info_command(), convert_command()};
   for (Command& c : stage_commands()) commands.push_back(std::move(c));
   commands.push_back(run_command());
+  commands.push_back(report_command());
   return commands;
 }
 

@@ -284,7 +284,7 @@ public:
       }
       p.steps.push_back(std::move(step));
     }
-    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s) || s.spec->measures; }))
+    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s) || s.spec->measures || !s.spec->writes_param.empty(); }))
       throw UsageError(fmt::format("{}: no output: end the pipeline with a file name to write", origin_));
     return p;
   }
@@ -375,6 +375,11 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
     for (const PipelineStep& s : pipeline.steps) {
       const std::string& file = s.args.has("filename") ? s.args.text("filename") : std::string();
       if (is_reader(s)) check_input_path(file);
+      const std::string& own = s.spec->writes_param.empty() ? std::string() : s.args.text(s.spec->writes_param);
+      if (!own.empty()) check_output_path(own, options.no_clobber, "own");
+      for (const std::string& o : outputs)
+        if (!own.empty() && same_path(o, own)) throw UsageError(fmt::format("{}: {} is written twice", pipeline.origin, own));
+      if (!own.empty()) outputs.push_back(own);
       if (is_writer(s)) {
         check_output_path(file, options.no_clobber, s.args.text("format"));
         for (const std::string& o : outputs)
@@ -430,6 +435,7 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
       record.rss_rise_mb = record.peak_rss_mb - rss_before;
       record.tree_builds = context.tree_builds() - builds_before;
       if (is_writer(step)) written.emplace_back(step.args.text("filename"));
+      if (!step.spec->writes_param.empty()) written.emplace_back(step.args.text(step.spec->writes_param));
       // Data no later stage reads is dropped now, not at the end.
       for (const std::string& in : step.inputs)
         if (last_use[in] == i && context.has(in) && !in_place) context.erase(in);

@@ -142,6 +142,10 @@ struct StageSpec {
   /// slot named "reference" defaults to the cloud as read at the start of the first input's
   /// chain, or to the tag given by the stage's "reference" parameter.
   bool measures = false;
+  /// A stage that writes a file of its own kind (render: a PNG): the parameter naming it. The
+  /// file is checked and cleaned up like a writer's, a pipeline may end with the stage, and its
+  /// command takes IN OUT with OUT that file.
+  std::string writes_param;
   std::function<void(StageRun&)> run;
   /// Checks across parameters made before any work (e.g. a viewpoint given without
   /// orient = viewpoint); throws UsageError. May be empty.

@@ -81,6 +81,7 @@ StageSpec features_stage();
 StageSpec reconstruct_stage();
 StageSpec quality_stage();
 StageSpec evaluate_stage();
+StageSpec render_stage();
 
 }  // namespace pointsurf::detail
 

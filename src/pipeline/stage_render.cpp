@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The render stage: a PNG picture of a cloud or mesh (pointsurf/render/render_scene.h).
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/render/render_scene.h"
+
+namespace pointsurf::detail {
+namespace {
+
+const std::vector<std::string> kViews = {"front", "side", "top", "iso"};
+
+std::pair<int, int> parse_size(const std::string& text) {
+  static const std::regex form(R"(^(\d{1,5})x(\d{1,5})$)");
+  std::smatch m;
+  if (!std::regex_match(text, m, form)) throw UsageError(fmt::format("size: \"{}\" is not WIDTHxHEIGHT (e.g. 1024x768)", text));
+  const int w = std::stoi(m[1].str()), h = std::stoi(m[2].str());
+  if (w < 8 || h < 8 || w > 16384 || h > 16384) throw UsageError(fmt::format("size: {} is outside 8x8 .. 16384x16384", text));
+  return {w, h};
+}
+
+std::string size_text(int w, int h) { return fmt::format("{}x{}", w, h); }
+
+void run_render(StageRun& run) {
+  const StageArgs& a = run.args;
+  const DataItem& item = run.context.item(run.inputs.front());
+  RenderParams p;
+  std::tie(p.width, p.height) = parse_size(a.text("size"));
+  p.view = view_from_name(a.text("view"));
+  p.field = a.text("field");
+  p.supersample = a.int32("supersample");
+  p.flat_shading = a.boolean("flat");
+  p.wireframe = a.boolean("wireframe");
+  p.point_size_px = a.number("point_size");
+  p.eye_dome = a.boolean("eye_dome");
+  p.title = a.text("title");
+  p.legend = a.boolean("legend");
+  const std::vector<double>& eye = a.numbers("eye");
+  if (eye.size() == 3) {
+    Camera c;
+    c.eye = Vector3d(eye[0], eye[1], eye[2]);
+    const std::vector<double>& target = a.numbers("target");
+    if (target.size() == 3) c.target = Vector3d(target[0], target[1], target[2]);
+    else c.target = bounding_box(item.cloud.positions).center();
+    const std::vector<double>& up = a.numbers("up");
+    c.up = Vector3d(up[0], up[1], up[2]);
+    c.fov_deg = a.number("fov_deg");
+    c.ortho_height = (c.target - c.eye).norm();
+    p.camera = c;
+  }
+  if (!p.field.empty()) {
+    const ScalarField* f = item.cloud.fields.find(p.field);
+    std::vector<double> axis;
+    if (f == nullptr && (p.field == "x" || p.field == "y" || p.field == "z"))
+      for (const Vector3d& q : item.cloud.positions) axis.push_back(q[p.field[0] - 'x']);
+    if (f != nullptr || !axis.empty()) {
+      ColorScale s = default_color_scale(f ? std::span<const double>(f->values) : std::span<const double>(axis), p.field, a.boolean("diverging"));
+      const std::vector<double>& range = a.numbers("range");
+      if (range.size() == 2) {
+        s.min = range[0];
+        s.max = range[1];
+      }
+      s.tolerance = a.number("tolerance");
+      s.unit = a.text("unit");
+      p.scale = s;
+    }
+  }
+  RenderResult r = render_scene(item.cloud, item.triangles, p);
+  const std::string& file = a.text("filename");
+  const std::vector<std::uint8_t> png = encode_png(r.image);
+  std::ofstream out(file, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+  if (!out) throw InputError(fmt::format("{}: cannot write the picture", file));
+  for (const std::string& w : r.warnings) run.record.warnings.push_back(w);
+  run.record.count("points_drawn", as_count(r.points_drawn));
+  run.record.count("triangles_drawn", as_count(r.triangles_drawn));
+  run.record.count("png_bytes", as_count(png.size()));
+  if (!p.field.empty()) {
+    run.record.metric("scale_min", r.scale.min);
+    run.record.metric("scale_max", r.scale.max);
+    run.record.metric("colormap", std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential"));
+  }
+  run.record.metric("image", file);
+  run.record.summary = fmt::format("render: {} view of {} to {} ({}x{})", p.camera ? "camera" : a.text("view"),
+                                   item.triangles.empty() ? plural(item.cloud.size(), "point") : plural(item.triangles.size(), "triangle"),
+                                   file, p.width, p.height);
+}
+
+}  // namespace
+
+StageSpec render_stage() {
+  const RenderParams d;
+  const Camera c;
+  StageSpec s;
+  s.name = "render";
+  s.summary = "Draw a PNG picture of a cloud or mesh: shaded, coloured by a field with its legend, auto-framed views";
+  s.description = "A software rasterizer (no display or GPU): z-buffer, supersampled anti-aliasing, Blinn-Phong lighting of meshes, "
+                  "point splats with eye-dome lighting. A field named deviation or distance* gets a diverging map symmetric about 0; "
+                  "others viridis between their 1st and 99th percentiles. In a pipeline it writes its file and passes its input on.";
+  s.order = 140;
+  s.consumes = {Slot{"data", DataKind::Any}};
+  s.writes_param = "filename";
+  s.params = {
+      P::text("filename", "", "PNG file to write").meta("FILE"),
+      P::text("size", size_text(d.width, d.height), "Picture size in pixels").meta("WxH"),
+      P::choice("view", view_name(d.view), kViews, "Auto-framed orthographic view (z up): front, side, top or iso"),
+      P::text("field", d.field, "Colour by this field (or x, y, z); default RGB when present, else plain").meta("NAME"),
+      P::boolean("diverging", false, "Use the diverging (blue-white-red) map for any field"),
+      P::numbers("range", {}, "Colour map range MIN,MAX (default from the data)").meta("MIN,MAX"),
+      P::number("tolerance", ColorScale{}.tolerance, "Diverging map: values within +-tolerance are green (0: no band)").unit("field units").non_negative(),
+      P::text("unit", "", "Unit shown on the legend").meta("UNIT"),
+      P::boolean("legend", d.legend, "Draw the colour bar with its values"),
+      P::text("title", d.title, "Text at the top left").meta("TEXT"),
+      P::boolean("flat", d.flat_shading, "Meshes: flat shading (one normal per face)"),
+      P::boolean("wireframe", d.wireframe, "Meshes: draw the edges"),
+      P::number("point_size", d.point_size_px, "Splat diameter; 0: from the projected density").unit("pixels").non_negative(),
+      P::boolean("eye_dome", d.eye_dome, "Shade splats by eye-dome lighting"),
+      P::integer("supersample", d.supersample, "Samples per pixel along each axis (anti-aliasing)").range(1, 4),
+      P::vector3("eye", {}, "Camera position: a perspective view instead of the auto-framed one").unit("cloud units"),
+      P::vector3("target", {}, "Point the camera looks at (default the data's centre)").unit("cloud units"),
+      P::vector3("up", as_list(c.up), "Camera up direction"),
+      P::number("fov_deg", c.fov_deg, "Vertical field of view of the camera; 0: orthographic, as high as the eye is far from the target").unit("degrees").range(0, 179, false, true),
+  };
+  s.examples = {"pointsurf render mesh.ply mesh.png --view front --size 1600x1200",
+                "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.5 --unit mm"};
+  s.run = run_render;
+  s.check = [](const StageArgs& a) {
+    const std::string& file = a.text("filename");
+    if (file.empty()) throw UsageError("filename: missing (the PNG file to write)");
+    std::string ext = std::filesystem::path(file).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".png") throw UsageError(fmt::format("filename: {}: expected a .png file name", file));
+    parse_size(a.text("size"));
+    if (a.numbers("range").size() != 0 && a.numbers("range").size() != 2)
+      throw UsageError(fmt::format("range: expected MIN,MAX, got {} numbers", a.numbers("range").size()));
+    if (a.numbers("range").size() == 2 && !(a.numbers("range")[0] < a.numbers("range")[1]))
+      throw UsageError("range: MIN must be below MAX");
+    if (a.numbers("target").size() == 3 && a.numbers("eye").size() != 3) throw UsageError("target: give eye too (the camera position)");
+  };
+  return s;
+}
+
+}  // namespace pointsurf::detail
