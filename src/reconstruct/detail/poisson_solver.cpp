@@ -61,6 +61,8 @@ std::uint64_t spread(std::uint64_t v) {  // 21 bits -> every third bit
   return v;
 }
 Key morton(int x, int y, int z) { return spread(std::uint64_t(x)) | spread(std::uint64_t(y)) << 1 | spread(std::uint64_t(z)) << 2; }
+// The hash key of a cell: cheaper than its Morton code, which orders the arrays.
+Key pack(int x, int y, int z) { return Key(std::uint32_t(x)) | Key(std::uint32_t(y)) << 21 | Key(std::uint32_t(z)) << 42; }
 
 // Open addressing, keys known up front (built once, then read concurrently).
 class KeyIndex {
@@ -174,11 +176,11 @@ struct Level {
   std::int32_t block(int bx, int by, int bz) const {
     const int nb_ = n / 2;
     if (bx < 0 || by < 0 || bz < 0 || bx >= nb_ || by >= nb_ || bz >= nb_) return -1;
-    return block_index.find(morton(bx, by, bz));
+    return block_index.find(pack(bx, by, bz));
   }
   std::int32_t node(int x, int y, int z) const {
     if (x < 0 || y < 0 || z < 0 || x >= n || y >= n || z >= n) return -1;
-    const std::int32_t b = block_index.find(morton(x >> 1, y >> 1, z >> 1));
+    const std::int32_t b = block_index.find(pack(x >> 1, y >> 1, z >> 1));
     return b < 0 ? -1 : 8 * b + ((x & 1) | (y & 1) << 1 | (z & 1) << 2);
   }
   // The node at (x, y, z) seen from block `b` (cell bc): its block must be within 1 of b.
@@ -432,6 +434,7 @@ void PoissonFunction::Impl::build_level(int l) {
   tbb::parallel_sort(blocks.begin(), blocks.end());
   L.block_cells.resize(blocks.size());
   for (std::size_t b = 0; b < blocks.size(); ++b) L.block_cells[b] = decode(blocks[b], l - 1);
+  for (std::size_t b = 0; b < blocks.size(); ++b) blocks[b] = pack(L.block_cells[b][0], L.block_cells[b][1], L.block_cells[b][2]);
   L.block_index.build(blocks);
   L.nb.resize(blocks.size());
   tbb::parallel_for(std::size_t(0), blocks.size(), [&](std::size_t b) {
@@ -496,6 +499,7 @@ Eigen::Vector4d PoissonFunction::Impl::evaluate_all(const Eigen::Vector3d& p, in
   std::array<std::int32_t, 27> nodes;
   for (int l = params.depth; l >= 1; --l) {
     const Level& L = levels[std::size_t(l)];
+    if (L.block_cells.empty()) continue;  // no sample reaches it
     const std::array<Weights1D, 3> w = {weights_1d(p.x(), L.n, s), weights_1d(p.y(), L.n, s), weights_1d(p.z(), L.n, s)};
     const bool complete = nodes_around(L, w, nodes);
     for (int d = first; d <= last; ++d) sum[d] += weighted_sum(w, nodes, complete ? L.F : L.x, d);
