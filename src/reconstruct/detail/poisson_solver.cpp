@@ -525,15 +525,22 @@ void PoissonFunction::Impl::estimate_density() {
   const double hk = 1.0 / L.n;
   area.resize(q.size());
   level_of.resize(q.size());
+  std::vector<double> at(q.size());
   tbb::parallel_for(std::size_t(0), q.size(), [&](std::size_t p) {
     bool complete = true;
-    const double w = std::max(gather(L, density, q[p], 0, complete), 1e-3);
-    area[p] = hk * hk / w;
+    at[p] = std::max(gather(L, density, q[p], 0, complete), 1e-3);
     // PoissonRecon's adaptive depth: the normal goes to the level where a node holds about
     // samples_per_node samples (4 times fewer per level finer on a surface), so sparse parts
     // of the cloud are not refined beyond what their samples support
-    level_of[p] = std::uint8_t(std::clamp(int(std::lround(depth_of(w))), params.kernel_depth, params.depth));
+    level_of[p] = std::uint8_t(std::clamp(int(std::lround(depth_of(at[p]))), params.kernel_depth, params.depth));
   });
+  // A sample's share of the surface: inverse to the density where it is denser than the
+  // median, the median's share where sparser. Without the cap an isolated outlier would weigh
+  // as much as all the samples of a node and raise a blob the size of a kernel cell.
+  std::vector<double> sorted = at;
+  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  tbb::parallel_for(std::size_t(0), q.size(), [&](std::size_t p) { area[p] = hk * hk / std::max(at[p], median); });
 }
 
 // b_i = int V . grad B_i = sum_j v_j . int B_j grad B_i: per axis a product of the 1-D tables
