@@ -97,6 +97,7 @@ std::string format_from_extension(const std::filesystem::path& path) {
   if (ext == ".ply") return "ply";
   if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".csv" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".asc") return "xyz";
   if (ext == ".pcd") return "pcd";
+  if (ext == ".e57") return "e57";
   if (ext == ".las") return "las";
   if (ext == ".off") return "off";
   if (ext == ".obj") return "obj";
@@ -110,6 +111,7 @@ std::string detect_format(const std::filesystem::path& path) {
   std::uintmax_t size = 0;
   const std::string head = read_head(path, 4096, size);
   if (size == 0 || head.empty()) throw InputError(fmt::format("{}: file is empty", display_name(path)));
+  if (head.rfind("ASTM-E57", 0) == 0) return "e57";
   if (head.rfind("ply", 0) == 0 && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return "ply";
   if (head.rfind("LASF", 0) == 0) {
     const std::string ext = lower(path.extension().string());
@@ -173,6 +175,7 @@ io::detail::RawData read_raw(const std::filesystem::path& path, const ReadOption
   if (format == "off") return io::detail::read_off(path, options);
   if (format == "obj") return io::detail::read_obj(path, options);
   if (format == "stl") return io::detail::read_stl(path, options);
+  if (format == "e57") return io::detail::read_e57(path, options);
   throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
 }
 
@@ -212,6 +215,7 @@ CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOp
   result.warnings = std::move(raw.warnings);
   result.face_count = raw.polygons.size() + raw.triangles.size();
   result.dropped_nonfinite = raw.dropped_nonfinite;
+  result.scans = std::move(raw.scans);
   if (options.strict && raw.dropped_nonfinite > 0)
     throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
                                  display_name(path), raw.dropped_nonfinite));
@@ -323,6 +327,7 @@ WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud
   else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);
   else if (format == "obj") io::detail::write_obj(out.path(), cloud, triangles, options);
   else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
+  else if (format == "e57") io::detail::write_e57(out.path(), cloud, options, result.notes);
   else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
   out.commit();
   return result;

@@ -12,7 +12,7 @@
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "off", "obj", "stl"};
+const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "off", "obj", "stl", "e57"};
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -25,6 +25,7 @@ void run_read(StageRun& run) {
   const std::string& file = run.args.text("filename");
   ReadOptions options;
   options.strict = run.args.boolean("strict");
+  options.apply_poses = !run.args.boolean("keep_poses");
   options.columns = run.args.text("columns");
   options.format = run.args.text("format");
   const std::string format = options.format.empty() ? detect_format(file) : options.format;
@@ -55,6 +56,8 @@ void run_read(StageRun& run) {
     warnings = std::move(r.warnings);
     encoding = r.encoding;
     item.cloud = std::move(r.cloud);
+    if (r.scans.size() > 1 || !options.apply_poses) rec.count("scans", as_count(r.scans.size()));
+    if (!options.apply_poses) item.scans = std::move(r.scans);
   }
   for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
   if (dropped > 0)
@@ -111,6 +114,8 @@ void run_write(StageRun& run) {
   const std::vector<double>& offset = run.args.numbers("las_offset");
   if (offset.size() == 3) w.las_offset = Vector3d(offset[0], offset[1], offset[2]);
   if (run.args.given("las_scale")) w.las_scale = run.args.number("las_scale");
+  if (run.args.given("e57_scale")) w.e57_scale = run.args.number("e57_scale");
+  w.scan_poses = item.scans;
   const std::string format = w.format.empty() ? format_from_extension(file) : w.format;
   StageRecord& rec = run.record;
   rec.set_used("format", format);
@@ -144,6 +149,8 @@ StageSpec read_stage() {
   s.params = {
       P::text("filename", "", "File to read").meta("FILE"),
       P::choice("format", "", kFormats, "Read as this format instead of detecting it from the content").meta("FORMAT"),
+      P::boolean("keep_poses", !ReadOptions{}.apply_poses,
+                 "E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose"),
       P::text("columns", ReadOptions{}.columns,
               "Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)")
           .meta("SPEC"),
@@ -177,6 +184,7 @@ StageSpec write_stage() {
           .unit("cloud units")
           .positive()
           .meta("S"),
+      P::number("e57_scale", 0.0, "E57: scaled-integer coordinates with this step (default: float64)").unit("cloud units").positive().meta("S"),
   };
   s.run = run_write;
   s.check = [](const StageArgs& a) {
