@@ -36,10 +36,10 @@ struct PoissonSystemParams {
   int full_depth = 5;             // levels 1..full_depth complete
   int kernel_depth = 6;           // density estimate's level
   double point_weight = 4.0;      // alpha (PoissonRecon's --pointWeight)
-  double samples_per_node = 1.5;  // density estimate: the depth where a node holds this many
+  double samples_per_node = 1.5;  // each normal goes to the level where a node holds this many
   bool dirichlet = false;         // boundary: Neumann (default) or Dirichlet (zero)
-  int max_iterations = 40;        // conjugate-gradient iterations per level at most
-  double tolerance = 1e-4;        // ... stop when the residual fell by this factor
+  int max_iterations = 8;         // conjugate-gradient iterations per sparse level at most
+  double tolerance = 1e-3;        // ... stop when the residual fell by this factor
 };
 
 struct PoissonLevelReport {
