@@ -127,6 +127,9 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   iso.iso_value = function.iso_value();
   iso.inside_positive = false;  // the function grows along the (outward) normals
   iso.root_refinement_steps = params.root_refinement_steps;
+  // Meshed at the finest level the samples reached, as PoissonRecon meshes its leaves: a depth
+  // beyond what the sampling supports adds no detail, only triangles.
+  lattice.depth = function.finest_level();
   detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
 
   TriangleMesh& mesh = result.mesh;
@@ -162,7 +165,8 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
 
   result.topology = analyze_topology(mesh);
   result.stats.counts = {{"skipped_normals", result.skipped_normals}, {"depth", std::size_t(depth)},
-                         {"finest_nodes", result.nodes_per_level.back()}, {"trimmed_triangles", result.trimmed_triangles},
+                         {"finest_level", std::size_t(lattice.depth)},
+                         {"finest_nodes", result.nodes_per_level[std::size_t(lattice.depth)]}, {"trimmed_triangles", result.trimmed_triangles},
                          {"trim_cut_triangles", trim.cut_triangles}, {"trim_removed_islands", trim.removed_islands}};
   result.stats.figures = {{"iso_value", result.iso_value}, {"peak_megabytes", double(result.peak_bytes) / 1e6}};
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -900,6 +900,8 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
     report(0.2 + 0.8 * double(l) / depth);
   }
   peak_bytes_ = bytes + largest;
+  for (int l = 1; l <= depth; ++l)
+    if (m.levels[std::size_t(l)].nodes() > 0) finest_level_ = l;
   std::vector<double> G(ns);
   tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) { G[p] = m.evaluate(m.q[p], 0); });
   double wsum = 0.0, vsum = 0.0;

@@ -67,6 +67,8 @@ class PoissonFunction final : public IsoFunction {
   Eigen::Vector3d gradient(const Eigen::Vector3d& p) const override;
   bool refined(int level, const std::array<std::uint32_t, 3>& cell) const override;
 
+  /// The finest level that holds nodes: the samples reach no deeper (at most params.depth).
+  int finest_level() const { return finest_level_; }
   /// The weighted mean of the function at the samples.
   double iso_value() const { return iso_value_; }
   /// The density at p in depth units: the (fractional) level at which a node around p holds
@@ -83,6 +85,7 @@ class PoissonFunction final : public IsoFunction {
   std::unique_ptr<Impl> impl_;
   IsoLattice frame_;
   double iso_value_ = 0.0;
+  int finest_level_ = 1;
   std::vector<PoissonLevelReport> reports_;
   std::size_t peak_bytes_ = 0;
   std::vector<double> sample_values_;
