@@ -74,12 +74,15 @@ demo() {
   log "demo: aerial LiDAR tile data/b9_training.ply (22,300 points at x ~ 596,648 m)"
   "$cli" info data/b9_training.ply --report out/b9_info.json
   "$cli" run examples/b9_mesh.json --report out/b9_run.json
+  "$cli" run examples/b9_poisson.json --report out/b9_poisson_run.json  # screened Poisson, trimmed at density depth 6
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
   "$cli" run examples/kitten_mesh.json --report out/kitten_run.json --html out/kitten_report.html
+  "$cli" reconstruct data/kitten.xyz out/kitten_poisson.ply --method poisson --report out/kitten_poisson.json
   log "demo: pictures (pointsurf render) and the HTML report of the b9 run"
   "$cli" render out/kitten_deviation.ply out/kitten_deviation.png --field deviation --view front --quiet
   "$cli" render out/kitten_mesh.ply out/kitten_mesh.png --view front --quiet
+  "$cli" render out/kitten_poisson.ply out/kitten_poisson.png --view front --quiet
   "$cli" report out/b9_run.json out/b9_report.html
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
