@@ -350,7 +350,7 @@ StageSpec reconstruct_stage() {
           .range(0, 1)
           .only(poisson),
       P::integer("max_iterations", pp.max_iterations, "Conjugate-gradient iterations per sparse level at most").at_least(1).only(poisson),
-      P::integer("root_refinement_steps", pp.root_refinement_steps, "Secant steps on the function per surface vertex; 0: linear").range(0, 20).only(poisson),
+      P::integer("root_refinement_steps", pp.root_refinement_steps, "Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps").range(0, 20).only(poisson),
       P::number("min_component_share", scp.min_share, "Remove components with fewer faces than this share of all; 0: keep all")
           .unit("share of faces")
           .range(0, 1),

@@ -168,9 +168,9 @@ constexpr std::uint8_t kQueued = 1, kActive = 2;
 /// 8^3 finest cells and their corners' values (minus the iso-value, inside positive; NaN until
 /// evaluated), with the cells' state and the crossed edges the brick owns.
 struct Brick {
-  Brick() { w.fill(std::numeric_limits<float>::quiet_NaN()); }
+  Brick() { w.fill(std::numeric_limits<double>::quiet_NaN()); }
   Key key = 0;  // brick coordinates, packed
-  std::array<float, kC * kC * kC> w;
+  std::array<double, kC * kC * kC> w;  // double: a float rounding flip moved vertices by 1e-9 of the diagonal under a 1e6 m shift
   std::array<std::uint8_t, kB * kB * kB> state{};
   std::vector<std::uint16_t> pending;
   std::vector<Key> outbox;           // cells of other bricks reached in the last round
@@ -183,7 +183,7 @@ int corner_local(int cell, int k) {
 }
 int brick_mask(const Brick& b, int cell) {
   int mask = 0;
-  for (int k = 0; k < 8; ++k) mask |= (b.w[corner_local(cell, k)] > 0.0f) << k;
+  for (int k = 0; k < 8; ++k) mask |= (b.w[corner_local(cell, k)] > 0.0) << k;
   return mask;
 }
 
@@ -192,6 +192,20 @@ struct Sign {
   bool inside_positive;
   double operator()(double v) const { return inside_positive ? v - iso : iso - v; }
 };
+
+// The root in [0, 1] of the quadratic through (0, wa), (1/2, wm), (1, wb), where wa and wb have
+// opposite signs (so exactly one root lies in [0, 1]); the linear root when the quadratic
+// degenerates or its root falls outside (rounding).
+double quadratic_root(double wa, double wm, double wb) {
+  const double linear = wa / (wa - wb);
+  const double qa = 2.0 * wa - 4.0 * wm + 2.0 * wb, qb = -3.0 * wa + 4.0 * wm - wb, qc = wa;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (!(disc >= 0.0) || std::abs(qa) <= 1e-12 * (std::abs(qb) + std::abs(qc))) return linear;
+  const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));  // no cancellation
+  for (const double t : {q != 0.0 ? qc / q : -1.0, qa != 0.0 ? q / qa : -1.0})
+    if (t >= 0.0 && t <= 1.0) return t;
+  return linear;
+}
 
 struct ChunkOutput {
   std::vector<std::array<std::uint32_t, 3>> triangles;  // centre vertices flagged with kCentre
@@ -384,7 +398,7 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
       }
       values.resize(missing.size());
       if (!missing.empty()) f.corner_values(depth, triples.data(), missing.size(), values.data());
-      for (std::size_t i = 0; i < missing.size(); ++i) b.w[missing[i]] = static_cast<float>(sign(values[i]));
+      for (std::size_t i = 0; i < missing.size(); ++i) b.w[missing[i]] = sign(values[i]);
       next_wave.clear();
       for (std::uint16_t cell : wave) {
         const int mask = brick_mask(b, cell);
@@ -490,8 +504,16 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
       Eigen::Vector3d outward = Eigen::Vector3d::Zero();
       outward[axis] = wa > 0.0 ? 1.0 : -1.0;
       Eigen::Vector3d p = a + (wa / (wa - wb)) * (bb - a);
-      int kept = 0;  // Illinois false position: halve the value of an end kept twice in a row
-      for (int step = 0; step < params.root_refinement_steps; ++step) {
+      if (params.root_refinement_steps > 0) {
+        // Step 1: the quadratic through both ends and the edge's midpoint. Exact for a degree-2
+        // B-spline function whose knots are lattice corners (Poisson: along an edge it is one
+        // quadratic piece), and it evaluates at fixed places, so the vertex depends smoothly on
+        // the function (no branch on a sign near the root, unlike bracketing steps).
+        const double wm = sign(f.value(0.5 * (a + bb)));
+        if (std::isfinite(wm)) p = a + quadratic_root(wa, wm, wb) * (bb - a);
+      }
+      int kept = 0;  // further steps: Illinois false position, halving the value of an end kept twice
+      for (int step = 1; step < params.root_refinement_steps; ++step) {
         const double wp = sign(f.value(p));
         if (!std::isfinite(wp) || wp == 0.0) break;
         if ((wp > 0.0) == (wa > 0.0)) {

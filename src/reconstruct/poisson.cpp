@@ -10,6 +10,7 @@
 #include <optional>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "pointsurf/core/error.h"
@@ -82,9 +83,13 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   std::optional<KdTree> own_tree;
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
   result.mean_spacing = mean_spacing(*tree);
+  // The lattice lives in coordinates relative to the box's centre: the solver, the extractor's
+  // secant steps and the density are evaluated there, so that a 1e6 m offset costs no precision;
+  // the vertices move back to the cloud's frame at the end.
+  const Vector3d centre = box.center();
   detail::IsoLattice lattice;
   lattice.size = 1.1 * extent;
-  lattice.origin = box.center() - Vector3d::Constant(0.5 * lattice.size);
+  lattice.origin = Vector3d::Constant(-0.5 * lattice.size);
   int depth = params.depth;
   if (depth == 0) {
     const double ratio = result.mean_spacing > 0.0 ? lattice.size / result.mean_spacing : 1.0;
@@ -94,8 +99,6 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   result.depth = depth;
 
   std::vector<detail::PoissonSample> samples(usable.size());
-  // relative to the box's centre first: an offset of 1e6 m cancels exactly where it can
-  const Vector3d centre = box.center();
   tbb::parallel_for(std::size_t(0), usable.size(), [&](std::size_t k) {
     const std::size_t i = usable[k];
     samples[k].position = ((cloud.positions[i] - centre) / lattice.size).array() + 0.5;
@@ -141,11 +144,14 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   const std::size_t nv = mesh.vertices.size();
   ScalarField& density = mesh.vertex_fields.add("density", nv, ScalarType::Float32);
   std::vector<std::uint32_t> nearest(nv);
-  tbb::parallel_for(std::size_t(0), nv, [&](std::size_t v) {
-    density.values[v] = function.density_depth(mesh.vertices[v]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbor> hit;
-    tree->knn(mesh.vertices[v], 1, hit);
-    nearest[v] = hit.empty() ? 0 : hit.front().index;
+    for (std::size_t v = range.begin(); v != range.end(); ++v) {
+      density.values[v] = function.density_depth(mesh.vertices[v]);  // centred frame
+      mesh.vertices[v] += centre;
+      tree->knn(mesh.vertices[v], 1, hit);
+      nearest[v] = hit.empty() ? 0 : hit.front().index;
+    }
   });
   if (cloud.has_colors()) {
     mesh.vertex_colors.resize(nv);

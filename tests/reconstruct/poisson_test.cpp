@@ -154,16 +154,14 @@ TEST(Poisson, DirichletBoundaryAlsoGivesTheSphere) {
   for (const Vector3d& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 1.0, 0.03);
 }
 
-// The same mesh (up to 1e-9 of the diagonal) for the points shifted by 1e6 m and shuffled,
-// with the vertices interpolated linearly on the edges. The extractor's secant steps
-// (root_refinement_steps, default 2) evaluate the function at world positions rounded at 2e6
-// (ulp 4.7e-10) and move vertices by up to 2.2e-8 here: 6.2e-9 of the diagonal (to be fixed in
-// the extractor by refining in lattice coordinates).
+// The same mesh (up to 1e-9 of the diagonal) for the points shifted by 1e6 m and shuffled, with
+// linear vertex placement and with the default secant steps (the lattice is centred on the box,
+// so the steps evaluate the function near the origin, not at 2e6).
 TEST(Poisson, SameMeshUnderAShiftOf1e6AndAPermutation) {
   const PointCloud sphere = test::sample_sphere(6000, 1.0, Vector3d(0.1, -0.2, 0.3));
-  for (const int steps : {0, 2}) {
+  for (const int steps : {0, 1}) {
     PoissonParams params;
-    params.depth = 6;
+    params.depth = 7;
     params.root_refinement_steps = steps;
     const PoissonResult a = reconstruct_poisson(sphere, params);
     const Vector3d shift(1e6, -2e6, 1e6);
@@ -178,7 +176,7 @@ TEST(Poisson, SameMeshUnderAShiftOf1e6AndAPermutation) {
     const double diagonal = 2.0 * std::sqrt(3.0);
     double worst = 0.0;
     for (std::size_t v = 0; v < a.mesh.vertex_count(); ++v) worst = std::max(worst, (b.mesh.vertices[v] - shift - a.mesh.vertices[v]).norm());
-    EXPECT_LT(worst, (steps == 0 ? 1e-9 : 1e-8) * diagonal) << steps << " secant steps";
+    EXPECT_LT(worst, 1e-9 * diagonal) << steps << " secant steps";
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
   }
 }

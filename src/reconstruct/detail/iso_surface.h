@@ -57,7 +57,9 @@ class IsoFunction {
 struct IsoSurfaceParams {
   double iso_value = 0.0;
   bool inside_positive = true;   // the function is larger than iso_value inside the surface
-  int root_refinement_steps = 3; // secant steps on value() per edge crossing; 0: linear only
+  int root_refinement_steps = 1; // per edge crossing: 0 linear in the corner values; 1 the quadratic
+                                 // through the edge midpoint (exact for degree-2 B-splines with knots
+                                 // on lattice corners); more: further false-position steps on value()
                                  // (3: Poisson elephant 100k depth 8 Chamfer -11 %)
 };
 
