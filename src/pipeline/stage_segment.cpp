@@ -6,8 +6,11 @@
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/features/boundary_points.h"
+#include "pointsurf/io/polylines.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/pipeline/context.h"
+#include "pointsurf/segment/outlines.h"
 #include "pointsurf/segment/segment.h"
 #include "pointsurf/shape/primitives.h"
 
@@ -125,7 +128,113 @@ void run_segment(StageRun& run) {
                             unassigned, plural(cloud.size(), "point"), estimated ? ", normals estimated" : "");
 }
 
+BoundaryParams boundary_params(const StageArgs& a) {
+  BoundaryParams p;
+  p.k = a.int32("k");
+  p.min_gap_deg = a.number("min_gap_deg");
+  return p;
+}
+
+OutlineParams outline_params(const StageArgs& a) {
+  OutlineParams p;
+  p.alpha = a.number("alpha");
+  p.alpha_in_spacings = a.number("alpha_in_spacings");
+  p.simplify_in_spacings = a.number("simplify_in_spacings");
+  p.max_rms_in_spacings = a.number("max_rms_in_spacings");
+  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
+  return p;
+}
+
+void run_boundary(StageRun& run) {
+  const StageArgs& a = run.args;
+  PointCloud& cloud = run.context.item(run.output).cloud;
+  StageRecord& rec = run.record;
+  if (cloud.size() < 5) throw InputError(fmt::format("{}; the boundary test needs at least 5", plural(cloud.size(), "point")));
+  const KdTree& tree = run.context.tree(run.output);
+  const BoundaryResult b = detect_boundary_points(cloud, boundary_params(a), &tree);
+  std::vector<double>& field = cloud.fields.add("boundary", cloud.size(), ScalarType::UInt8).values;
+  for (std::size_t i = 0; i < field.size(); ++i) field[i] = b.boundary[i];
+  rec.count("points", as_count(cloud.size()));
+  rec.count("boundary", as_count(b.count));
+  // Outlines of the planar segments: the input's "segment" field, else region growing.
+  std::vector<std::int32_t> labels(cloud.size(), -1);
+  const ScalarField* segments = cloud.fields.find("segment");
+  std::string source = "segment field";
+  if (segments != nullptr) {
+    for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<std::int32_t>(segments->values[i]);
+  } else {
+    if (!cloud.has_normals()) estimate_missing_normals(run, NormalParams{}.k, {});
+    labels = segment_region_growing(cloud, {}, &run.context.tree(run.output)).labels;
+    source = "region growing";
+  }
+  const OutlineResult o = outline_planar_segments(cloud, labels, outline_params(a));
+  rec.set_used("alpha", o.alpha_used);
+  std::vector<Polyline> lines;
+  PolylineWriteOptions write;
+  write.crs = a.text("crs");
+  std::size_t holes = 0;
+  double area = 0.0, length = 0.0;
+  for (std::size_t i = 0; i < o.outlines.size(); ++i) {
+    const SegmentOutline& s = o.outlines[i];
+    std::size_t h = 0;
+    for (std::size_t k = 0; k < s.loops.size(); ++k) {
+      lines.push_back(s.loops[k]);
+      write.group.push_back(s.segment);
+      write.hole.push_back(s.hole[k]);
+      h += s.hole[k];
+    }
+    holes += h;
+    area += s.area;
+    length += s.perimeter;
+    // Per outline: segment, area, perimeter, loops, holes.
+    rec.metric(fmt::format("outline_{}", i), std::vector<double>{double(s.segment), s.area, s.perimeter, double(s.loops.size()), double(h)});
+  }
+  rec.count("outlines", as_count(o.outlines.size()));
+  rec.count("loops", as_count(lines.size()));
+  rec.count("holes", as_count(holes));
+  rec.count("nonplanar_segments", as_count(o.nonplanar));
+  rec.metric("outline_area", area);
+  rec.metric("outline_length", length);
+  rec.metric("outline_source", source);
+  const std::string& path = a.text("outlines");
+  if (!path.empty()) write_polylines(path, lines, write);
+  rec.summary = fmt::format("boundary: {} of {} on the boundary; {} outlines ({} loops, {} holes) of planar segments from the {}, area {:.4g}, length {:.4g}{}",
+                            b.count, plural(cloud.size(), "point"), o.outlines.size(), lines.size(), holes, source, area, length,
+                            path.empty() ? "" : ", written to " + path);
+}
+
 }  // namespace
+
+StageSpec boundary_stage() {
+  const BoundaryParams b;
+  const OutlineParams o;
+  StageSpec s;
+  s.name = "boundary";
+  s.summary = "Boundary points (field \"boundary\", angular gap) and alpha-shape outlines of planar segments, holes included";
+  s.description = "Outlines come from the input's \"segment\" field (segment stage), or from region growing when it has none; "
+                  "--outlines writes them as .ply edges, .obj lines or .geojson (coordinates in the cloud's own CRS, named by --crs).";
+  s.order = 81;
+  s.consumes = {Slot{"cloud", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = {
+      P::integer("k", b.k, "Neighbours per point of the angular-gap test").at_least(4),
+      P::number("min_gap_deg", b.min_gap_deg, "A point is on the boundary when its neighbours leave a wider gap").unit("degrees").range(0.0, 360.0, true, true),
+      P::number("alpha", o.alpha, "Alpha radius of the outlines; 0: alpha_in_spacings x mean spacing").unit("cloud units").non_negative().meta("A"),
+      P::number("alpha_in_spacings", o.alpha_in_spacings, "Alpha radius when alpha is 0").unit("mean spacings").positive(),
+      P::number("simplify_in_spacings", o.simplify_in_spacings, "Douglas-Peucker tolerance of the loops (0: none)").unit("mean spacings").non_negative(),
+      P::number("max_rms_in_spacings", o.max_rms_in_spacings, "A segment is planar when its RMS distance to its plane is at most this").unit("mean spacings").non_negative(),
+      P::integer("min_points", static_cast<std::int64_t>(o.min_points), "Fewest points of an outlined segment").at_least(3),
+      P::text("outlines", "", "Write the outlines to this file (.ply, .obj, .geojson)").meta("FILE"),
+      P::text("crs", "", "GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)").meta("CRS"),
+  };
+  s.examples = {"pointsurf boundary roofs.ply roofs_boundary.ply --outlines roofs.geojson --crs EPSG:25832"};
+  s.run = run_boundary;
+  s.check = [](const StageArgs& a) {
+    boundary_params(a).validate();
+    outline_params(a).validate();
+  };
+  return s;
+}
 
 StageSpec segment_stage() {
   const RegionGrowingParams rg;

@@ -47,3 +47,38 @@ TEST(SegmentStage, RegionEuclideanAndErrors) {
 
 }  // namespace
 }  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST(BoundaryStage, MarksTheRimAndWritesOutlines) {
+  const std::filesystem::path dir = test::temp_dir("boundary_stage");
+  PointCloud plate = test::sample_plane(20000, 1.0, 6);
+  write_point_cloud(dir / "plate.ply", plate);
+  const std::string out = (dir / "out.ply").string(), lines = (dir / "lines.geojson").string();
+  const test::RunResult r =
+      test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + lines + " --crs EPSG:25832 --report " + (dir / "r.json").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud got = read_point_cloud(out).cloud;
+  const ScalarField* b = got.fields.find("boundary");
+  ASSERT_NE(b, nullptr);
+  std::size_t rim = 0, marked = 0, both = 0, recalled = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    // Mean spacing about 0.007: points within 0.005 of the rim should be marked, and marked
+    // points should mostly lie within 0.03 of it.
+    const double depth = 1.0 - got.positions[i].cwiseAbs().head<2>().maxCoeff();
+    const bool on = b->values[i] != 0;
+    rim += depth < 0.005, marked += on, both += on && depth < 0.03;
+    recalled += on && depth < 0.005;
+  }
+  EXPECT_GT(double(recalled), 0.5 * double(rim));
+  EXPECT_GT(double(both), 0.8 * double(marked));  // random samples leave wide gaps at ~0.5 % of interior points
+  const std::string geo = test::read_bytes(lines);
+  EXPECT_TRUE(test::contains(geo, "EPSG:25832"));
+  EXPECT_TRUE(test::contains(geo, "LineString"));
+  const test::RunResult bad = test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + (dir / "x.dxf").string(), dir);
+  EXPECT_NE(bad.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace pointsurf
