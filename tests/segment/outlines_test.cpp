@@ -2,6 +2,8 @@
 #include "pointsurf/segment/outlines.h"
 
 #include <cmath>
+#include <algorithm>
+#include <map>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -62,6 +64,85 @@ TEST(OutlinePlanarSegments, SkipsCurvedSegmentsAndChecksInput) {
   p.alpha = -1.0;
   EXPECT_THROW(p.validate(), UsageError);
   EXPECT_TRUE(outline_planar_segments(PointCloud{}, {}).outlines.empty());
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/segment/segment.h"
+
+namespace pointsurf {
+namespace {
+
+// Even-odd inside test over all loops of an outline (holes subtract), in x, y.
+bool inside_outline(const SegmentOutline& o, double x, double y) {
+  bool in = false;
+  for (const Polyline& l : o.loops)
+    for (std::size_t i = 0, j = l.points.size() - 1; i < l.points.size(); j = i++) {
+      const Eigen::Vector3d &a = l.points[i], &b = l.points[j];
+      if ((a.y() > y) != (b.y() > y) && x < (b.x() - a.x()) * (y - a.y()) / (b.y() - a.y()) + a.x()) in = !in;
+    }
+  return in;
+}
+
+TEST(OutlinePlanarSegments, FootprintsOfABlockOfFlatRoofs) {
+  // Three flat roofs of an aerial scan (20 points per m^2) over ground: a 10 x 6 box roof, an
+  // L-shaped roof and a roof with a 3 x 3 courtyard; footprints are known rectangles.
+  struct Roof {
+    double z;
+    std::vector<Eigen::Vector4d> boxes;  // x0, y0, x1, y1 of the parts (union)
+    std::vector<Eigen::Vector4d> holes;
+  };
+  const std::vector<Roof> roofs = {{8.0, {{0, 0, 10, 6}}, {}},
+                                   {12.0, {{14, 0, 24, 4}, {14, 4, 18, 12}}, {}},
+                                   {6.0, {{0, 10, 10, 20}}, {{3.5, 13.5, 6.5, 16.5}}}};
+  auto in_roof = [](const Roof& r, double x, double y) {
+    bool in = false;
+    for (const auto& b : r.boxes) in |= x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3];
+    for (const auto& h : r.holes) in &= !(x > h[0] && x < h[2] && y > h[1] && y < h[3]);
+    return in;
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-4.0, 28.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  PointCloud cloud;
+  std::vector<int> truth;
+  for (int i = 0; i < 20 * 32 * 32; ++i) {
+    const double x = u(rng), y = u(rng);
+    int on = -1;
+    for (std::size_t r = 0; r < roofs.size(); ++r)
+      if (in_roof(roofs[r], x, y)) on = int(r);
+    cloud.positions.emplace_back(x, y, (on < 0 ? 0.0 : roofs[std::size_t(on)].z) + noise(rng));
+    truth.push_back(on);
+  }
+  estimate_normals(cloud);
+  const SegmentResult seg = segment_region_growing(cloud);
+  const OutlineResult r = outline_planar_segments(cloud, seg.labels);
+  for (std::size_t k = 0; k < roofs.size(); ++k) {
+    SCOPED_TRACE(k);
+    // The segment most of this roof's points carry, and its outline.
+    std::map<int, int> votes;
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      if (truth[i] == int(k)) ++votes[seg.labels[i]];
+    const int label = std::max_element(votes.begin(), votes.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+    const auto it = std::find_if(r.outlines.begin(), r.outlines.end(), [&](const SegmentOutline& o) { return o.segment == label; });
+    ASSERT_NE(it, r.outlines.end());
+    // Area and IoU on a 5 cm raster.
+    std::size_t both = 0, either = 0, truth_cells = 0;
+    for (double x = -1.0; x < 25.0; x += 0.05)
+      for (double y = -1.0; y < 21.0; y += 0.05) {
+        const bool t = in_roof(roofs[k], x, y), o = inside_outline(*it, x, y);
+        both += t && o, either += t || o, truth_cells += t;
+      }
+    const double iou = double(both) / double(either);
+    // The outline runs through the outermost samples, about one spacing (0.11 m) inside the true
+    // edge, and its simplification cuts corners: measured IoU 0.930, 0.934, 0.942 and areas 7 %,
+    // 5 %, 5 % small.
+    EXPECT_GT(iou, 0.9);
+    EXPECT_NEAR(it->area, double(truth_cells) * 0.0025, 0.1 * double(truth_cells) * 0.0025);
+    EXPECT_EQ(it->loops.size(), roofs[k].holes.size() + 1);
+  }
 }
 
 }  // namespace
