@@ -140,6 +140,7 @@ OutlineParams outline_params(const StageArgs& a) {
   p.alpha = a.number("alpha");
   p.alpha_in_spacings = a.number("alpha_in_spacings");
   p.simplify_in_spacings = a.number("simplify_in_spacings");
+  p.offset_in_spacings = a.number("offset_in_spacings");
   p.max_rms_in_spacings = a.number("max_rms_in_spacings");
   p.min_points = static_cast<std::size_t>(a.integer("min_points"));
   return p;
@@ -222,6 +223,7 @@ StageSpec boundary_stage() {
       P::number("alpha", o.alpha, "Alpha radius of the outlines; 0: alpha_in_spacings x mean spacing").unit("cloud units").non_negative().meta("A"),
       P::number("alpha_in_spacings", o.alpha_in_spacings, "Alpha radius when alpha is 0").unit("mean spacings").positive(),
       P::number("simplify_in_spacings", o.simplify_in_spacings, "Douglas-Peucker tolerance of the loops (0: none)").unit("mean spacings").non_negative(),
+      P::number("offset_in_spacings", o.offset_in_spacings, "Loops are moved this far away from the points (outer out, holes in)").unit("mean spacings").non_negative(),
       P::number("max_rms_in_spacings", o.max_rms_in_spacings, "A segment is planar when its RMS distance to its plane is at most this").unit("mean spacings").non_negative(),
       P::integer("min_points", static_cast<std::int64_t>(o.min_points), "Fewest points of an outlined segment").at_least(3),
       P::text("outlines", "", "Write the outlines to this file (.ply, .obj, .geojson)").meta("FILE"),

@@ -114,6 +114,27 @@ std::vector<Eigen::Vector2d> simplify_loop(const std::vector<Eigen::Vector2d>& l
   return out.size() >= 3 ? out : loop;
 }
 
+// The loop moved by `distance` along its vertices' mitred normals: outwards (away from the
+// enclosed area) for `grow`, inwards otherwise.
+std::vector<Eigen::Vector2d> offset_loop(const std::vector<Eigen::Vector2d>& loop, double distance, bool grow) {
+  if (!(distance > 0.0)) return loop;
+  const std::size_t n = loop.size();
+  // Counter-clockwise loops have the outside on the right of each edge.
+  const double side = (signed_area(loop) > 0.0 ? 1.0 : -1.0) * (grow ? 1.0 : -1.0);
+  std::vector<Eigen::Vector2d> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = (loop[i] - loop[(i + n - 1) % n]).normalized(), b = (loop[(i + 1) % n] - loop[i]).normalized();
+    const Eigen::Vector2d na(a.y(), -a.x()), nb(b.y(), -b.x());
+    Eigen::Vector2d m = na + nb;
+    const double c = m.norm();
+    // A mitre longer than 2 distances (a turn sharper than 120 degrees) is cut to that length.
+    m = c > 1e-9 ? Eigen::Vector2d(m / c) : nb;
+    const double scale = std::min(1.0 / std::max(m.dot(nb), 1e-9), 2.0);
+    out[i] = loop[i] + side * distance * scale * m;
+  }
+  return out;
+}
+
 }  // namespace
 
 void OutlineParams::validate() const {
@@ -123,6 +144,8 @@ void OutlineParams::validate() const {
     throw UsageError(fmt::format("{}: alpha_in_spacings must be > 0, got {}", fn, alpha_in_spacings));
   if (!(std::isfinite(max_rms_in_spacings) && max_rms_in_spacings >= 0.0))
     throw UsageError(fmt::format("{}: max_rms_in_spacings must be >= 0, got {}", fn, max_rms_in_spacings));
+  if (!(std::isfinite(offset_in_spacings) && offset_in_spacings >= 0.0))
+    throw UsageError(fmt::format("{}: offset_in_spacings must be >= 0, got {}", fn, offset_in_spacings));
   if (!(std::isfinite(simplify_in_spacings) && simplify_in_spacings >= 0.0))
     throw UsageError(fmt::format("{}: simplify_in_spacings must be >= 0, got {}", fn, simplify_in_spacings));
   if (min_points < 3) throw UsageError(fmt::format("{}: min_points must be >= 3, got {}", fn, min_points));
@@ -197,10 +220,11 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
       bool is_hole = false;
       for (std::size_t m = 0; m < k && !is_hole; ++m)
         if (!out.hole[m]) is_hole = inside(l.front(), loops2[order[m]]);
+      const std::vector<Eigen::Vector2d> moved = offset_loop(l, params.offset_in_spacings * spacing, !is_hole);
       Polyline line;
       line.closed = true;
-      for (const Eigen::Vector2d& p : l) line.points.push_back(out.centroid + p.x() * u + p.y() * v);
-      const double area = std::abs(signed_area(l));
+      for (const Eigen::Vector2d& p : moved) line.points.push_back(out.centroid + p.x() * u + p.y() * v);
+      const double area = std::abs(signed_area(moved));
       out.area += is_hole ? -area : area;
       out.perimeter += line.length();
       out.loops.push_back(std::move(line));

@@ -136,11 +136,10 @@ TEST(OutlinePlanarSegments, FootprintsOfABlockOfFlatRoofs) {
         both += t && o, either += t || o, truth_cells += t;
       }
     const double iou = double(both) / double(either);
-    // The outline runs through the outermost samples, about one spacing (0.11 m) inside the true
-    // edge, and its simplification cuts corners: measured IoU 0.930, 0.934, 0.942 and areas 7 %,
-    // 5 %, 5 % small.
-    EXPECT_GT(iou, 0.9);
-    EXPECT_NEAR(it->area, double(truth_cells) * 0.0025, 0.1 * double(truth_cells) * 0.0025);
+    // Measured IoU 0.967, 0.961, 0.956 and areas -0.9 %, +1.9 %, +1.6 % with the loops moved out
+    // by one spacing (through the outermost samples: IoU 0.930, 0.934, 0.942, areas 5-7 % small).
+    EXPECT_GT(iou, 0.95);
+    EXPECT_NEAR(it->area, double(truth_cells) * 0.0025, 0.03 * double(truth_cells) * 0.0025);
     EXPECT_EQ(it->loops.size(), roofs[k].holes.size() + 1);
   }
 }

@@ -22,6 +22,10 @@ struct OutlineParams {
   double simplify_in_spacings = 2.0;    // loops are simplified (Douglas-Peucker) to within this
                                         // many mean spacings, which removes the zigzag of the
                                         // alpha-shape boundary (0: none)
+  double offset_in_spacings = 1.0;      // loops are moved this many mean spacings away from
+                                        // the segment's points (outer loops out, holes in): the
+                                        // outermost samples lie inside the true edge by about
+                                        // that much (0: through the samples)
   std::size_t min_points = 30;          // segments with fewer points get no outline
   /// Throws UsageError naming the first value out of range.
   void validate() const;
