@@ -26,7 +26,7 @@ constexpr int kMortonBits = 21;         // per axis
 constexpr std::size_t kSmallestSubset = 500;  // points in the first scoring subset, about
 constexpr std::size_t kBatch = 20;      // minimal sets drawn between extraction tests
 constexpr std::size_t kMaxDraws = 400000;  // per extraction: a cap that ends hopeless searches
-constexpr int kMaxFailures = 30;        // extractions in a row that fall below min_points
+constexpr int kMaxFailures = 2000;      // extractions in a row that fall below min_points (a cap)
 
 struct Candidate {
   Primitive shape;             // in the shifted frame
@@ -518,7 +518,6 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
     // Extract: compatible points, their largest connected component, a least-squares refit,
     // and again with the refitted primitive.
     Candidate chosen = candidates[best];
-    candidates.erase(candidates.begin() + std::ptrdiff_t(best));
     Primitive shape = chosen.shape;
     std::vector<std::uint32_t> idx = largest_component(pts, collect(shape), cluster);
     for (int pass = 0; pass < 2 && idx.size() >= min_points; ++pass) {
@@ -530,6 +529,12 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
       idx = std::move(again);
     }
     if (idx.size() < min_points) {
+      // Its points are scattered (Schnabel et al.: the score is the largest component): keep it
+      // with that score, so that it ranks below the others and counts against min_points.
+      Candidate& failed = candidates[best];
+      failed.subsets = subset_count;
+      failed.evaluated = remaining.size();
+      failed.score = idx.size();
       ++failures;
       continue;
     }
