@@ -6,6 +6,8 @@
 #   planes:  pointsurf planes only (min points 100k: the two true planes) vs Open3D segment_plane
 #            twice (1000 iterations)
 #   cluster: pointsurf segment_euclidean vs Open3D cluster_dbscan (min_points 1), same radius
+#   building: ransac on CGAL's demo building.ply (unseen; its segment_index as reference, planes
+#            of >= 500 points scored), pointsurf's default parameters given to both
 # Writes bench/results/segment.csv (raw runs) and prints a Markdown table.
 #   bench/segment/run_segment_bench.sh [BUILD_DIR] [REPEATS]
 set -euo pipefail
@@ -19,6 +21,10 @@ g++ -O2 -std=c++17 -DNDEBUG -I/usr/include/eigen3 "$ROOT/bench/segment/cgal_effi
 RUNNER="$BUILD/bench/segment_runner"
 $PY "$ROOT/bench/segment/make_scene.py" 1000000 0.005 "$WORK/scene.ply" "$WORK/scene.bin" > /dev/null
 EPS=0.02 CLUSTER=0.05 NORMAL=25 MIN=2000 PROB=0.01
+tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$WORK" data/points_3/building.ply
+$PY "$ROOT/bench/segment/building_case.py" "$WORK/data/points_3/building.ply" "$WORK/building.ply" "$WORK/building.bin"
+# pointsurf's defaults on building.ply: epsilon 1 mean spacing, cluster epsilon 3, min points N / 200.
+B_EPS=0.1369529134601264 B_CLUSTER=0.4108587403803792 B_MIN=500
 CSV="$ROOT/bench/results/segment.csv"
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD)
 DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ)
@@ -45,6 +51,10 @@ for r in $(seq 1 "$REPEATS"); do
   row planes pointsurf "$r" "$j" "$($PY "$ROOT/bench/segment/score_labels.py" "$WORK/scene.ply" "$WORK/psp.labels" 0,1)"
   j=$($PY "$ROOT/bench/segment/open3d_segment.py" planes "$WORK/scene.ply" $EPS $MIN 1000 2 "$WORK/o3dp.labels")
   row planes open3d "$r" "$j" "$($PY "$ROOT/bench/segment/score_labels.py" "$WORK/scene.ply" "$WORK/o3dp.labels" 0,1)"
+  j=$("$RUNNER" ransac "$WORK/building.ply" all $B_EPS $B_CLUSTER $NORMAL $B_MIN $PROB "$WORK/bps.labels")
+  row building pointsurf "$r" "$j" "$($PY "$ROOT/bench/segment/score_labels.py" "$WORK/building.ply" "$WORK/bps.labels" big500)"
+  j=$("$CGAL_BIN" "$WORK/building.bin" $B_EPS $B_CLUSTER $NORMAL $B_MIN $PROB all "$WORK/bcgal.labels")
+  row building cgal "$r" "$j" "$($PY "$ROOT/bench/segment/score_labels.py" "$WORK/building.ply" "$WORK/bcgal.labels" big500)"
   j=$("$RUNNER" euclidean "$WORK/scene.ply" $CLUSTER "$WORK/psc.labels")
   row cluster pointsurf "$r" "$j" "$($PY "$ROOT/bench/segment/score_labels.py" "$WORK/scene.ply" "$WORK/psc.labels")"
   j=$($PY "$ROOT/bench/segment/open3d_segment.py" dbscan "$WORK/scene.ply" $CLUSTER "$WORK/o3dc.labels")
@@ -55,7 +65,7 @@ import csv, statistics, sys
 rows = [r for r in csv.DictReader(open(sys.argv[1])) if r["commit"] == sys.argv[2]]
 print("| task | tool | median s | primitives / segments | completeness | recovered (>= 95 %) |")
 print("|---|---|---|---|---|---|")
-for task in ("ransac", "planes", "cluster"):
+for task in ("ransac", "planes", "cluster", "building"):
     for tool in sorted({r["tool"] for r in rows if r["task"] == task}):
         rs = [r for r in rows if r["task"] == task and r["tool"] == tool]
         print(f'| {task} | {tool} | {statistics.median(float(r["seconds"]) for r in rs):.3f} | {rs[-1]["primitives"]} | {rs[-1]["completeness"]} | {rs[-1]["recovered_95"]} |')
