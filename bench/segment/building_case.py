@@ -6,6 +6,8 @@
 import sys
 import numpy as np
 
+from scene_io import write_scene
+
 src, out_ply, out_bin = sys.argv[1:4]
 with open(src) as f:
     skip = 0
@@ -14,15 +16,4 @@ with open(src) as f:
         if line.startswith("end_header"):
             break
 d = np.loadtxt(src, skiprows=skip)
-rec = np.zeros(len(d), dtype=[("p", "<f8", 6), ("truth", "<i4")])
-rec["p"] = d[:, :6]
-rec["truth"] = d[:, 6].astype(np.int32)
-with open(out_ply, "wb") as f:
-    f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % len(d)).encode())
-    for k in "x y z nx ny nz".split():
-        f.write(("property double %s\n" % k).encode())
-    f.write(b"property int truth\nend_header\n")
-    f.write(rec.tobytes())
-with open(out_bin, "wb") as f:
-    f.write(np.uint64(len(d)).tobytes())
-    f.write(d[:, :6].astype("<f8").tobytes())
+write_scene(d[:, :6], d[:, 6].astype(np.int32), out_ply, out_bin)

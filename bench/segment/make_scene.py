@@ -6,6 +6,8 @@
 import sys
 import numpy as np
 
+from scene_io import write_scene
+
 n_target, sigma, out_ply, out_bin = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], sys.argv[4]
 rng = np.random.default_rng(1)
 t30 = np.tan(np.radians(30.0))
@@ -33,17 +35,5 @@ d = np.cos(phi)[:, None] * x + np.sin(phi)[:, None] * y
 nrm = np.cos(np.radians(30)) * d - np.sin(np.radians(30)) * a
 add(np.array([1.5, 2.0, 3.6]) + h[:, None] * a + (h * t30)[:, None] * d, nrm, 4)
 P, N, T = np.vstack(P), np.vstack(N), np.concatenate(T).astype(np.int32)
-rec = np.zeros(len(P), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("nx", "<f8"), ("ny", "<f8"), ("nz", "<f8"), ("truth", "<i4")])
-for i, k in enumerate("x y z nx ny nz".split()):
-    rec[k] = (P if i < 3 else N)[:, i % 3]
-rec["truth"] = T
-with open(out_ply, "wb") as f:
-    f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % len(P)).encode())
-    for k in "x y z nx ny nz".split():
-        f.write(("property double %s\n" % k).encode())
-    f.write(b"property int truth\nend_header\n")
-    f.write(rec.tobytes())
-with open(out_bin, "wb") as f:
-    f.write(np.uint64(len(P)).tobytes())
-    f.write(np.c_[P, N].astype("<f8").tobytes())
+write_scene(np.c_[P, N], T, out_ply, out_bin)
 print(len(P))
