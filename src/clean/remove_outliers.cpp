@@ -2,7 +2,6 @@
 #include "pointsurf/clean/remove_outliers.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -17,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include "clean/detail/clean_common.h"
+#include "core/detail/plane_fit.h"
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/voxel_grid.h"
@@ -49,76 +49,16 @@ OutlierResult collect(const std::vector<std::uint8_t>& keep, double threshold) {
   return result;
 }
 
-// SplitMix64: a small, good mixer for per-point seeds.
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
+using detail::mix;
+using detail::Plane;
+using detail::seed_for;
+using Fit = detail::PlaneFit;
 
-// A point's random stream: from the seed and its coordinates only (not its index).
-std::uint64_t seed_for(std::uint64_t seed, const Eigen::Vector3d& p) {
-  return mix(seed ^ mix(std::bit_cast<std::uint64_t>(p.x()) ^
-                        mix(std::bit_cast<std::uint64_t>(p.y()) ^ mix(std::bit_cast<std::uint64_t>(p.z())))));
-}
+Fit fit_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) { return detail::msac_fit(q, plane, distance); }
 
-// A plane normal . x + offset = 0 in the offsets' frame (the query point at the origin, so
-// |offset| is its distance to the plane).
-struct Plane {
-  Eigen::Vector3d normal;
-  double offset = 0.0;
-  double rms = 0.0;  // refitted planes: RMS distance of the inliers they were fitted to
-  bool surrounds = true;  // refitted planes: the point's foot lies within the inliers' spread
-  double score = 0.0;  // candidates: their Fit score
-};
-
-// How well a plane fits the neighbours: how many lie within `distance` (its support) and the
-// MSAC score sum(1 - r^2 / distance^2) over those, which prefers a surface (residuals at the
-// noise level) to a plane cutting across creases (residuals spread over the whole band).
-struct Fit {
-  std::size_t support = 0;
-  double score = 0.0;
-};
-
-Fit fit_of(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
-  Fit fit;
-  const double inverse = 1.0 / (distance * distance);
-  for (const Eigen::Vector3d& x : q) {
-    const double r = plane.normal.dot(x) + plane.offset;
-    if (std::abs(r) > distance) continue;
-    ++fit.support;
-    fit.score += 1.0 - r * r * inverse;
-  }
-  return fit;
-}
-
-// The least-squares plane of the points within `distance` of `plane` (its inliers); nullopt
-// when fewer than 3 or when they are collinear.
+// The least-squares plane of the inliers, whose foot test uses the in-plane spread kSpread.
 std::optional<Plane> refit(std::span<const Eigen::Vector3d> q, const Plane& plane, double distance) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-  std::size_t count = 0;
-  for (const Eigen::Vector3d& x : q) {
-    if (std::abs(plane.normal.dot(x) + plane.offset) > distance) continue;
-    sum += x;
-    outer.noalias() += x * x.transpose();
-    ++count;
-  }
-  if (count < 3) return std::nullopt;
-  const Eigen::Vector3d centroid = sum / double(count);
-  const Eigen::Matrix3d covariance = outer / double(count) - centroid * centroid.transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(covariance);
-  const Eigen::Vector3d values = eigen.eigenvalues();  // ascending
-  if (!(values[1] > kMinSine * kMinSine * values[2])) return std::nullopt;  // a line, not a plane
-  Plane fitted{eigen.eigenvectors().col(0).normalized(), 0.0, std::sqrt(std::max(values[0], 0.0))};
-  fitted.offset = -fitted.normal.dot(centroid);
-  // The foot of the point (the origin) on the plane, from the inliers' centroid, against the
-  // inliers' in-plane spread: a point far from where the plane is supported does not lie on it.
-  const Eigen::Vector3d foot = -centroid + fitted.normal.dot(centroid) * fitted.normal;
-  fitted.surrounds = foot.squaredNorm() <= kSpread * kSpread * (values[1] + values[2]);
-  return fitted;
+  return detail::refit_plane(q, plane, distance, kMinSine, kSpread);
 }
 
 // Whether a refitted plane passes close enough to the point (the origin): within `distance`,

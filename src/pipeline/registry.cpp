@@ -18,7 +18,7 @@ const std::vector<StageSpec>& registered_stages() {
     std::vector<StageSpec> s = {detail::read_stage(),      detail::write_stage(),    detail::crop_stage(),
                                 detail::range_stage(),     detail::transform_stage(), detail::merge_stage(),
                                 detail::clean_stage(),     detail::simplify_stage(), detail::normals_stage(),
-                                detail::curvature_stage(), detail::features_stage(), detail::reconstruct_stage(),
+                                detail::curvature_stage(), detail::features_stage(), detail::segment_stage(), detail::boundary_stage(), detail::reconstruct_stage(),
                                 detail::quality_stage(),   detail::evaluate_stage(),    detail::render_stage()};
     std::stable_sort(s.begin(), s.end(), [](const StageSpec& a, const StageSpec& b) { return a.order < b.order; });
     return s;

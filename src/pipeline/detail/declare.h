@@ -78,6 +78,8 @@ StageSpec simplify_stage();
 StageSpec normals_stage();
 StageSpec curvature_stage();
 StageSpec features_stage();
+StageSpec segment_stage();
+StageSpec boundary_stage();
 StageSpec reconstruct_stage();
 StageSpec quality_stage();
 StageSpec evaluate_stage();

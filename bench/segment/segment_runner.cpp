@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Stage runner for bench/segment/run_segment_bench.sh; prints one JSON line, writes N int32
+// labels (-1 unassigned).
+//   segment_runner ransac IN.ply TYPES EPSILON CLUSTER_EPSILON NORMAL_DEG MIN_POINTS PROBABILITY OUT.labels
+//       TYPES: all or plane
+//   segment_runner euclidean IN.ply RADIUS OUT.labels
+//   segment_runner region IN.ply OUT.labels
+#include <chrono>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "pointsurf/io/io.h"
+#include "pointsurf/segment/segment.h"
+#include "pointsurf/shape/primitives.h"
+
+using namespace pointsurf;
+
+namespace {
+
+void write_labels(const std::string& path, const std::vector<std::int32_t>& labels) {
+  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(labels.data()), std::streamsize(labels.size() * 4));
+}
+
+double since(std::chrono::steady_clock::time_point t0) { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (!((mode == "ransac" && argc == 10) || (mode == "euclidean" && argc == 5) || (mode == "region" && argc == 4))) {
+    std::cerr << "usage: see the header of bench/segment/segment_runner.cpp\n";
+    return 1;
+  }
+  const PointCloud cloud = read_point_cloud(argv[2]).cloud;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (mode == "ransac") {
+    PrimitiveParams p;
+    p.types = std::string(argv[3]) == "plane" ? kPlanes : kAllPrimitives;
+    p.epsilon = std::stod(argv[4]);
+    p.cluster_epsilon = std::stod(argv[5]);
+    p.max_normal_deg = std::stod(argv[6]);
+    p.min_points = std::stoul(argv[7]);
+    p.probability = std::stod(argv[8]);
+    const PrimitiveResult r = detect_primitives(cloud, p);
+    const double s = since(t0);
+    std::string types;
+    for (const Primitive& x : r.primitives) types += (types.empty() ? "" : ",") + std::string(primitive_type_name(x.type));
+    write_labels(argv[9], r.labels);
+    fmt::print("{{\"tool\": \"pointsurf\", \"seconds\": {:.4f}, \"primitives\": {}, \"types\": \"{}\", \"unassigned\": {}}}\n", s, r.primitives.size(),
+               types, r.unassigned);
+  } else {
+    SegmentResult r;
+    if (mode == "euclidean") {
+      EuclideanParams p;
+      p.radius = std::stod(argv[3]);
+      p.min_points = 1;
+      r = segment_euclidean(cloud, p);
+    } else {
+      r = segment_region_growing(cloud);
+    }
+    const double s = since(t0);
+    write_labels(argv[argc - 1], r.labels);
+    fmt::print("{{\"tool\": \"pointsurf\", \"seconds\": {:.4f}, \"segments\": {}, \"unassigned\": {}}}\n", s, r.sizes.size(), r.unassigned);
+  }
+  return 0;
+}

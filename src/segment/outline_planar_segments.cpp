@@ -1,0 +1,238 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// CGAL's 2D alpha shape stays inside this file.
+#include "pointsurf/segment/outlines.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+#include <CGAL/Alpha_shape_2.h>
+#include <CGAL/Alpha_shape_face_base_2.h>
+#include <CGAL/Alpha_shape_vertex_base_2.h>
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/spatial/kd_tree.h"
+
+namespace pointsurf {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb = CGAL::Alpha_shape_vertex_base_2<K, CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K>>;
+using Fb = CGAL::Alpha_shape_face_base_2<K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using Delaunay = CGAL::Delaunay_triangulation_2<K, Tds>;
+using AlphaShape = CGAL::Alpha_shape_2<Delaunay>;
+
+double signed_area(const std::vector<Eigen::Vector2d>& loop) {
+  double a = 0.0;
+  for (std::size_t i = 0; i < loop.size(); ++i) {
+    const Eigen::Vector2d& p = loop[i];
+    const Eigen::Vector2d& q = loop[(i + 1) % loop.size()];
+    a += p.x() * q.y() - q.x() * p.y();
+  }
+  return 0.5 * a;
+}
+
+bool inside(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& loop) {
+  bool in = false;
+  for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
+    const Eigen::Vector2d &a = loop[i], &b = loop[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) in = !in;
+  }
+  return in;
+}
+
+// Chains undirected boundary edges into closed loops (at a pinch vertex of degree 4 the walk
+// takes the first unused edge).
+std::vector<std::vector<std::uint32_t>> chain_loops(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) {
+  std::map<std::uint32_t, std::vector<std::size_t>> at;
+  for (std::size_t e = 0; e < edges.size(); ++e) at[edges[e].first].push_back(e), at[edges[e].second].push_back(e);
+  std::vector<std::uint8_t> used(edges.size(), 0);
+  std::vector<std::vector<std::uint32_t>> loops;
+  for (std::size_t start = 0; start < edges.size(); ++start) {
+    if (used[start]) continue;
+    used[start] = 1;
+    std::vector<std::uint32_t> loop = {edges[start].first};
+    std::uint32_t current = edges[start].second;
+    while (current != loop.front()) {
+      loop.push_back(current);
+      std::size_t next = edges.size();
+      for (std::size_t e : at[current])
+        if (!used[e]) {
+          next = e;
+          break;
+        }
+      if (next == edges.size()) break;  // open chain: not a loop
+      used[next] = 1;
+      current = edges[next].first == current ? edges[next].second : edges[next].first;
+    }
+    if (current == loop.front() && loop.size() >= 3) loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+// Douglas-Peucker on the open chain loop[first..last] (indices mod size): marks kept vertices.
+void douglas_peucker(const std::vector<Eigen::Vector2d>& loop, std::size_t first, std::size_t last, double tolerance,
+                     std::vector<std::uint8_t>& keep) {
+  const std::size_t n = loop.size();
+  const Eigen::Vector2d a = loop[first % n], b = loop[last % n];
+  const Eigen::Vector2d d = b - a;
+  const double l = d.norm();
+  double worst = -1.0;
+  std::size_t at = first;
+  for (std::size_t i = first + 1; i < last; ++i) {
+    const Eigen::Vector2d q = loop[i % n] - a;
+    const double dist = l > 0.0 ? std::abs(d.x() * q.y() - d.y() * q.x()) / l : q.norm();
+    if (dist > worst) worst = dist, at = i;
+  }
+  if (worst <= tolerance) return;
+  keep[at % n] = 1;
+  douglas_peucker(loop, first, at, tolerance, keep);
+  douglas_peucker(loop, at, last, tolerance, keep);
+}
+
+// A closed loop simplified: split at its first vertex and the vertex farthest from it.
+std::vector<Eigen::Vector2d> simplify_loop(const std::vector<Eigen::Vector2d>& loop, double tolerance) {
+  const std::size_t n = loop.size();
+  if (!(tolerance > 0.0) || n < 4) return loop;
+  std::size_t far = 0;
+  for (std::size_t i = 1; i < n; ++i)
+    if ((loop[i] - loop[0]).squaredNorm() > (loop[far] - loop[0]).squaredNorm()) far = i;
+  std::vector<std::uint8_t> keep(n, 0);
+  keep[0] = keep[far] = 1;
+  douglas_peucker(loop, 0, far, tolerance, keep);
+  douglas_peucker(loop, far, n, tolerance, keep);
+  std::vector<Eigen::Vector2d> out;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) out.push_back(loop[i]);
+  return out.size() >= 3 ? out : loop;
+}
+
+// The loop moved by `distance` along its vertices' mitred normals: outwards (away from the
+// enclosed area) for `grow`, inwards otherwise.
+std::vector<Eigen::Vector2d> offset_loop(const std::vector<Eigen::Vector2d>& loop, double distance, bool grow) {
+  if (!(distance > 0.0)) return loop;
+  const std::size_t n = loop.size();
+  // Counter-clockwise loops have the outside on the right of each edge.
+  const double side = (signed_area(loop) > 0.0 ? 1.0 : -1.0) * (grow ? 1.0 : -1.0);
+  std::vector<Eigen::Vector2d> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = (loop[i] - loop[(i + n - 1) % n]).normalized(), b = (loop[(i + 1) % n] - loop[i]).normalized();
+    const Eigen::Vector2d na(a.y(), -a.x()), nb(b.y(), -b.x());
+    Eigen::Vector2d m = na + nb;
+    const double c = m.norm();
+    // A mitre longer than 2 distances (a turn sharper than 120 degrees) is cut to that length.
+    m = c > 1e-9 ? Eigen::Vector2d(m / c) : nb;
+    const double scale = std::min(1.0 / std::max(m.dot(nb), 1e-9), 2.0);
+    out[i] = loop[i] + side * distance * scale * m;
+  }
+  return out;
+}
+
+}  // namespace
+
+void OutlineParams::validate() const {
+  constexpr std::string_view fn = "outline_planar_segments";
+  if (!std::isfinite(alpha) || alpha < 0.0) throw UsageError(fmt::format("{}: alpha must be >= 0 (cloud units), got {}", fn, alpha));
+  if (alpha == 0.0 && !(std::isfinite(alpha_in_spacings) && alpha_in_spacings > 0.0))
+    throw UsageError(fmt::format("{}: alpha_in_spacings must be > 0, got {}", fn, alpha_in_spacings));
+  if (!(std::isfinite(max_rms_in_spacings) && max_rms_in_spacings >= 0.0))
+    throw UsageError(fmt::format("{}: max_rms_in_spacings must be >= 0, got {}", fn, max_rms_in_spacings));
+  if (!(std::isfinite(offset_in_spacings) && offset_in_spacings >= 0.0))
+    throw UsageError(fmt::format("{}: offset_in_spacings must be >= 0, got {}", fn, offset_in_spacings));
+  if (!(std::isfinite(simplify_in_spacings) && simplify_in_spacings >= 0.0))
+    throw UsageError(fmt::format("{}: simplify_in_spacings must be >= 0, got {}", fn, simplify_in_spacings));
+  if (min_points < 3) throw UsageError(fmt::format("{}: min_points must be >= 3, got {}", fn, min_points));
+}
+
+OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params) {
+  constexpr std::string_view fn = "outline_planar_segments";
+  params.validate();
+  if (labels.size() != cloud.size())
+    throw UsageError(fmt::format("{}: {} labels for {} points", fn, labels.size(), cloud.size()));
+  OutlineResult result;
+  if (cloud.size() < 2) return result;
+  const double spacing = mean_spacing(cloud.positions);
+  const double alpha = params.alpha > 0.0 ? params.alpha : params.alpha_in_spacings * spacing;
+  result.alpha_used = alpha;
+  if (!(alpha > 0.0)) return result;
+  std::map<std::int32_t, std::vector<std::uint32_t>> members;
+  for (std::uint32_t i = 0; i < labels.size(); ++i)
+    if (labels[i] >= 0) members[labels[i]].push_back(i);
+  for (const auto& [label, idx] : members) {
+    if (idx.size() < params.min_points) continue;
+    // The least-squares plane, relative to the first point (georeferenced clouds).
+    const Eigen::Vector3d origin = cloud.positions[idx.front()];
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::uint32_t i : idx) mean += cloud.positions[i] - origin;
+    mean /= double(idx.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::uint32_t i : idx) {
+      const Eigen::Vector3d d = cloud.positions[i] - origin - mean;
+      cov.noalias() += d * d.transpose();
+    }
+    cov /= double(idx.size());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov);
+    if (!(std::sqrt(std::max(eigen.eigenvalues()[0], 0.0)) <= params.max_rms_in_spacings * spacing) || !(eigen.eigenvalues()[1] > 0.0)) {
+      ++result.nonplanar;
+      continue;
+    }
+    const Eigen::Vector3d normal = eigen.eigenvectors().col(0).normalized();
+    const Eigen::Vector3d u = eigen.eigenvectors().col(2).normalized(), v = normal.cross(u);
+    std::vector<std::pair<K::Point_2, std::uint32_t>> flat;
+    std::vector<Eigen::Vector2d> uv(idx.size());
+    for (std::uint32_t j = 0; j < idx.size(); ++j) {
+      const Eigen::Vector3d d = cloud.positions[idx[j]] - origin - mean;
+      uv[j] = Eigen::Vector2d(u.dot(d), v.dot(d));
+      flat.emplace_back(K::Point_2(uv[j].x(), uv[j].y()), j);
+    }
+    AlphaShape shape(flat.begin(), flat.end(), alpha * alpha, AlphaShape::REGULARIZED);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    for (auto it = shape.alpha_shape_edges_begin(); it != shape.alpha_shape_edges_end(); ++it) {
+      if (shape.classify(*it) != AlphaShape::REGULAR) continue;
+      const auto f = it->first;
+      const int i = it->second;
+      edges.emplace_back(f->vertex(Delaunay::cw(i))->info(), f->vertex(Delaunay::ccw(i))->info());
+    }
+    std::sort(edges.begin(), edges.end());
+    const std::vector<std::vector<std::uint32_t>> chains = chain_loops(edges);
+    std::vector<std::vector<Eigen::Vector2d>> loops2;
+    for (const auto& c : chains) {
+      std::vector<Eigen::Vector2d> l;
+      for (std::uint32_t j : c) l.push_back(uv[j]);
+      loops2.push_back(simplify_loop(l, params.simplify_in_spacings * spacing));
+    }
+    std::vector<std::size_t> order(chains.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return std::abs(signed_area(loops2[a])) > std::abs(signed_area(loops2[b])); });
+    SegmentOutline out;
+    out.segment = label;
+    out.centroid = origin + mean;
+    out.normal = normal;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const std::vector<Eigen::Vector2d>& l = loops2[order[k]];
+      bool is_hole = false;
+      for (std::size_t m = 0; m < k && !is_hole; ++m)
+        if (!out.hole[m]) is_hole = inside(l.front(), loops2[order[m]]);
+      const std::vector<Eigen::Vector2d> moved = offset_loop(l, params.offset_in_spacings * spacing, !is_hole);
+      Polyline line;
+      line.closed = true;
+      for (const Eigen::Vector2d& p : moved) line.points.push_back(out.centroid + p.x() * u + p.y() * v);
+      const double area = std::abs(signed_area(moved));
+      out.area += is_hole ? -area : area;
+      out.perimeter += line.length();
+      out.loops.push_back(std::move(line));
+      out.hole.push_back(is_hole);
+    }
+    if (!out.loops.empty()) result.outlines.push_back(std::move(out));
+  }
+  return result;
+}
+
+}  // namespace pointsurf

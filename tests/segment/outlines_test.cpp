@@ -1,0 +1,148 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/segment/outlines.h"
+
+#include <cmath>
+#include <algorithm>
+#include <map>
+#include <random>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/error.h"
+
+namespace pointsurf {
+namespace {
+
+// A 2 x 2 square with a round hole of radius 0.4 at its centre, tilted and shifted, sampled
+// uniformly (`n` points in the square before the hole is cut out), all labelled 0.
+PointCloud square_with_hole(std::size_t n, const Eigen::Vector3d& shift) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  PointCloud cloud;
+  while (cloud.positions.size() < n) {
+    const double x = u(rng), y = u(rng);
+    if (x * x + y * y < 0.4 * 0.4) continue;
+    cloud.positions.push_back(rotation * Eigen::Vector3d(x, y, 0.0) + shift);
+  }
+  return cloud;
+}
+
+void check_square_with_hole(const Eigen::Vector3d& shift) {
+  const PointCloud cloud = square_with_hole(40000, shift);
+  const std::vector<std::int32_t> labels(cloud.size(), 0);
+  const OutlineResult r = outline_planar_segments(cloud, labels);
+  ASSERT_EQ(r.outlines.size(), 1u);
+  const SegmentOutline& o = r.outlines[0];
+  ASSERT_EQ(o.loops.size(), 2u);
+  EXPECT_EQ(o.hole[0], 0);
+  EXPECT_EQ(o.hole[1], 1);
+  EXPECT_NEAR(o.loops[0].length(), 8.0, 0.02 * 8.0);
+  EXPECT_NEAR(o.loops[1].length(), 2 * M_PI * 0.4, 0.02 * 2 * M_PI * 0.4);
+  EXPECT_NEAR(o.area, 4.0 - M_PI * 0.16, 0.02 * (4.0 - M_PI * 0.16));
+}
+
+TEST(OutlinePlanarSegments, SquareWithARoundHoleHasOneOuterAndOneInnerLoop) { check_square_with_hole(Eigen::Vector3d::Zero()); }
+
+TEST(OutlinePlanarSegments, SameFarFromTheOrigin) { check_square_with_hole(Eigen::Vector3d(1e6, -1e6, 1e6)); }
+
+TEST(OutlinePlanarSegments, SkipsCurvedSegmentsAndChecksInput) {
+  PointCloud sphere;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < 5000; ++i) {
+    const double x = g(rng), y = g(rng), z = g(rng);
+    sphere.positions.push_back(Eigen::Vector3d(x, y, z).normalized());
+  }
+  const std::vector<std::int32_t> labels(sphere.size(), 0);
+  const OutlineResult r = outline_planar_segments(sphere, labels);
+  EXPECT_TRUE(r.outlines.empty());
+  EXPECT_EQ(r.nonplanar, 1u);
+  EXPECT_THROW(outline_planar_segments(sphere, std::vector<std::int32_t>(3, 0)), UsageError);
+  OutlineParams p;
+  p.alpha = -1.0;
+  EXPECT_THROW(p.validate(), UsageError);
+  EXPECT_TRUE(outline_planar_segments(PointCloud{}, {}).outlines.empty());
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/segment/segment.h"
+
+namespace pointsurf {
+namespace {
+
+// Even-odd inside test over all loops of an outline (holes subtract), in x, y.
+bool inside_outline(const SegmentOutline& o, double x, double y) {
+  bool in = false;
+  for (const Polyline& l : o.loops)
+    for (std::size_t i = 0, j = l.points.size() - 1; i < l.points.size(); j = i++) {
+      const Eigen::Vector3d &a = l.points[i], &b = l.points[j];
+      if ((a.y() > y) != (b.y() > y) && x < (b.x() - a.x()) * (y - a.y()) / (b.y() - a.y()) + a.x()) in = !in;
+    }
+  return in;
+}
+
+TEST(OutlinePlanarSegments, FootprintsOfABlockOfFlatRoofs) {
+  // Three flat roofs of an aerial scan (20 points per m^2) over ground: a 10 x 6 box roof, an
+  // L-shaped roof and a roof with a 3 x 3 courtyard; footprints are known rectangles.
+  struct Roof {
+    double z;
+    std::vector<Eigen::Vector4d> boxes;  // x0, y0, x1, y1 of the parts (union)
+    std::vector<Eigen::Vector4d> holes;
+  };
+  const std::vector<Roof> roofs = {{8.0, {{0, 0, 10, 6}}, {}},
+                                   {12.0, {{14, 0, 24, 4}, {14, 4, 18, 12}}, {}},
+                                   {6.0, {{0, 10, 10, 20}}, {{3.5, 13.5, 6.5, 16.5}}}};
+  auto in_roof = [](const Roof& r, double x, double y) {
+    bool in = false;
+    for (const auto& b : r.boxes) in |= x >= b[0] && x <= b[2] && y >= b[1] && y <= b[3];
+    for (const auto& h : r.holes) in &= !(x > h[0] && x < h[2] && y > h[1] && y < h[3]);
+    return in;
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-4.0, 28.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  PointCloud cloud;
+  std::vector<int> truth;
+  for (int i = 0; i < 20 * 32 * 32; ++i) {
+    const double x = u(rng), y = u(rng);
+    int on = -1;
+    for (std::size_t r = 0; r < roofs.size(); ++r)
+      if (in_roof(roofs[r], x, y)) on = int(r);
+    cloud.positions.emplace_back(x, y, (on < 0 ? 0.0 : roofs[std::size_t(on)].z) + noise(rng));
+    truth.push_back(on);
+  }
+  estimate_normals(cloud);
+  const SegmentResult seg = segment_region_growing(cloud);
+  const OutlineResult r = outline_planar_segments(cloud, seg.labels);
+  for (std::size_t k = 0; k < roofs.size(); ++k) {
+    SCOPED_TRACE(k);
+    // The segment most of this roof's points carry, and its outline.
+    std::map<int, int> votes;
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      if (truth[i] == int(k)) ++votes[seg.labels[i]];
+    const int label = std::max_element(votes.begin(), votes.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+    const auto it = std::find_if(r.outlines.begin(), r.outlines.end(), [&](const SegmentOutline& o) { return o.segment == label; });
+    ASSERT_NE(it, r.outlines.end());
+    // Area and IoU on a 5 cm raster.
+    std::size_t both = 0, either = 0, truth_cells = 0;
+    for (double x = -1.0; x < 25.0; x += 0.05)
+      for (double y = -1.0; y < 21.0; y += 0.05) {
+        const bool t = in_roof(roofs[k], x, y), o = inside_outline(*it, x, y);
+        both += t && o, either += t || o, truth_cells += t;
+      }
+    const double iou = double(both) / double(either);
+    // Measured IoU 0.967, 0.961, 0.956 and areas -0.9 %, +1.9 %, +1.6 % with the loops moved out
+    // by one spacing (through the outermost samples: IoU 0.930, 0.934, 0.942, areas 5-7 % small).
+    EXPECT_GT(iou, 0.95);
+    EXPECT_NEAR(it->area, double(truth_cells) * 0.0025, 0.03 * double(truth_cells) * 0.0025);
+    EXPECT_EQ(it->loops.size(), roofs[k].holes.size() + 1);
+  }
+}
+
+}  // namespace
+}  // namespace pointsurf

@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The segment stage end to end through the command line.
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "pointsurf/io/io.h"
+#include "support/cli_run.h"
+#include "support/files.h"
+#include "support/primitive_scene.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+TEST(SegmentStage, RansacWritesTheFieldAndListsPrimitives) {
+  const std::filesystem::path dir = test::temp_dir("segment_stage_ransac");
+  const test::PrimitiveScene scene = test::make_primitive_scene(150.0);
+  write_point_cloud(dir / "scene.ply", scene.cloud);
+  const test::RunResult r = test::run_cli("segment " + (dir / "scene.ply").string() + " " + (dir / "out.ply").string() + " --method ransac --report " + (dir / "report.json").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud out = read_point_cloud(dir / "out.ply").cloud;
+  const ScalarField* field = out.fields.find("segment");
+  ASSERT_NE(field, nullptr);
+  std::map<int, std::size_t> counts;
+  for (double v : field->values) ++counts[int(v)];
+  EXPECT_GE(counts.size(), 5u);
+  const std::string report = test::read_bytes(dir / "report.json");
+  for (const char* type : {"plane", "sphere", "cylinder", "cone"}) EXPECT_TRUE(test::contains(report, type)) << type;
+}
+
+TEST(SegmentStage, RegionEuclideanAndErrors) {
+  const std::filesystem::path dir = test::temp_dir("segment_stage_region");
+  write_point_cloud(dir / "cube.ply", test::sample_cube(6000, 1.0, 2));
+  const std::string cube = (dir / "cube.ply").string(), out = " " + (dir / "out.ply").string();
+  EXPECT_EQ(test::run_cli("segment " + cube + out, dir).exit_code, 0);
+  EXPECT_EQ(test::run_cli("segment " + cube + out + " --method euclidean", dir).exit_code, 0);
+  const test::RunResult hk = test::run_cli("segment " + cube + out + " --method hk", dir);
+  EXPECT_EQ(hk.exit_code, 2);
+  EXPECT_TRUE(test::contains(hk.err, "surface_type")) << hk.err;
+  const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max_angle_deg 120", dir);
+  EXPECT_EQ(bad.exit_code, 1);
+  const test::RunResult types = test::run_cli("segment " + cube + out + " --method ransac --types plane,torus", dir);
+  EXPECT_EQ(types.exit_code, 1);
+  EXPECT_TRUE(test::contains(types.err, "torus")) << types.err;
+}
+
+}  // namespace
+}  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+
+TEST(BoundaryStage, MarksTheRimAndWritesOutlines) {
+  const std::filesystem::path dir = test::temp_dir("boundary_stage");
+  PointCloud plate = test::sample_plane(20000, 1.0, 6);
+  write_point_cloud(dir / "plate.ply", plate);
+  const std::string out = (dir / "out.ply").string(), lines = (dir / "lines.geojson").string();
+  const test::RunResult r =
+      test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + lines + " --crs EPSG:25832 --report " + (dir / "r.json").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud got = read_point_cloud(out).cloud;
+  const ScalarField* b = got.fields.find("boundary");
+  ASSERT_NE(b, nullptr);
+  std::size_t rim = 0, marked = 0, both = 0, recalled = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    // Mean spacing about 0.007: points within 0.005 of the rim should be marked, and marked
+    // points should mostly lie within 0.03 of it.
+    const double depth = 1.0 - got.positions[i].cwiseAbs().head<2>().maxCoeff();
+    const bool on = b->values[i] != 0;
+    rim += depth < 0.005, marked += on, both += on && depth < 0.03;
+    recalled += on && depth < 0.005;
+  }
+  EXPECT_GT(double(recalled), 0.5 * double(rim));
+  EXPECT_GT(double(both), 0.8 * double(marked));  // random samples leave wide gaps at ~0.5 % of interior points
+  const std::string geo = test::read_bytes(lines);
+  EXPECT_TRUE(test::contains(geo, "EPSG:25832"));
+  EXPECT_TRUE(test::contains(geo, "LineString"));
+  const test::RunResult bad = test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + (dir / "x.dxf").string(), dir);
+  EXPECT_NE(bad.exit_code, 0);
+}
+
+}  // namespace
+}  // namespace pointsurf
