@@ -25,8 +25,8 @@ BUILD_PACKAGES=(
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
-# Node.js runs laz-perf (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ.
-LAZ_CHECK_PACKAGES=(nodejs npm)
+# Node.js (Debian nodejs, npm; installed in build() when the commands are missing) runs laz-perf and
+# web-e57 (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ and E57.
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
@@ -52,7 +52,12 @@ install_missing() {
 }
 
 build() {
-  install_missing "${BUILD_PACKAGES[@]}" "${LAZ_CHECK_PACKAGES[@]}"
+  # Debian's nodejs and npm only where the commands are missing: a machine may carry another
+  # Node.js build (NodeSource's nodejs bundles npm and conflicts with Debian's npm package).
+  local node_packages=()
+  command -v node >/dev/null 2>&1 || node_packages+=(nodejs)
+  command -v npm >/dev/null 2>&1 || node_packages+=(npm)
+  install_missing "${BUILD_PACKAGES[@]}" "${node_packages[@]}"
   local generator=()
   if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
     command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)

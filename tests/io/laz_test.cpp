@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "io/detail/laz_items.h"
 #include "io/detail/laz_layered.h"
 #include "pointsurf/core/error.h"
@@ -43,7 +45,10 @@ void put(std::string& s, std::size_t at, T value) {
   std::memcpy(s.data() + at, &value, sizeof(T));
 }
 
-std::filesystem::path temp(const std::string& name) { return std::filesystem::temp_directory_path() / ("pointsurf_laz_" + name); }
+// One name per process: ctest runs each test in its own process, in parallel.
+std::filesystem::path temp(const std::string& name) {
+  return std::filesystem::temp_directory_path() / ("pointsurf_laz_" + std::to_string(::getpid()) + "_" + name);
+}
 
 void expect_same_clouds(const PointCloud& a, const PointCloud& b) {
   ASSERT_EQ(a.size(), b.size());
