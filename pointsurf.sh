@@ -24,6 +24,8 @@ BUILD_PACKAGES=(
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
+# The Python module (python/): pybind11, Debian's Python with numpy, pytest; setuptools and venv for pip.
+PYTHON_PACKAGES=(pybind11-dev python3-dev python3-numpy python3-pytest python3-setuptools python3-venv)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
@@ -82,10 +84,12 @@ demo() {
 }
 
 run_tests() {
-  install_missing "${TEST_PACKAGES[@]}"
-  build
+  install_missing "${TEST_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
+  build -DPOINTSURF_BUILD_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900
+  # The Python module from this build; pytest exits 5 (failing the script) when it collects nothing.
+  PYTHONPATH="$BUILD_DIR/python" /usr/bin/python3 -m pytest -q -p no:cacheprovider "$ROOT/python/tests"
 }
 
 # Sanitizer run: the whole suite built with -fsanitize=address,undefined in its own build folder.
