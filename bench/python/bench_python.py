@@ -6,7 +6,7 @@ against Open3D's Python API, interleaved in one run (medians of REPEATS).
     PYTHONPATH=build/python /usr/bin/python3 bench/python/bench_python.py [POINTS] [REPEATS]
 
 Calls: normals (k = 30, orient none: PCA only, as Open3D's estimate_normals) and reconstruct
-(ball pivoting; Open3D's create_from_point_cloud_ball_pivoting with the radius pointsurf chose).
+(ball pivoting; Open3D's create_from_point_cloud_ball_pivoting with the radii pointsurf chose).
 Per call: pointsurf Python wall time, the library's own stage time (its report's "seconds"),
 so overhead = wall - stage (input copy, worker thread, output wrap); the CLI's wall time
 (includes reading and writing the file) and its stage time; Open3D's wall time. Rows go to
@@ -85,14 +85,14 @@ def main():
             # reconstruct (ball pivoting) from the same cloud with normals
             wall, mesh = timed(lambda: pointsurf.reconstruct(with_normals, method="ball-pivot"))
             rows.append(("reconstruct", "pointsurf-python", rep, wall, mesh.report["seconds"], load))
-            radius = float(mesh.report["parameters"].get("radius") or 0.0)
+            radii = [float(r) for r in mesh.report["parameters"]["radii"]]
             wall, stage_s = cli("reconstruct", src_n, ["--method", "ball-pivot"], tmp)
             rows.append(("reconstruct", "pointsurf-cli", rep, wall, stage_s, load))
             pcn = pointsurf.to_open3d(with_normals)
-            radii = o3d.utility.DoubleVector([radius, 2 * radius])
-            wall, _ = timed(lambda: o3d.geometry.TriangleMesh.create_from_point_cloud_ball_pivoting(pcn, radii))
+            wall, _ = timed(lambda: o3d.geometry.TriangleMesh.create_from_point_cloud_ball_pivoting(
+                pcn, o3d.utility.DoubleVector(radii)))
             rows.append(("reconstruct", "open3d", rep, wall, wall, load))
-            print(f"run {rep + 1}/{repeats} done (load {load:.1f}); ball-pivot radius {radius:.5g}", file=sys.stderr)
+            print(f"run {rep + 1}/{repeats} done (load {load:.1f}); ball-pivot radii {radii}", file=sys.stderr)
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%MZ")
     new = not OUT.exists()
     with OUT.open("a", newline="") as f:
@@ -106,13 +106,13 @@ def main():
         for tool in ("pointsurf-python", "pointsurf-cli", "open3d"):
             sel = [r for r in rows if r[0] == stage and r[1] == tool]
             med[stage, tool] = (statistics.median(r[3] for r in sel), statistics.median(r[4] for r in sel))
-    print("| call | Python wall s | library stage s | Python overhead s | CLI wall s (with I/O) | Open3D s | Python / Open3D |")
-    print("|---|---|---|---|---|---|---|")
+    print("| call | Python wall s | its stage s | Python overhead s | CLI wall s (with I/O) | CLI stage s | Open3D s | Python / Open3D |")
+    print("|---|---|---|---|---|---|---|---|")
     for stage in ("normals", "reconstruct"):
         pw, ps = med[stage, "pointsurf-python"]
-        cw, _ = med[stage, "pointsurf-cli"]
+        cw, cs = med[stage, "pointsurf-cli"]
         ow, _ = med[stage, "open3d"]
-        print(f"| {stage} | {pw:.3f} | {ps:.3f} | {pw - ps:.3f} | {cw:.3f} | {ow:.3f} | {pw / ow:.2f} |")
+        print(f"| {stage} | {pw:.3f} | {ps:.3f} | {pw - ps:.3f} | {cw:.3f} | {cs:.3f} | {ow:.3f} | {pw / ow:.2f} |")
 
 
 if __name__ == "__main__":

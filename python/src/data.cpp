@@ -64,6 +64,14 @@ void assign_values(std::vector<double>& values, const py::object& value, const s
   if (!values.empty()) std::memcpy(values.data(), a.data(), values.size() * sizeof(double));
 }
 
+/// A read-write property `name` over the member vector of rows: a view going out, a copy coming in.
+template <class Owner, class Vec>
+void def_rows(py::class_<Owner>& cls, const char* name, std::vector<Vec> Owner::*rows, const char* doc) {
+  cls.def_property(
+      name, [rows](py::object self) { return view_rows(self.cast<Owner&>().*rows, self); },
+      [rows, name](Owner& o, const py::object& v) { assign_rows(o.*rows, v, name); }, doc);
+}
+
 py::dict field_views(FieldSet& fields, py::handle owner) {
   py::dict out;
   for (ScalarField& f : fields) out[py::str(f.name)] = view_values(f.values, owner);
@@ -82,10 +90,10 @@ void set_field(FieldSet& fields, const std::string& name, const py::object& valu
 }  // namespace
 
 void bind_data(py::module_& m) {
-  py::class_<PointCloud>(m, "PointCloud", py::dynamic_attr(),
+  py::class_<PointCloud> cloud(m, "PointCloud", py::dynamic_attr(),
                          "Points with optional normals, colours (RGB in [0, 1]) and named scalar fields.\n"
-                         "Attributes are numpy views of the C++ memory (no copy); assigning copies once.")
-      .def(py::init([](const py::object& positions, const py::object& normals, const py::object& colors, const py::dict& fields) {
+                         "Attributes are numpy views of the C++ memory (no copy); assigning copies once.");
+  cloud.def(py::init([](const py::object& positions, const py::object& normals, const py::object& colors, const py::dict& fields) {
              PointCloud c;
              assign_rows(c.positions, positions, "positions");
              assign_rows(c.normals, normals, "normals");
@@ -96,13 +104,11 @@ void bind_data(py::module_& m) {
              return c;
            }),
            py::arg("positions") = py::none(), py::arg("normals") = py::none(), py::arg("colors") = py::none(),
-           py::arg("fields") = py::dict())
-      .def_property("positions", [](py::object self) { return view_rows(self.cast<PointCloud&>().positions, self); },
-                    [](PointCloud& c, const py::object& v) { assign_rows(c.positions, v, "positions"); }, "N x 3 float64")
-      .def_property("normals", [](py::object self) { return view_rows(self.cast<PointCloud&>().normals, self); },
-                    [](PointCloud& c, const py::object& v) { assign_rows(c.normals, v, "normals"); }, "N x 3 float64, or 0 x 3")
-      .def_property("colors", [](py::object self) { return view_rows(self.cast<PointCloud&>().colors, self); },
-                    [](PointCloud& c, const py::object& v) { assign_rows(c.colors, v, "colors"); }, "N x 3 float32 in [0, 1], or 0 x 3")
+           py::arg("fields") = py::dict());
+  def_rows(cloud, "positions", &PointCloud::positions, "N x 3 float64");
+  def_rows(cloud, "normals", &PointCloud::normals, "N x 3 float64, or 0 x 3");
+  def_rows(cloud, "colors", &PointCloud::colors, "N x 3 float32 in [0, 1], or 0 x 3");
+  cloud
       .def_property_readonly("fields", [](py::object self) { return field_views(self.cast<PointCloud&>().fields, self); },
                              "{name: N float64 view}")
       .def("set_field", [](PointCloud& c, const std::string& name, const py::object& v) { set_field(c.fields, name, v, c.size(), "points"); },
@@ -118,30 +124,26 @@ void bind_data(py::module_& m) {
                (c.has_colors() ? ", colors" : "") + (fields.empty() ? "" : ", fields: " + fields) + ")";
       });
 
-  py::class_<TriangleMesh>(m, "TriangleMesh", py::dynamic_attr(),
+  py::class_<TriangleMesh> mesh(m, "TriangleMesh", py::dynamic_attr(),
                            "Vertices, triangles (int32 indices, counter-clockwise from outside), optional vertex\n"
-                           "normals, colours, vertex and face fields; numpy views of the C++ memory.")
-      .def(py::init([](const py::object& vertices, const py::object& triangles, const py::object& normals, const py::object& colors) {
-             TriangleMesh mesh;
-             assign_rows(mesh.vertices, vertices, "vertices");
-             assign_rows(mesh.triangles, triangles, "triangles");
-             assign_rows(mesh.vertex_normals, normals, "vertex_normals");
-             assign_rows(mesh.vertex_colors, colors, "vertex_colors");
-             mesh.validate();
-             return mesh;
+                           "normals, colours, vertex and face fields; numpy views of the C++ memory.");
+  mesh.def(py::init([](const py::object& vertices, const py::object& triangles, const py::object& normals, const py::object& colors) {
+             TriangleMesh t;
+             assign_rows(t.vertices, vertices, "vertices");
+             assign_rows(t.triangles, triangles, "triangles");
+             assign_rows(t.vertex_normals, normals, "vertex_normals");
+             assign_rows(t.vertex_colors, colors, "vertex_colors");
+             t.validate();
+             return t;
            }),
            py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("vertex_normals") = py::none(),
-           py::arg("vertex_colors") = py::none())
-      .def_property("vertices", [](py::object self) { return view_rows(self.cast<TriangleMesh&>().vertices, self); },
-                    [](TriangleMesh& t, const py::object& v) { assign_rows(t.vertices, v, "vertices"); }, "V x 3 float64")
-      .def_property("positions", [](py::object self) { return view_rows(self.cast<TriangleMesh&>().vertices, self); },
-                    [](TriangleMesh& t, const py::object& v) { assign_rows(t.vertices, v, "positions"); }, "the vertices")
-      .def_property("triangles", [](py::object self) { return view_rows(self.cast<TriangleMesh&>().triangles, self); },
-                    [](TriangleMesh& t, const py::object& v) { assign_rows(t.triangles, v, "triangles"); }, "F x 3 int32")
-      .def_property("vertex_normals", [](py::object self) { return view_rows(self.cast<TriangleMesh&>().vertex_normals, self); },
-                    [](TriangleMesh& t, const py::object& v) { assign_rows(t.vertex_normals, v, "vertex_normals"); })
-      .def_property("vertex_colors", [](py::object self) { return view_rows(self.cast<TriangleMesh&>().vertex_colors, self); },
-                    [](TriangleMesh& t, const py::object& v) { assign_rows(t.vertex_colors, v, "vertex_colors"); })
+           py::arg("vertex_colors") = py::none());
+  def_rows(mesh, "vertices", &TriangleMesh::vertices, "V x 3 float64");
+  def_rows(mesh, "positions", &TriangleMesh::vertices, "the vertices");
+  def_rows(mesh, "triangles", &TriangleMesh::triangles, "F x 3 int32");
+  def_rows(mesh, "vertex_normals", &TriangleMesh::vertex_normals, "V x 3 float64, or 0 x 3");
+  def_rows(mesh, "vertex_colors", &TriangleMesh::vertex_colors, "V x 3 float32 in [0, 1], or 0 x 3");
+  mesh
       .def_property_readonly("vertex_fields", [](py::object self) { return field_views(self.cast<TriangleMesh&>().vertex_fields, self); })
       .def_property_readonly("face_fields", [](py::object self) { return field_views(self.cast<TriangleMesh&>().face_fields, self); })
       .def("set_vertex_field", [](TriangleMesh& t, const std::string& name, const py::object& v) { set_field(t.vertex_fields, name, v, t.vertex_count(), "vertices"); },
