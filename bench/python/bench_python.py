@@ -10,7 +10,9 @@ Calls: normals (k = 30, orient none: PCA only, as Open3D's estimate_normals) and
 Per call: pointsurf Python wall time, the library's own stage time (its report's "seconds"),
 so overhead = wall - stage (input copy, worker thread, output wrap); the CLI's wall time
 (includes reading and writing the file) and its stage time; Open3D's wall time. Rows go to
-bench/results/python_bench.csv with commit, date, machine and load average."""
+bench/results/python_bench.csv with commit, date, machine and load average.
+BENCH_OPEN3D=0 leaves Open3D out of the process (it slows pointsurf's reconstruct in the same
+process: see docs/benchmarks.md)."""
 import csv
 import datetime
 import json
@@ -59,8 +61,10 @@ def cli(stage, src, args, tmp):
 def main():
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
     repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-    import open3d as o3d
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    with_open3d = os.environ.get("BENCH_OPEN3D", "1") != "0"
+    if with_open3d:
+        import open3d as o3d
+        o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
     p = wavy_surface(n)
     cloud = pointsurf.PointCloud(p)
     rows = []
@@ -79,19 +83,21 @@ def main():
             rows.append(("normals", "pointsurf-python", rep, wall, out.report["seconds"], load))
             wall, stage_s = cli("normals", src, ["--k", "30", "--orient", "none"], tmp)
             rows.append(("normals", "pointsurf-cli", rep, wall, stage_s, load))
-            pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
-            wall, _ = timed(lambda: pc.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(30)))
-            rows.append(("normals", "open3d", rep, wall, wall, load))
+            if with_open3d:
+                pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(p))
+                wall, _ = timed(lambda: pc.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(30)))
+                rows.append(("normals", "open3d", rep, wall, wall, load))
             # reconstruct (ball pivoting) from the same cloud with normals
             wall, mesh = timed(lambda: pointsurf.reconstruct(with_normals, method="ball-pivot"))
             rows.append(("reconstruct", "pointsurf-python", rep, wall, mesh.report["seconds"], load))
             radii = [float(r) for r in mesh.report["parameters"]["radii"]]
             wall, stage_s = cli("reconstruct", src_n, ["--method", "ball-pivot"], tmp)
             rows.append(("reconstruct", "pointsurf-cli", rep, wall, stage_s, load))
-            pcn = pointsurf.to_open3d(with_normals)
-            wall, _ = timed(lambda: o3d.geometry.TriangleMesh.create_from_point_cloud_ball_pivoting(
-                pcn, o3d.utility.DoubleVector(radii)))
-            rows.append(("reconstruct", "open3d", rep, wall, wall, load))
+            if with_open3d:
+                pcn = pointsurf.to_open3d(with_normals)
+                wall, _ = timed(lambda: o3d.geometry.TriangleMesh.create_from_point_cloud_ball_pivoting(
+                    pcn, o3d.utility.DoubleVector(radii)))
+                rows.append(("reconstruct", "open3d", rep, wall, wall, load))
             print(f"run {rep + 1}/{repeats} done (load {load:.1f}); ball-pivot radii {radii}", file=sys.stderr)
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%MZ")
     new = not OUT.exists()
@@ -105,7 +111,8 @@ def main():
     for stage in ("normals", "reconstruct"):
         for tool in ("pointsurf-python", "pointsurf-cli", "open3d"):
             sel = [r for r in rows if r[0] == stage and r[1] == tool]
-            med[stage, tool] = (statistics.median(r[3] for r in sel), statistics.median(r[4] for r in sel))
+            med[stage, tool] = (statistics.median(r[3] for r in sel), statistics.median(r[4] for r in sel)) if sel \
+                else (float("nan"), float("nan"))
     print("| call | Python wall s | its stage s | Python overhead s | CLI wall s (with I/O) | CLI stage s | Open3D s | Python / Open3D |")
     print("|---|---|---|---|---|---|---|---|")
     for stage in ("normals", "reconstruct"):
