@@ -222,10 +222,9 @@ def quality(mesh: TriangleMesh, /, *, progress: Progress = None) -> TriangleMesh
     """Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume
     """
 
-def evaluate(mesh: TriangleMesh, reference: Data, /, *, reference: str = ..., tolerance: float = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., progress: Progress = None) -> PointCloud:
+def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., progress: Progress = None) -> PointCloud:
     """Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality
 
-    reference = '': Tag of the cloud to measure (pipeline); the command line takes a file. Default: the cloud as read
     tolerance = 0.0: Share within +-tolerance is reported; 0: the reference's mean spacing (cloud units, [0, inf))
     sign = 'auto': How the side is decided: auto picks pseudo-normals, the winding number, or unsigned
     max_distance = 0.0: Points farther are left out of the statistics; 0: no limit (cloud units, [0, inf))

@@ -97,8 +97,8 @@ def stub(spec):
     args.append("*")
     doc = [spec["summary"], ""]
     for p in pointsurf._parameters(spec):
-        if p["name"] == "filename":
-            continue
+        if p["name"] == "filename" or p["name"] in [slot for slot, _ in slots]:
+            continue  # the file argument, or the data itself (evaluate's reference)
         args.append(f"{p['name']}: {type_of({'kind': 4, **p})} = ...")
         extra = ", ".join(x for x in (p.get("unit", ""), p.get("range", "")) if x)
         doc.append(f"{p['name']} = {p['default']!r}: {p['doc']}{' (' + extra + ')' if extra else ''}")
