@@ -7,6 +7,7 @@ line): ``pointsurf.normals(cloud, k=30, orient="mst")`` returns a new PointCloud
 ``.report`` dict, and leaves ``cloud`` unchanged. ``pointsurf.run(pipeline)`` runs a whole
 pipeline (a list of dicts and file names, or a JSON file). See docs/python.md.
 """
+import builtins as _builtins
 import inspect as _inspect
 import json as _json
 import os as _os
@@ -124,7 +125,8 @@ def _make_stage(spec):
 for _spec in STAGES:
     _fn = _make_stage(_spec)
     globals()[_fn.__name__] = _fn
-    __all__.append(_fn.__name__)
+    if not hasattr(_builtins, _fn.__name__):  # "import *" must not shadow range()
+        __all__.append(_fn.__name__)
 del _spec, _fn
 
 
