@@ -19,11 +19,14 @@ BUILD_PACKAGES=(
   libgtest-dev libgmock-dev
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
+  libpugixml-dev
 )
 # The browser test of the HTML report (tests/report): headless Chromium, driven from Python.
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
+# Node.js runs laz-perf (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ.
+LAZ_CHECK_PACKAGES=(nodejs npm)
 # The Python module (python/): pybind11, Debian's Python with numpy, pytest; setuptools and venv for pip.
 PYTHON_PACKAGES=(pybind11-dev python3-dev python3-numpy python3-pytest python3-setuptools python3-venv)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
@@ -51,7 +54,7 @@ install_missing() {
 }
 
 build() {
-  install_missing "${BUILD_PACKAGES[@]}"
+  install_missing "${BUILD_PACKAGES[@]}" "${LAZ_CHECK_PACKAGES[@]}"
   local generator=()
   if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
     command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
@@ -61,6 +64,8 @@ build() {
     cmake -S "$ROOT" -B "$BUILD_DIR" "$@"
   fi
   cmake --build "$BUILD_DIR" --parallel "$JOBS"
+  [ -d "$BUILD_DIR/npm/node_modules/laz-perf" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund laz-perf@0.0.7 >/dev/null 2>&1 ||
+    log "could not install laz-perf from npm (no network?): the LAZ cross-check will skip"
 }
 
 demo() {
@@ -71,12 +76,15 @@ demo() {
   log "demo: aerial LiDAR tile data/b9_training.ply (22,300 points at x ~ 596,648 m)"
   "$cli" info data/b9_training.ply --report out/b9_info.json
   "$cli" run examples/b9_mesh.json --report out/b9_run.json
+  "$cli" run examples/b9_poisson.json --report out/b9_poisson_run.json  # screened Poisson, trimmed at density depth 6
   log "demo: kitten scan data/kitten.xyz"
   "$cli" info data/kitten.xyz --report out/kitten_info.json
   "$cli" run examples/kitten_mesh.json --report out/kitten_run.json --html out/kitten_report.html
+  "$cli" reconstruct data/kitten.xyz out/kitten_poisson.ply --method poisson --report out/kitten_poisson.json
   log "demo: pictures (pointsurf render) and the HTML report of the b9 run"
   "$cli" render out/kitten_deviation.ply out/kitten_deviation.png --field deviation --view front --quiet
   "$cli" render out/kitten_mesh.ply out/kitten_mesh.png --view front --quiet
+  "$cli" render out/kitten_poisson.ply out/kitten_poisson.png --view front --quiet
   "$cli" report out/b9_run.json out/b9_report.html
   log "demo done. Results in $out/:"
   ls -1 "$out" | sed "s|^|  $out/|" >&2
@@ -86,6 +94,9 @@ demo() {
 run_tests() {
   install_missing "${TEST_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
   build -DPOINTSURF_BUILD_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
+  # web-e57 (npm) reads pointsurf's E57 in tests/io/e57_test.cpp; the test skips without it.
+  [ -d "$BUILD_DIR/npm/node_modules/web-e57" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund web-e57@1.2.0 >/dev/null 2>&1 ||
+    log "could not install web-e57 from npm (no network or no npm): the E57 cross-check will skip"
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900
   # The Python module from this build; pytest exits 5 (failing the script) when it collects nothing.

@@ -78,6 +78,12 @@ int run_info(const std::vector<std::string>& args) {
     info["dropped_nonfinite"] = r.dropped_nonfinite;
     warnings = std::move(r.warnings);
     cloud = std::move(r.cloud);
+    // E57: each scan with its pose (rotation as a unit quaternion w x y z, then translation).
+    for (const ScanPose& s : r.scans)
+      info["scans"].push_back({{"name", s.name},
+                               {"points", s.points},
+                               {"rotation_wxyz", {s.rotation.w(), s.rotation.x(), s.rotation.y(), s.rotation.z()}},
+                               {"translation", {s.translation.x(), s.translation.y(), s.translation.z()}}});
   }
   // A file of words read as text gives no point: that is bad input, not an empty answer.
   if (cloud.empty()) throw InputError(fmt::format("{}: no points (is it a point cloud?)", input));
@@ -153,6 +159,14 @@ int run_info(const std::vector<std::string>& args) {
       fmt::print("{} {} ({}) range [{:g}, {:g}]\n", label, f["name"].get<std::string>(), f["type"].get<std::string>(), f["min"].get<double>(),
                  f["max"].get<double>());
   }
+  if (info.contains("scans"))
+    for (const auto& s : info["scans"]) {
+      const auto& q = s["rotation_wxyz"];
+      const auto& t = s["translation"];
+      fmt::print("scan         {}: {} points, pose rotation (w x y z) {:.9g} {:.9g} {:.9g} {:.9g}, translation {:.9g} {:.9g} {:.9g}\n",
+                 s["name"].get<std::string>(), s["points"].get<std::size_t>(), q[0].get<double>(), q[1].get<double>(), q[2].get<double>(),
+                 q[3].get<double>(), t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+    }
   for (const std::string& w : warnings) fmt::print("warning      {}\n", w);
   return 0;
 }

@@ -97,11 +97,12 @@ std::string format_from_extension(const std::filesystem::path& path) {
   if (ext == ".ply") return "ply";
   if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".csv" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".asc") return "xyz";
   if (ext == ".pcd") return "pcd";
+  if (ext == ".e57") return "e57";
   if (ext == ".las") return "las";
   if (ext == ".off") return "off";
   if (ext == ".obj") return "obj";
   if (ext == ".stl") return "stl";
-  if (ext == ".laz") throw UsageError(fmt::format("{}: compressed LAS (LAZ) is not supported yet; write .las", display_name(path)));
+  if (ext == ".laz") return "laz";
   throw UsageError(fmt::format("{}: unknown output format '{}': expected .ply, .xyz, .txt, .pts, .csv, .pcd, .las, .off, .obj or .stl",
                                display_name(path), ext.empty() ? std::string("(no extension)") : ext));
 }
@@ -110,14 +111,11 @@ std::string detect_format(const std::filesystem::path& path) {
   std::uintmax_t size = 0;
   const std::string head = read_head(path, 4096, size);
   if (size == 0 || head.empty()) throw InputError(fmt::format("{}: file is empty", display_name(path)));
+  if (head.rfind("ASTM-E57", 0) == 0) return "e57";
   if (head.rfind("ply", 0) == 0 && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return "ply";
   if (head.rfind("LASF", 0) == 0) {
-    const std::string ext = lower(path.extension().string());
     const bool compressed_format = head.size() > 104 && (static_cast<unsigned char>(head[104]) & 0xC0) != 0;
-    if (ext == ".laz" || compressed_format)
-      throw InputError(fmt::format("{}: compressed LAS (LAZ) is not supported yet; decompress it to .las first (e.g. laszip -i in.laz -o out.las)",
-                                   display_name(path)));
-    return "las";
+    return compressed_format ? "laz" : "las";
   }
   // Binary STL: 80-byte header, triangle count, 50 bytes per triangle. Checked before the
   // text formats because many exporters start the binary header with "solid".
@@ -170,9 +168,11 @@ io::detail::RawData read_raw(const std::filesystem::path& path, const ReadOption
   if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") { format = "xyz"; return io::detail::read_xyz(path, options); }
   if (format == "pcd") return io::detail::read_pcd(path, options);
   if (format == "las") return io::detail::read_las(path, options);
+  if (format == "laz") return io::detail::read_laz(path, options);
   if (format == "off") return io::detail::read_off(path, options);
   if (format == "obj") return io::detail::read_obj(path, options);
   if (format == "stl") return io::detail::read_stl(path, options);
+  if (format == "e57") return io::detail::read_e57(path, options);
   throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
 }
 
@@ -205,6 +205,20 @@ std::vector<int> drop_nonfinite(PointCloud& cloud, const std::filesystem::path& 
 
 }  // namespace
 
+namespace {
+
+// The points inside the box min..max (xmin, ymin, zmin, xmax, ymax, zmax), with their attributes.
+void keep_inside(PointCloud& cloud, const std::array<double, 6>& box) {
+  std::vector<std::size_t> inside;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Vector3d& p = cloud.positions[i];
+    if (p.x() >= box[0] && p.y() >= box[1] && p.z() >= box[2] && p.x() <= box[3] && p.y() <= box[4] && p.z() <= box[5]) inside.push_back(i);
+  }
+  if (inside.size() != cloud.size()) cloud = cloud.select(inside);
+}
+
+}  // namespace
+
 CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOptions& options) {
   CloudReadResult result;
   io::detail::RawData raw = read_raw(path, options, result.format);
@@ -212,10 +226,14 @@ CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOp
   result.warnings = std::move(raw.warnings);
   result.face_count = raw.polygons.size() + raw.triangles.size();
   result.dropped_nonfinite = raw.dropped_nonfinite;
+  result.scans = std::move(raw.scans);
   if (options.strict && raw.dropped_nonfinite > 0)
     throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
                                  display_name(path), raw.dropped_nonfinite));
   drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, false);
+  if (options.copc_level >= 0 && result.format != "laz")
+    throw UsageError(fmt::format("{}: an octree level is a COPC (LAZ) option; this file is {}", display_name(path), result.format));
+  if (options.bounds) keep_inside(raw.cloud, *options.bounds);
   raw.cloud.validate();
   result.cloud = std::move(raw.cloud);
   return result;
@@ -320,9 +338,11 @@ WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud
   }
   else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options, result.notes);
   else if (format == "las") io::detail::write_las(out.path(), cloud, options);
+  else if (format == "laz") io::detail::write_laz(out.path(), cloud, options);
   else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);
   else if (format == "obj") io::detail::write_obj(out.path(), cloud, triangles, options);
   else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
+  else if (format == "e57") io::detail::write_e57(out.path(), cloud, options, result.notes);
   else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
   out.commit();
   return result;

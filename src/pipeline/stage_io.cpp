@@ -12,7 +12,7 @@
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "off", "obj", "stl"};
+const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "laz", "off", "obj", "stl", "e57"};
 
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -25,9 +25,14 @@ void run_read(StageRun& run) {
   const std::string& file = run.args.text("filename");
   ReadOptions options;
   options.strict = run.args.boolean("strict");
+  options.apply_poses = !run.args.boolean("keep_poses");
   options.columns = run.args.text("columns");
   options.format = run.args.text("format");
+  options.copc_level = static_cast<int>(run.args.integer("copc_level"));
+  if (const std::vector<double>& b = run.args.numbers("bounds"); !b.empty()) options.bounds = std::array<double, 6>{b[0], b[1], b[2], b[3], b[4], b[5]};
   const std::string format = options.format.empty() ? detect_format(file) : options.format;
+  if (holds_faces(format) && (options.bounds || options.copc_level >= 0))
+    throw UsageError(fmt::format("{}: --bounds and --copc-level select points of a cloud; this is a {} mesh file", file, format));
   options.format = format;
   StageRecord& rec = run.record;
   std::size_t dropped = 0;
@@ -55,6 +60,8 @@ void run_read(StageRun& run) {
     warnings = std::move(r.warnings);
     encoding = r.encoding;
     item.cloud = std::move(r.cloud);
+    if (r.scans.size() > 1 || !options.apply_poses) rec.count("scans", as_count(r.scans.size()));
+    if (!options.apply_poses) item.scans = std::move(r.scans);
   }
   for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
   if (dropped > 0)
@@ -111,6 +118,8 @@ void run_write(StageRun& run) {
   const std::vector<double>& offset = run.args.numbers("las_offset");
   if (offset.size() == 3) w.las_offset = Vector3d(offset[0], offset[1], offset[2]);
   if (run.args.given("las_scale")) w.las_scale = run.args.number("las_scale");
+  if (run.args.given("e57_scale")) w.e57_scale = run.args.number("e57_scale");
+  w.scan_poses = item.scans;
   const std::string format = w.format.empty() ? format_from_extension(file) : w.format;
   StageRecord& rec = run.record;
   rec.set_used("format", format);
@@ -137,21 +146,29 @@ void run_write(StageRun& run) {
 StageSpec read_stage() {
   StageSpec s;
   s.name = "read";
-  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, OFF, OBJ, STL; format from the content)";
+  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)";
   s.description = "A file name at the start of a pipeline is a reader. Mesh files keep their faces.";
   s.order = 0;
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = {
       P::text("filename", "", "File to read").meta("FILE"),
       P::choice("format", "", kFormats, "Read as this format instead of detecting it from the content").meta("FORMAT"),
+      P::boolean("keep_poses", !ReadOptions{}.apply_poses,
+                 "E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose"),
       P::text("columns", ReadOptions{}.columns,
               "Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)")
           .meta("SPEC"),
       P::boolean("strict", ReadOptions{}.strict, "Points with NaN/Inf coordinates are an error instead of being dropped and counted"),
+      P::integer("copc_level", ReadOptions{}.copc_level, "COPC files: read the octree levels 0..N only (-1: all)").at_least(-1),
+      P::numbers("bounds", {}, "Keep the points inside the box xmin,ymin,zmin,xmax,ymax,zmax (COPC: nodes outside are not decoded)")
+          .meta("X0,Y0,Z0,X1,Y1,Z1")
+          .unit("cloud units"),
   };
   s.run = run_read;
   s.check = [](const StageArgs& a) {
     if (a.text("filename").empty()) throw UsageError("filename: missing (the file to read)");
+    if (const std::size_t n = a.numbers("bounds").size(); n != 0 && n != 6)
+      throw UsageError(fmt::format("bounds: {} numbers given; expected 6 (xmin,ymin,zmin,xmax,ymax,zmax)", n));
   };
   return s;
 }
@@ -177,6 +194,7 @@ StageSpec write_stage() {
           .unit("cloud units")
           .positive()
           .meta("S"),
+      P::number("e57_scale", 0.0, "E57: scaled-integer coordinates with this step (default: float64)").unit("cloud units").positive().meta("S"),
   };
   s.run = run_write;
   s.check = [](const StageArgs& a) {

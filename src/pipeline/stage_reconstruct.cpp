@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The reconstruct stage: a triangle mesh through the points (region-growing triangulation,
-// cocone, Crust or ball pivoting), with its topology reported.
+// cocone, Crust, ball pivoting or screened Poisson), with its topology reported.
 #include <algorithm>
 #include <limits>
 
@@ -16,6 +16,7 @@
 #include "pointsurf/reconstruct/crust.h"
 #include "pointsurf/reconstruct/flat_regions.h"
 #include "pointsurf/reconstruct/mesh_cleanup.h"
+#include "pointsurf/reconstruct/poisson.h"
 #include "pointsurf/reconstruct/triangulate.h"
 
 namespace pointsurf::detail {
@@ -110,6 +111,33 @@ BallPivotParams ball_params(const StageArgs& a) {
   return p;
 }
 
+PoissonParams poisson_params(const StageArgs& a) {
+  PoissonParams p;
+  p.depth = a.int32("depth");
+  p.full_depth = a.int32("full_depth");
+  p.samples_per_node = a.number("samples_per_node");
+  p.point_weight = a.number("point_weight");
+  p.boundary = a.text("boundary_condition") == "dirichlet" ? PoissonBoundary::Dirichlet : PoissonBoundary::Neumann;
+  p.confidence = a.boolean("confidence");
+  p.trim_depth = a.number("trim_depth");
+  p.island_area_ratio = a.number("island_area_ratio");
+  p.max_iterations = a.int32("max_iterations");
+  p.root_refinement_steps = a.int32("root_refinement_steps");
+  return p;
+}
+
+// The Poisson figures beyond the common ones: the depth used, the octree per level, the solver.
+void record_poisson(const PoissonResult& r, StageRecord& rec) {
+  rec.set_used("depth", std::int64_t{r.depth});
+  std::vector<double> nodes, residuals;
+  for (std::size_t l = 1; l < r.nodes_per_level.size(); ++l) {
+    nodes.push_back(double(r.nodes_per_level[l]));
+    residuals.push_back(r.residual_per_level[l]);
+  }
+  rec.metric("nodes_per_level", nodes);
+  rec.metric("relative_residual_per_level", residuals);
+}
+
 SmallComponentParams component_params(const StageArgs& a) {
   SmallComponentParams p;
   p.min_share = a.number("min_component_share");
@@ -157,7 +185,7 @@ void run_reconstruct(StageRun& run) {
   const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
   const NoiseEstimate noise = estimate_noise(cloud, tree);
   rec.metric("noise_in_spacings", noise.median_in_spacings);
-  if (noise.median_in_spacings > kNoisyInSpacings)
+  if (noise.median_in_spacings > kNoisyInSpacings && method != "poisson")
     rec.warnings.push_back(fmt::format(
         "the points are noisy: their neighbourhoods are {:.2f} local spacings thick (median RMS distance to the local plane; "
         "above {} an interpolating surface comes out in shreds); smooth them first (pointsurf clean --method bilateral) or "
@@ -170,6 +198,12 @@ void run_reconstruct(StageRun& run) {
     result = reconstruct_cocone(cloud, cocone_params(a), progress);
   } else if (method == "crust") {
     result = reconstruct_crust(cloud, crust_params(a), progress);
+  } else if (method == "poisson") {
+    PoissonResult poisson = reconstruct_poisson(cloud, poisson_params(a), &tree, progress);
+    record_poisson(poisson, rec);
+    if (poisson.skipped_normals > 0)
+      rec.warnings.push_back(fmt::format("{} skipped: zero or non-finite normal", plural(poisson.skipped_normals, "point")));
+    result = std::move(poisson);
   } else {
     const BallPivotParams p = ball_params(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
@@ -182,8 +216,14 @@ void run_reconstruct(StageRun& run) {
   }
   record_stats(result.stats, rec);
   clean_and_label_faces(result, a, rec);
+  if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
-  const LoopKinds loops = classify_loops(t, cloud, tree);
+  // Poisson's surface is closed but where trimming opened it: its loops are borders, and its
+  // vertices are not the cloud's points, which the rim test reads
+  LoopKinds loops;
+  if (method == "poisson")
+    for (const BoundaryLoop& loop : t.boundary_loops) loops.borders.push_back(&loop);
+  else loops = classify_loops(t, cloud, tree);
   const double hole_perimeter = LoopKinds::perimeter(loops.holes);
   rec.count("points", as_count(cloud.size()));
   rec.count("triangles", as_count(t.triangles));
@@ -223,8 +263,8 @@ void run_reconstruct(StageRun& run) {
                             plural(loops.holes.size(), "hole"), hole_perimeter, plural(loops.borders.size(), "border loop"),
                             t.non_manifold_edges, t.non_manifold_vertices, plural(t.components, "component"),
                             genus >= 0 ? std::to_string(genus) : std::string("-"));
-  // The mesh's vertices are the cloud's points in order: the item keeps its positions (and so
-  // its cached tree) and gains the faces.
+  // The mesh's vertices are the cloud's points in order (Poisson: new vertices): the item keeps
+  // its positions (and so its cached tree) and gains the faces.
   TriangleMesh& mesh = result.mesh;
   if (mesh.vertex_normals.empty() && cloud.has_normals() && mesh.vertices.size() == cloud.size()) mesh.vertex_normals = cloud.normals;
   item.assign_mesh(std::move(mesh), run.record.inputs.front());  // the mesh records the cloud it came from
@@ -238,19 +278,20 @@ StageSpec reconstruct_stage() {
   const BallPivotParams bp;
   const SmallComponentParams scp;
   const FlatRegionParams fp;
+  const PoissonParams pp;
   StageSpec s;
   s.name = "reconstruct";
-  s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust or ball pivoting";
-  s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (cocone and crust need none). Holes, "
+  s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson";
+  s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (cocone and crust need none). Poisson builds new vertices (approximating); its trim loops are border loops. Holes, "
                   "manifoldness, components and genus are reported.";
   s.order = 120;
   s.consumes = {Slot{"cloud", DataKind::Cloud}};
   s.produces = Slot{"mesh", DataKind::Mesh};
-  s.methods = {"triangulate", "cocone", "crust", "ball-pivot"};
+  s.methods = {"triangulate", "cocone", "crust", "ball-pivot", "poisson"};
   s.default_method = "triangulate";
-  const std::vector<std::string> tri = {"triangulate"}, cocone = {"cocone"}, delaunay = {"cocone", "crust"}, ball = {"ball-pivot"};
+  const std::vector<std::string> tri = {"triangulate"}, cocone = {"cocone"}, delaunay = {"cocone", "crust"}, ball = {"ball-pivot"}, poisson = {"poisson"};
   s.params = {
-      P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot"}),
+      P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot", "poisson"}),
       P::integer("k", tp.k, "At most k neighbours per point (4k within 4x the radius for points on a scan line)").at_least(3).only(tri),
       P::number("radius", tp.radius, "Search radius and longest edge; 0: radius_in_spacings x local spacing").unit("cloud units").non_negative().meta("R").only(tri),
       P::number("radius_in_spacings", tp.radius_in_spacings, "Radius when radius is 0").unit("local spacings").positive().only(tri),
@@ -263,10 +304,10 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, false, true)
           .only(tri),
-      P::number("max_hole_perimeter_in_spacings", HoleFillParams{}.max_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every method); 0: none")
+      P::number("max_hole_perimeter_in_spacings", HoleFillParams{}.max_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every interpolating method); 0: none")
           .unit("local spacings")
           .non_negative()
-          ,
+          .only({"triangulate", "cocone", "crust", "ball-pivot"}),
       P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(cocone),
       P::number("normal_filter_angle_deg", cp.normal_filter_angle_deg, "Drop triangles deviating more from the pole vectors; 90: off")
           .unit("degrees")
@@ -290,6 +331,26 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, true, false)
           .only(ball),
+      P::integer("depth", pp.depth, "Finest octree level (2^depth cells across 1.1x the largest extent); 0: the level whose cell is nearest the mean spacing, 6..10")
+          .range(0, 16)
+          .only(poisson),
+      P::integer("full_depth", pp.full_depth, "Octree levels 1..full_depth are complete grids").range(1, 16).only(poisson),
+      P::number("samples_per_node", pp.samples_per_node, "Density output: the depth at which a node holds this many samples").unit("samples").positive().only(poisson),
+      P::number("point_weight", pp.point_weight, "Screening weight alpha: pull of the surface to the samples; 0: plain Poisson").non_negative().only(poisson),
+      P::choice("boundary_condition", pp.boundary == PoissonBoundary::Dirichlet ? "dirichlet" : "neumann", {"neumann", "dirichlet"},
+                "Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)")
+          .only(poisson),
+      P::boolean("confidence", pp.confidence, "Weight each point by its normal's length").only(poisson),
+      P::number("trim_depth", pp.trim_depth, "Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off")
+          .unit("depth")
+          .range(0, 16)
+          .only(poisson),
+      P::number("island_area_ratio", pp.island_area_ratio, "After trimming, remove pieces smaller than this share of the largest's area")
+          .unit("share of area")
+          .range(0, 1)
+          .only(poisson),
+      P::integer("max_iterations", pp.max_iterations, "Conjugate-gradient iterations per sparse level at most").at_least(1).only(poisson),
+      P::integer("root_refinement_steps", pp.root_refinement_steps, "Secant steps on the function per surface vertex; 0: linear").range(0, 20).only(poisson),
       P::number("min_component_share", scp.min_share, "Remove components with fewer faces than this share of all; 0: keep all")
           .unit("share of faces")
           .range(0, 1),
@@ -300,7 +361,8 @@ StageSpec reconstruct_stage() {
           .unit("degrees")
           .range(0, 180, true, false),
   };
-  s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4"};
+  s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4",
+                "pointsurf reconstruct scan.ply mesh.ply --method poisson --trim-depth 7"};
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
@@ -309,6 +371,7 @@ StageSpec reconstruct_stage() {
     if (a.method() == "triangulate") triangulate_params(a).validate();
     else if (a.method() == "cocone") cocone_params(a).validate();
     else if (a.method() == "crust") crust_params(a).validate();
+    else if (a.method() == "poisson") poisson_params(a).validate();
     else ball_params(a).validate();
   };
   return s;

@@ -19,6 +19,7 @@
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/reconstruct/ball_pivot.h"
+#include "pointsurf/reconstruct/poisson.h"
 #include "pointsurf/reconstruct/cocone.h"
 #include "pointsurf/reconstruct/triangulate.h"
 #include "pointsurf/shape/curvature.h"
@@ -92,6 +93,7 @@ std::vector<Expected> library_defaults() {
   const TriangulateParams tp;
   const CoconeParams cp;
   const BallPivotParams bp;
+  const PoissonParams pp;
   const MeshDistanceParams md;
   const DeviationParams dev;
   const SurfaceDistanceParams sd;
@@ -164,6 +166,14 @@ std::vector<Expected> library_defaults() {
       {"reconstruct", "ball-pivot", "max_normal_angle_deg", bp.max_normal_angle_deg},
       {"reconstruct", "ball-pivot", "max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg},
       {"reconstruct", "ball-pivot", "max_hole_perimeter_in_spacings", bp.max_hole_perimeter_in_spacings},
+      {"reconstruct", "poisson", "depth", I{pp.depth}},
+      {"reconstruct", "poisson", "full_depth", I{pp.full_depth}},
+      {"reconstruct", "poisson", "samples_per_node", pp.samples_per_node},
+      {"reconstruct", "poisson", "point_weight", pp.point_weight},
+      {"reconstruct", "poisson", "trim_depth", pp.trim_depth},
+      {"reconstruct", "poisson", "island_area_ratio", pp.island_area_ratio},
+      {"reconstruct", "poisson", "max_iterations", I{pp.max_iterations}},
+      {"reconstruct", "poisson", "root_refinement_steps", I{pp.root_refinement_steps}},
   };
 }
 
@@ -255,7 +265,7 @@ namespace {
 // stage's check (which builds the library's Params and calls validate()), is refused.
 TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
   const std::map<std::string, std::vector<std::string>> validated = {
-      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "cocone", "crust", "ball-pivot"}},
+      {"normals", {""}}, {"curvature", {""}}, {"features", {""}}, {"reconstruct", {"triangulate", "cocone", "crust", "ball-pivot", "poisson"}},
       {"clean", {"local", "sor", "radius", "ransac", "duplicates", "bilateral", "trilateral"}},
       {"simplify", {"curvature", "regional", "curvature-distance", "lfs"}}};
   std::size_t checked = 0;

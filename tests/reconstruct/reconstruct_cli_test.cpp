@@ -237,6 +237,37 @@ TEST_F(ReconstructCli, WarnsWhenThePointsAreTooNoisyForAnInterpolatingSurface) {
   EXPECT_GT(stage("run.json", "reconstruct")["figures"]["noise_in_spacings"].get<double>(), 0.4);
 }
 
+TEST_F(ReconstructCli, PoissonWritesAWatertightSphereWithDensityAndReportsTheOctree) {
+  PointCloud sphere = test::sample_sphere(6000, 1.0, Vector3d(10.0, -5.0, 2.0));
+  sphere.normals[3] = Vector3d::Zero();
+  write_point_cloud(path("sphere.ply"), sphere);
+  const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path("mesh.ply") + " --method poisson --depth 6 --report " +
+                                  path("run.json"),
+                              dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "poisson")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "genus 0")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "1 point skipped: zero or non-finite normal")) << r.err;
+  const MeshReadResult mesh = read_mesh(path("mesh.ply"));
+  const MeshTopology t = analyze_topology(mesh.mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.genus(), 0);
+  EXPECT_EQ(mesh.mesh.vertex_normals.size(), mesh.mesh.vertex_count());
+  EXPECT_TRUE(mesh.mesh.vertex_fields.contains("density"));
+  for (const Vector3d& v : mesh.mesh.vertices) EXPECT_NEAR((v - Vector3d(10.0, -5.0, 2.0)).norm(), 1.0, 0.02);
+  const nlohmann::json s = stage("run.json", "reconstruct");
+  ASSERT_FALSE(s.is_null());
+  EXPECT_EQ(s["parameters"]["method"], "poisson");
+  EXPECT_EQ(s["parameters"]["depth"], 6);
+  EXPECT_EQ(s["figures"]["skipped_normals"], 1);
+  EXPECT_EQ(s["figures"]["nodes_per_level"].size(), 6u);
+  EXPECT_EQ(s["figures"]["watertight"], true);
+  EXPECT_GT(s["figures"]["peak_megabytes"].get<double>(), 0.0);
+  // bad option values are usage errors
+  EXPECT_EQ(run_cli("reconstruct " + path("sphere.ply") + " " + path("bad.ply") + " --method poisson --point-weight -1", dir_).exit_code, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "bad.ply"));
+}
+
 TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
   test::write_bytes(dir_ / "two.xyz", "0 0 0 0 0 1\n1 0 0 0 0 1\n");
   RunResult r = run_cli("reconstruct " + path("two.xyz") + " " + path("out.ply") + " --method ball-pivot", dir_);
@@ -254,9 +285,9 @@ TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
   EXPECT_TRUE(test::contains(r.err, "no triangle could be formed from 20 points")) << r.err;
 
   write_point_cloud(path("sphere.ply"), test::sample_sphere(500, 1.0));
-  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method poisson", dir_);
+  r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method rbf", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "--method: \"poisson\" is not one of triangulate, cocone, crust or ball-pivot")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--method: \"rbf\" is not one of triangulate, cocone, crust, ball-pivot or poisson")) << r.err;
   r = run_cli("reconstruct " + path("sphere.ply") + " " + path("out.ply") + " --method ball-pivot --radii 0.1,abc", dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--radii: \"0.1,abc\": \"abc\" is not a number")) << r.err;

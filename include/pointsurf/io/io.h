@@ -3,10 +3,12 @@
 // Reading and writing clouds and meshes in every common scan format.
 //
 // Formats: PLY (ascii, binary little/big endian), XYZ/PTS/TXT/CSV, PCD v0.7 (ascii, binary,
-// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4).
+// binary_compressed), OFF, OBJ, STL (ascii, binary), LAS 1.0-1.4 (point formats 0-10; written as 1.4),
+// LAZ (LASzip-compressed LAS: formats 0-10 read, written as format 6/7).
 // The format of a file being read is detected from its content (magic bytes, header); the
 // extension is only a hint for headerless text. The format written follows the extension of
 // the output path unless WriteOptions::format says otherwise.
+// E57 (ASTM E2807): several scans with their poses (CloudReadResult::scans), colour, intensity.
 //
 // Errors: malformed input throws InputError naming the file, the place (line, element index or
 // byte offset) and what was expected; a bad option throws UsageError. Points with NaN/Inf
@@ -14,20 +16,23 @@
 // Writes go to a temporary file in the target directory that is renamed when complete, so an
 // output is whole or absent.
 // Thread-safety: all functions are reentrant; concurrent calls on different files are safe.
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
 
-/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las".
+/// Canonical format names: "ply", "xyz", "pcd", "off", "obj", "stl", "las", "laz".
 /// Returns the format of `path` from its first bytes, falling back on the extension for text
-/// without a header; throws InputError for an empty or unrecognised file (and for LAZ).
+/// without a header; throws InputError for an empty or unrecognised file.
 std::string detect_format(const std::filesystem::path& path);
 
 /// Format implied by the extension of `path` (".ply" -> "ply", ".txt"/".pts"/".csv" -> "xyz",
@@ -50,13 +55,28 @@ void remove_output(const std::filesystem::path& path) noexcept;
 /// exist).
 bool same_path(const std::filesystem::path& a, const std::filesystem::path& b);
 
+/// One scan of a file that holds several (E57): its name, point count and pose, the rigid
+/// transform from the scan's own frame to the file's frame: p_file = rotation * p + translation.
+struct ScanPose {
+  std::string name;
+  std::size_t points = 0;
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  // unit quaternion
+  Vector3d translation = Vector3d::Zero();                       // cloud units
+};
+
 struct ReadOptions {
   bool strict = false;      // NaN/Inf coordinates are an InputError instead of being dropped
+  bool apply_poses = true;  // E57: move each scan by its pose; false keeps scan coordinates (poses in the result's scans)
   std::string format;       // force a format ("ply", "xyz", ...); empty: detect from content
   // Column meaning for XYZ-family text, comma separated: x,y,z,nx,ny,nz,r,g,b,i (intensity)
   // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
   // chosen from the column count, or taken from a header line of names.
   std::string columns;
+  // COPC (LAZ with an octree hierarchy): read the octree levels 0..copc_level only; -1: all.
+  int copc_level = -1;
+  // Keep only the points with min <= p <= max (xmin, ymin, zmin, xmax, ymax, zmax); COPC files
+  // skip the octree nodes outside without decoding them.
+  std::optional<std::array<double, 6>> bounds;
 };
 
 struct CloudReadResult {
@@ -66,6 +86,7 @@ struct CloudReadResult {
   std::size_t dropped_nonfinite = 0;   // points dropped for NaN/Inf coordinates (smaller is better)
   std::size_t face_count = 0;          // faces present in the file (meshes read as clouds)
   std::vector<std::string> warnings;   // things the user should know, e.g. organized PCD flattened
+  std::vector<ScanPose> scans;         // E57: one per scan, in file order (field "scan" numbers them when more than one)
 };
 
 struct MeshReadResult {
@@ -103,6 +124,8 @@ struct WriteOptions {
   bool pcd_compressed = false;            // PCD binary_compressed (LZF) instead of binary
   std::optional<Vector3d> las_offset;     // LAS offset; default near the data's minimum
   std::optional<double> las_scale;        // LAS scale (cloud units per count); default <= 1e-4
+  std::vector<ScanPose> scan_poses;       // E57: pose of the scan whose "scan" field is i (identity when absent)
+  std::optional<double> e57_scale;        // E57: scaled-integer coordinates with this step; default float64
   int precision = 17;                     // significant digits of text coordinates (XYZ, OBJ, ...)
 };
 

@@ -11,6 +11,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/triangle_mesh.h"
+#include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -23,6 +24,7 @@ struct DataItem {
   FieldSet face_fields;  // each holds one value per triangle; cleared with the triangles
   bool is_mesh = false;
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
+  std::vector<ScanPose> scans;  // E57 scans read with keep_poses: the pose of each value of field "scan"
 
   /// Becomes `mesh`: its vertices and their attributes as the cloud, its faces as triangles.
   void assign_mesh(TriangleMesh mesh, std::string mesh_source);

@@ -24,6 +24,7 @@ struct RawData {
   std::string encoding;                    // "ascii", "binary_little_endian", ...
   std::size_t dropped_nonfinite = 0;       // dropped by the reader itself (organized PCD)
   std::vector<std::string> warnings;
+  std::vector<ScanPose> scans;             // E57
 };
 
 // Readers. `display` is the file name to use in messages. Each throws InputError on malformed
@@ -32,9 +33,11 @@ RawData read_ply(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_pcd(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_las(const std::filesystem::path& path, const ReadOptions& options);
+RawData read_laz(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_off(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_obj(const std::filesystem::path& path, const ReadOptions& options);
 RawData read_stl(const std::filesystem::path& path, const ReadOptions& options);
+RawData read_e57(const std::filesystem::path& path, const ReadOptions& options);
 
 // Writers: write `cloud` (the vertices, with attributes) and `triangles` (may be empty) to the
 // already-open temporary file path `tmp_path`; the dispatch renames it afterwards. Only PLY
@@ -45,9 +48,11 @@ void write_xyz(const std::filesystem::path& tmp_path, const PointCloud& cloud, c
 // `notes` gets what the user should know about a choice the writer made (PCD: double positions).
 void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
 void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
+void write_laz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 void write_off(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_obj(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_stl(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
+void write_e57(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
 
 /// File name for messages ("scan.ply" as given by the user).
 std::string display_name(const std::filesystem::path& path);

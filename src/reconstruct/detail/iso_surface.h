@@ -37,7 +37,9 @@ class IsoFunction {
  public:
   virtual ~IsoFunction() = default;
 
-  /// Values at `n` corners of `level` (corners[3 * i + 0..2]).
+  /// Values at `n` corners of `level` (corners[3 * i + 0..2]). A corner's value must not depend
+  /// on the batch it comes in: the extractor may ask for a corner twice (once per brick of cells
+  /// that needs it) and the two answers must classify it the same way.
   virtual void corner_values(int level, const std::uint32_t* corners, std::size_t n, double* values) const = 0;
 
   /// Value at an arbitrary point (root refinement along an edge).
@@ -55,7 +57,8 @@ class IsoFunction {
 struct IsoSurfaceParams {
   double iso_value = 0.0;
   bool inside_positive = true;   // the function is larger than iso_value inside the surface
-  int root_refinement_steps = 0; // secant steps on value() per edge crossing; 0: linear only
+  int root_refinement_steps = 3; // secant steps on value() per edge crossing; 0: linear only
+                                 // (3: Poisson elephant 100k depth 8 Chamfer -11 %)
 };
 
 /// The extracted surface: closed (watertight) wherever it does not leave the lattice, edge- and
@@ -68,6 +71,13 @@ struct IsoSurface {
 };
 
 /// Contours `f` at params.iso_value over the leaves of the octree that `f.refined` describes.
+/// The implementation (reconstruct/iso_surface.cpp) meshes at the octree's finest level (the
+/// deepest level that has leaves, at most lattice.depth) wherever the surface goes, coarse leaves
+/// included, which makes it crack-free by construction: every finest
+/// leaf, and every finest cell where a coarse leaf's edge changes sign, seeds a search that follows
+/// the surface cell by cell. A surface part that crosses no edge of any leaf (a bubble smaller than
+/// the coarse leaf around it) is not found. Output order is deterministic: the same mesh for any
+/// thread count.
 /// Throws CancelledError when `progress` returns false.
 IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, const IsoSurfaceParams& params,
                                const ProgressCallback& progress = {});

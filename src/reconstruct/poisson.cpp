@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Screened Poisson reconstruction: the samples into a unit cube, the system solved on the
+// octree (detail/poisson_solver), its level set extracted (detail/iso_surface), then the
+// per-vertex density, trimming, and the nearest sample's colour and fields.
+#include "pointsurf/reconstruct/poisson.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/mesh_topology.h"
+#include "reconstruct/detail/density_trim.h"
+#include "reconstruct/detail/iso_surface.h"
+#include "reconstruct/detail/poisson_solver.h"
+
+namespace pointsurf {
+namespace {
+
+constexpr int kMaxDepth = 16;
+constexpr int kMinAutoDepth = 6, kMaxAutoDepth = 10;
+
+ProgressCallback part(const ProgressCallback& progress, double from, double to) {
+  if (!progress) return {};
+  return [progress, from, to](double f) { return progress(from + (to - from) * f); };
+}
+
+}  // namespace
+
+void PoissonParams::validate() const {
+  if (depth != 0 && (depth < 2 || depth > kMaxDepth))
+    throw UsageError(fmt::format("reconstruct_poisson: depth must be 0 (from the data) or in [2, {}], got {}", kMaxDepth, depth));
+  if (full_depth < 1 || full_depth > kMaxDepth)
+    throw UsageError(fmt::format("reconstruct_poisson: full_depth must be in [1, {}], got {}", kMaxDepth, full_depth));
+  if (!(samples_per_node > 0.0 && std::isfinite(samples_per_node)))
+    throw UsageError(fmt::format("reconstruct_poisson: samples_per_node must be > 0 and finite, got {}", samples_per_node));
+  if (!(point_weight >= 0.0 && std::isfinite(point_weight)))
+    throw UsageError(fmt::format("reconstruct_poisson: point_weight must be >= 0 and finite, got {}", point_weight));
+  if (!(trim_depth >= 0.0 && trim_depth <= kMaxDepth))
+    throw UsageError(fmt::format("reconstruct_poisson: trim_depth must be in [0, {}] (0: off), got {}", kMaxDepth, trim_depth));
+  if (!(island_area_ratio >= 0.0 && island_area_ratio <= 1.0))
+    throw UsageError(fmt::format("reconstruct_poisson: island_area_ratio must be in [0, 1], got {}", island_area_ratio));
+  if (root_refinement_steps < 0 || root_refinement_steps > 20)
+    throw UsageError(fmt::format("reconstruct_poisson: root_refinement_steps must be in [0, 20], got {}", root_refinement_steps));
+  if (max_iterations < 1) throw UsageError(fmt::format("reconstruct_poisson: max_iterations must be >= 1, got {}", max_iterations));
+  if (!(tolerance > 0.0 && tolerance < 1.0))
+    throw UsageError(fmt::format("reconstruct_poisson: tolerance must be in (0, 1), got {}", tolerance));
+}
+
+PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& params, const KdTree* tree, const ProgressCallback& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  params.validate();
+  const std::size_t n = cloud.size();
+  if (!cloud.has_normals()) throw UsageError("reconstruct_poisson: the cloud has no normals (estimate and orient them first)");
+  cloud.validate();
+  if (tree != nullptr && tree->size() != n)
+    throw UsageError(fmt::format("reconstruct_poisson: the kd-tree holds {} points but the cloud has {}", tree->size(), n));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!cloud.positions[i].allFinite()) throw InputError(fmt::format("reconstruct_poisson: point {} has a non-finite coordinate", i));
+
+  PoissonResult result;
+  result.stats.input_points = n;
+  std::vector<std::size_t> usable;
+  usable.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3d& v = cloud.normals[i];
+    if (v.allFinite() && v.squaredNorm() > 0.0) usable.push_back(i);
+  }
+  result.skipped_normals = n - usable.size();
+  if (usable.size() < 4)
+    throw InputError(fmt::format("reconstruct_poisson: {} of {} points have a usable normal (non-zero, finite); at least 4 are needed",
+                                 usable.size(), n));
+  BoundingBox box;
+  for (const std::size_t i : usable) box.extend(cloud.positions[i]);
+  const double extent = box.extent().maxCoeff();
+  if (!(extent > 0.0)) throw InputError(fmt::format("reconstruct_poisson: all {} usable points coincide", usable.size()));
+
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  result.mean_spacing = mean_spacing(*tree);
+  detail::IsoLattice lattice;
+  lattice.size = 1.1 * extent;
+  lattice.origin = box.center() - Vector3d::Constant(0.5 * lattice.size);
+  int depth = params.depth;
+  if (depth == 0) {
+    const double ratio = result.mean_spacing > 0.0 ? lattice.size / result.mean_spacing : 1.0;
+    depth = std::clamp(int(std::lround(std::log2(ratio))), kMinAutoDepth, kMaxAutoDepth);
+  }
+  lattice.depth = depth;
+  result.depth = depth;
+
+  std::vector<detail::PoissonSample> samples(usable.size());
+  // relative to the box's centre first: an offset of 1e6 m cancels exactly where it can
+  const Vector3d centre = box.center();
+  tbb::parallel_for(std::size_t(0), usable.size(), [&](std::size_t k) {
+    const std::size_t i = usable[k];
+    samples[k].position = ((cloud.positions[i] - centre) / lattice.size).array() + 0.5;
+    const Vector3d& v = cloud.normals[i];
+    samples[k].normal = params.confidence ? v : v.normalized();
+  });
+  detail::PoissonSystemParams sys;
+  sys.depth = depth;
+  sys.full_depth = std::min(params.full_depth, depth);
+  sys.kernel_depth = std::max(1, depth - 2);
+  sys.point_weight = params.point_weight;
+  sys.samples_per_node = params.samples_per_node;
+  sys.dirichlet = params.boundary == PoissonBoundary::Dirichlet;
+  sys.max_iterations = params.max_iterations;
+  sys.tolerance = params.tolerance;
+  const detail::PoissonFunction function(std::move(samples), sys, lattice, part(progress, 0.0, 0.7));
+  result.iso_value = function.iso_value();
+  result.peak_bytes = function.peak_bytes();
+  result.nodes_per_level.assign(std::size_t(depth + 1), 0);
+  result.iterations_per_level.assign(std::size_t(depth + 1), 0);
+  result.residual_per_level.assign(std::size_t(depth + 1), 0.0);
+  for (const detail::PoissonLevelReport& r : function.levels()) {
+    result.nodes_per_level[std::size_t(r.level)] = r.nodes;
+    result.iterations_per_level[std::size_t(r.level)] = r.iterations;
+    result.residual_per_level[std::size_t(r.level)] = r.initial_residual > 0.0 ? r.final_residual / r.initial_residual : 0.0;
+  }
+
+  detail::IsoSurfaceParams iso;
+  iso.iso_value = function.iso_value();
+  iso.inside_positive = false;  // the function grows along the (outward) normals
+  iso.root_refinement_steps = params.root_refinement_steps;
+  // Meshed at the finest level the samples reached, as PoissonRecon meshes its leaves: a depth
+  // beyond what the sampling supports adds no detail, only triangles.
+  lattice.depth = function.finest_level();
+  detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
+
+  TriangleMesh& mesh = result.mesh;
+  mesh.vertices = std::move(surface.vertices);
+  mesh.vertex_normals = std::move(surface.normals);
+  mesh.triangles.resize(surface.triangles.size());
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) mesh.triangles[t][k] = static_cast<int>(surface.triangles[t][std::size_t(k)]);
+  const std::size_t nv = mesh.vertices.size();
+  ScalarField& density = mesh.vertex_fields.add("density", nv, ScalarType::Float32);
+  std::vector<std::uint32_t> nearest(nv);
+  tbb::parallel_for(std::size_t(0), nv, [&](std::size_t v) {
+    density.values[v] = function.density_depth(mesh.vertices[v]);
+    std::vector<Neighbor> hit;
+    tree->knn(mesh.vertices[v], 1, hit);
+    nearest[v] = hit.empty() ? 0 : hit.front().index;
+  });
+  if (cloud.has_colors()) {
+    mesh.vertex_colors.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) mesh.vertex_colors[v] = cloud.colors[nearest[v]];
+  }
+  for (const ScalarField& field : cloud.fields) {
+    if (field.name == "density") continue;
+    ScalarField& out = mesh.vertex_fields.add(field.name, nv, field.type);
+    for (std::size_t v = 0; v < nv; ++v) out.values[v] = field.values[nearest[v]];
+  }
+
+  detail::TrimResult trim;
+  if (params.trim_depth > 0.0) {
+    trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
+    result.trimmed_triangles = trim.removed_triangles;
+  }
+
+  result.topology = analyze_topology(mesh);
+  result.stats.counts = {{"skipped_normals", result.skipped_normals}, {"depth", std::size_t(depth)},
+                         {"finest_level", std::size_t(lattice.depth)},
+                         {"finest_nodes", result.nodes_per_level[std::size_t(lattice.depth)]}, {"trimmed_triangles", result.trimmed_triangles},
+                         {"trim_cut_triangles", trim.cut_triangles}, {"trim_removed_islands", trim.removed_islands}};
+  result.stats.figures = {{"iso_value", result.iso_value}, {"peak_megabytes", double(result.peak_bytes) / 1e6}};
+  result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (progress && !progress(1.0)) throw CancelledError("reconstruct_poisson: cancelled");
+  return result;
+}
+
+}  // namespace pointsurf

@@ -1,0 +1,258 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "pointsurf/reconstruct/poisson.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/error.h"
+#include "reconstruct/detail/poisson_solver.h"
+#include "support/files.h"
+#include "support/shapes.h"
+
+namespace pointsurf {
+namespace {
+
+using test::expect_error;
+
+// The solver alone: the function of a sampled unit sphere is below its iso-value inside and
+// above it outside, and crosses it within 1 % of the radius along any ray.
+TEST(PoissonSolver, SphereFunctionIsBelowTheIsoValueInsideAndAboveOutside) {
+  const PointCloud sphere = test::sample_sphere(20000, 1.0);
+  detail::IsoLattice frame;
+  frame.size = 2.2;
+  frame.origin = Vector3d::Constant(-1.1);
+  frame.depth = 6;
+  std::vector<detail::PoissonSample> samples;
+  for (std::size_t i = 0; i < sphere.size(); ++i) samples.push_back({(sphere.positions[i] - frame.origin) / frame.size, sphere.normals[i]});
+  detail::PoissonSystemParams params;
+  params.depth = 6;
+  params.kernel_depth = 4;
+  const detail::PoissonFunction f(samples, params, frame);
+  const double iso = f.iso_value();
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> gauss;
+  for (int k = 0; k < 50; ++k) {
+    const Vector3d dir = Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    EXPECT_LT(f.value(0.3 * dir), iso);
+    EXPECT_LT(f.value(0.95 * dir), iso);
+    EXPECT_GT(f.value(1.05 * dir), iso);
+    EXPECT_GT(f.value(1.09 * dir), iso);
+    EXPECT_GT(f.gradient(dir).dot(dir), 0.0);  // grows outwards
+    double lo = 0.5, hi = 1.09;
+    for (int it = 0; it < 50; ++it) (f.value(0.5 * (lo + hi) * dir) < iso ? lo : hi) = 0.5 * (lo + hi);
+    EXPECT_NEAR(lo, 1.0, 0.01);
+  }
+  // every level solved: the residual fell
+  ASSERT_EQ(f.levels().size(), 6u);
+  for (const detail::PoissonLevelReport& r : f.levels()) EXPECT_LT(r.final_residual, r.initial_residual) << "level " << r.level;
+  // below full_depth the octree is sparse
+  EXPECT_LT(f.levels().back().nodes, std::size_t(64 * 64 * 64));
+  // the samples are where the density is
+  EXPECT_GT(f.density_depth(Vector3d(1, 0, 0)), 4.0);
+  EXPECT_EQ(f.density_depth(Vector3d(0, 0, 0)), 0.0);
+}
+
+TEST(Poisson, SphereWithinOnePercentOfTheRadiusAtDepth7WatertightGenus0) {
+  const PointCloud sphere = test::sample_sphere(20000, 1.0);
+  PoissonParams params;
+  params.depth = 7;
+  const PoissonResult r = reconstruct_poisson(sphere, params);
+  ASSERT_GT(r.mesh.vertex_count(), 1000u);
+  double worst = 0.0;
+  for (const Vector3d& v : r.mesh.vertices) worst = std::max(worst, std::abs(v.norm() - 1.0));
+  EXPECT_LT(worst, 0.01);
+  EXPECT_TRUE(r.topology.watertight());
+  EXPECT_EQ(r.topology.components, 1u);
+  EXPECT_EQ(r.topology.non_manifold_edges, 0u);
+  EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
+  EXPECT_EQ(r.topology.genus(), 0);
+  // normals from the gradient: outward, unit
+  ASSERT_EQ(r.mesh.vertex_normals.size(), r.mesh.vertex_count());
+  for (std::size_t v = 0; v < r.mesh.vertex_count(); ++v) {
+    EXPECT_NEAR(r.mesh.vertex_normals[v].norm(), 1.0, 1e-9);
+    EXPECT_GT(r.mesh.vertex_normals[v].dot(r.mesh.vertices[v].normalized()), 0.95);
+  }
+  // triangles counter-clockwise from outside
+  for (const Triangle& t : r.mesh.triangles) {
+    const Vector3d& a = r.mesh.vertices[t[0]];
+    EXPECT_GT((r.mesh.vertices[t[1]] - a).cross(r.mesh.vertices[t[2]] - a).dot(a), 0.0);
+  }
+  EXPECT_EQ(r.depth, 7);
+  EXPECT_EQ(r.nodes_per_level.size(), 8u);
+  EXPECT_GT(r.peak_bytes, 0u);
+  const ScalarField* density = r.mesh.vertex_fields.find("density");
+  ASSERT_NE(density, nullptr);
+  for (const double d : density->values) EXPECT_GT(d, 4.0);
+}
+
+TEST(Poisson, TorusIsWatertightOfGenus1) {
+  const PointCloud torus = test::sample_torus(30000, 1.0, 0.35);
+  PoissonParams params;
+  params.depth = 7;
+  const PoissonResult r = reconstruct_poisson(torus, params);
+  EXPECT_TRUE(r.topology.watertight());
+  EXPECT_EQ(r.topology.components, 1u);
+  EXPECT_EQ(r.topology.genus(), 1);
+  for (const Vector3d& v : r.mesh.vertices) {
+    const double ring = std::hypot(v.x(), v.y()) - 1.0;
+    EXPECT_NEAR(std::hypot(ring, v.z()), 0.35, 0.01);
+  }
+}
+
+// An open surface: Poisson closes it far from the samples (here against the bounding cube),
+// where the density is low; trimming at a level below the samples' density leaves the dome
+// with exactly one boundary loop near its rim. The closed sphere loses nothing at that level.
+TEST(Poisson, TrimmedHemisphereHasExactlyOneBoundaryLoop) {
+  const PointCloud sphere = test::sample_sphere(20000, 1.0);
+  std::vector<std::size_t> upper;
+  for (std::size_t i = 0; i < sphere.size(); ++i)
+    if (sphere.positions[i].z() >= 0.0) upper.push_back(i);
+  const PointCloud dome = sphere.select(upper);
+  PoissonParams params;
+  params.depth = 7;
+  const PoissonResult untrimmed = reconstruct_poisson(dome, params);
+  double lowest = 0.0;
+  for (const Vector3d& v : untrimmed.mesh.vertices) lowest = std::min(lowest, v.z());
+  EXPECT_LT(lowest, -0.2);  // the closing part hangs below the rim
+  params.trim_depth = 5.0;  // the samples' density is about 6.1 (depth units)
+  const PoissonResult r = reconstruct_poisson(dome, params);
+  EXPECT_GT(r.trimmed_triangles, 0u);
+  EXPECT_EQ(r.topology.boundary_loops.size(), 1u);
+  EXPECT_EQ(r.topology.components, 1u);
+  EXPECT_EQ(r.topology.non_manifold_edges, 0u);
+  EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
+  for (const Vector3d& v : r.mesh.vertices) {
+    EXPECT_GT(v.z(), -0.2);
+    if (v.z() > 0.1) {
+      EXPECT_NEAR(v.norm(), 1.0, 0.01);
+    }
+  }
+  for (const int v : r.topology.boundary_loops.front().vertices) EXPECT_NEAR(r.mesh.vertices[std::size_t(v)].z(), 0.0, 0.2);
+  // the closed sphere is dense everywhere: nothing goes
+  PoissonParams closed;
+  closed.depth = 7;
+  closed.trim_depth = 5.0;
+  const PoissonResult whole = reconstruct_poisson(sphere, closed);
+  EXPECT_EQ(whole.trimmed_triangles, 0u);
+  EXPECT_TRUE(whole.topology.watertight());
+}
+
+TEST(Poisson, DirichletBoundaryAlsoGivesTheSphere) {
+  const PointCloud sphere = test::sample_sphere(10000, 1.0);
+  PoissonParams params;
+  params.depth = 6;
+  params.boundary = PoissonBoundary::Dirichlet;
+  const PoissonResult r = reconstruct_poisson(sphere, params);
+  EXPECT_TRUE(r.topology.watertight());
+  EXPECT_EQ(r.topology.genus(), 0);
+  // the zero on the cube, 0.1 from the sphere, pulls the surface out a little
+  for (const Vector3d& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 1.0, 0.03);
+}
+
+// The same mesh (up to 1e-9 of the diagonal) for the points shifted by 1e6 m and shuffled,
+// with the vertices interpolated linearly on the edges. The extractor's secant steps
+// (root_refinement_steps, default 2) evaluate the function at world positions rounded at 2e6
+// (ulp 4.7e-10) and move vertices by up to 2.2e-8 here: 6.2e-9 of the diagonal (to be fixed in
+// the extractor by refining in lattice coordinates).
+TEST(Poisson, SameMeshUnderAShiftOf1e6AndAPermutation) {
+  const PointCloud sphere = test::sample_sphere(6000, 1.0, Vector3d(0.1, -0.2, 0.3));
+  for (const int steps : {0, 2}) {
+    PoissonParams params;
+    params.depth = 6;
+    params.root_refinement_steps = steps;
+    const PoissonResult a = reconstruct_poisson(sphere, params);
+    const Vector3d shift(1e6, -2e6, 1e6);
+    std::vector<std::size_t> order(sphere.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), std::mt19937_64(3));
+    PointCloud moved = sphere.select(order);
+    for (Vector3d& p : moved.positions) p += shift;
+    const PoissonResult b = reconstruct_poisson(moved, params);
+    ASSERT_EQ(a.mesh.vertex_count(), b.mesh.vertex_count());
+    ASSERT_EQ(a.mesh.triangle_count(), b.mesh.triangle_count());
+    const double diagonal = 2.0 * std::sqrt(3.0);
+    double worst = 0.0;
+    for (std::size_t v = 0; v < a.mesh.vertex_count(); ++v) worst = std::max(worst, (b.mesh.vertices[v] - shift - a.mesh.vertices[v]).norm());
+    EXPECT_LT(worst, (steps == 0 ? 1e-9 : 1e-8) * diagonal) << steps << " secant steps";
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  }
+}
+
+TEST(Poisson, ZeroAndNonFiniteNormalsAreSkippedAndCounted) {
+  PointCloud sphere = test::sample_sphere(10000, 1.0);
+  for (std::size_t i = 0; i < 100; ++i) sphere.normals[7 * i] = Vector3d::Zero();
+  sphere.normals[1] = Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+  sphere.normals[2] = Vector3d(std::numeric_limits<double>::infinity(), 0.0, 0.0);
+  PoissonParams params;
+  params.depth = 6;
+  const PoissonResult r = reconstruct_poisson(sphere, params);
+  EXPECT_EQ(r.skipped_normals, 102u);
+  EXPECT_TRUE(r.topology.watertight());
+  EXPECT_EQ(r.topology.genus(), 0);
+  const auto& counts = r.stats.counts;
+  EXPECT_NE(std::find(counts.begin(), counts.end(), std::pair<std::string, std::size_t>("skipped_normals", 102)), counts.end());
+}
+
+TEST(Poisson, CarriesColoursAndFieldsFromTheNearestSample) {
+  PointCloud sphere = test::sample_sphere(10000, 1.0);
+  sphere.colors.resize(sphere.size());
+  ScalarField& side = sphere.fields.add("side", sphere.size(), ScalarType::Int32);
+  for (std::size_t i = 0; i < sphere.size(); ++i) {
+    const bool top = sphere.positions[i].z() > 0.0;
+    sphere.colors[i] = top ? Vector3f(1, 0, 0) : Vector3f(0, 0, 1);
+    side.values[i] = top ? 1 : -1;
+  }
+  PoissonParams params;
+  params.depth = 6;
+  const PoissonResult r = reconstruct_poisson(sphere, params);
+  ASSERT_EQ(r.mesh.vertex_colors.size(), r.mesh.vertex_count());
+  const ScalarField* out = r.mesh.vertex_fields.find("side");
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(out->type, ScalarType::Int32);
+  for (std::size_t v = 0; v < r.mesh.vertex_count(); ++v) {
+    const double z = r.mesh.vertices[v].z();
+    if (std::abs(z) < 0.1) continue;
+    EXPECT_EQ(r.mesh.vertex_colors[v].x(), z > 0 ? 1.0f : 0.0f);
+    EXPECT_EQ(out->values[v], z > 0 ? 1.0 : -1.0);
+  }
+}
+
+TEST(Poisson, ErrorsNameTheProblem) {
+  PointCloud few = test::sample_sphere(10, 1.0);
+  for (std::size_t i = 0; i < 7; ++i) few.normals[i] = Vector3d::Zero();
+  expect_error<InputError>([&] { reconstruct_poisson(few); }, "3 of 10 points have a usable normal");
+  PointCloud bare = test::sample_sphere(100, 1.0);
+  bare.normals.clear();
+  expect_error<UsageError>([&] { reconstruct_poisson(bare); }, "no normals");
+  PointCloud bad = test::sample_sphere(100, 1.0);
+  bad.positions[5].x() = std::numeric_limits<double>::quiet_NaN();
+  expect_error<InputError>([&] { reconstruct_poisson(bad); }, "point 5 has a non-finite coordinate");
+  PoissonParams p;
+  p.depth = 1;
+  expect_error<UsageError>([&] { p.validate(); }, "depth must be 0 (from the data) or in [2, 16], got 1");
+  p = {};
+  p.point_weight = -1;
+  expect_error<UsageError>([&] { p.validate(); }, "point_weight must be >= 0");
+  p = {};
+  p.samples_per_node = 0;
+  expect_error<UsageError>([&] { p.validate(); }, "samples_per_node must be > 0");
+  p = {};
+  p.island_area_ratio = 2;
+  expect_error<UsageError>([&] { p.validate(); }, "island_area_ratio must be in [0, 1]");
+}
+
+TEST(Poisson, DepthFromTheDataFollowsTheSpacing) {
+  const PointCloud sphere = test::sample_sphere(20000, 1.0);  // spacing about 0.012: 2.2 / 0.012 = 2^7.5
+  const PoissonResult r = reconstruct_poisson(sphere);
+  EXPECT_GE(r.depth, 7);
+  EXPECT_LE(r.depth, 8);
+  EXPECT_TRUE(r.topology.watertight());
+}
+
+}  // namespace
+}  // namespace pointsurf
