@@ -59,12 +59,15 @@ def from_numpy(positions: npt.ArrayLike, normals: npt.ArrayLike | None = ..., co
 def to_open3d(data: Data) -> Any: ...
 def from_open3d(geometry: Any) -> Data: ...
 
-def read(filename: Path, *, format: Literal['', 'ply', 'xyz', 'pcd', 'las', 'off', 'obj', 'stl'] = ..., columns: str = ..., strict: bool = ..., progress: Progress = None) -> Data:
-    """Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, OFF, OBJ, STL; format from the content)
+def read(filename: Path, *, format: Literal['', 'ply', 'xyz', 'pcd', 'las', 'laz', 'off', 'obj', 'stl', 'e57'] = ..., keep_poses: bool = ..., columns: str = ..., strict: bool = ..., copc_level: int = ..., bounds: Sequence[float] = ..., progress: Progress = None) -> Data:
+    """Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)
 
     format = '': Read as this format instead of detecting it from the content
+    keep_poses = False: E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose
     columns = '': Column meaning of XYZ/TXT/CSV input, e.g. x,y,z,_,i,r,g,b (_ skips a column; other names become fields)
     strict = False: Points with NaN/Inf coordinates are an error instead of being dropped and counted
+    copc_level = -1: COPC files: read the octree levels 0..N only (-1: all) ([-1, inf))
+    bounds = []: Keep the points inside the box xmin,ymin,zmin,xmax,ymax,zmax (COPC: nodes outside are not decoded) (cloud units)
     """
 
 def crop(cloud: Data, /, *, min: Sequence[float] = ..., max: Sequence[float] = ..., outside: bool = ..., progress: Progress = None) -> PointCloud:
@@ -190,10 +193,10 @@ def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., 
     truth_field = '': Field marking true feature points (non-zero): report precision and recall
     """
 
-def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot'] = ..., normals_k: int = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
-    """Triangle mesh through the points: region-growing triangulation (default), cocone, Crust or ball pivoting
+def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot', 'poisson'] = ..., normals_k: int = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., depth: int = ..., full_depth: int = ..., samples_per_node: float = ..., point_weight: float = ..., boundary_condition: Literal['neumann', 'dirichlet'] = ..., confidence: bool = ..., trim_depth: float = ..., island_area_ratio: float = ..., max_iterations: int = ..., root_refinement_steps: int = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
+    """Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson
 
-    method = 'triangulate': one of triangulate, cocone, crust, ball-pivot
+    method = 'triangulate': one of triangulate, cocone, crust, ball-pivot, poisson
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     k = 30: At most k neighbours per point (4k within 4x the radius for points on a scan line) ([3, inf))
     radius = 0.0: Search radius and longest edge; 0: radius_in_spacings x local spacing (cloud units, [0, inf))
@@ -204,7 +207,7 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     max_angle_deg = 160.0: Largest inner angle of a triangle (degrees, (60, 180])
     max_dihedral_deg = 135.0: Largest angle between neighbouring triangle normals (degrees, (0, 180])
     max_front_angle_deg = 150.0: Close boundary corners opening less than this after growing; 0: off (degrees, [0, 180))
-    max_hole_perimeter_in_spacings = 20.0: Close holes up to this perimeter (fill_holes, every method); 0: none (local spacings, [0, inf))
+    max_hole_perimeter_in_spacings = 20.0: Close holes up to this perimeter (fill_holes, every interpolating method); 0: none (local spacings, [0, inf))
     cocone_angle_deg = 22.5: Cocone half-angle theta (degrees, (0, 90))
     normal_filter_angle_deg = 60.0: Drop triangles deviating more from the pole vectors; 90: off (degrees, (0, 90])
     sharp_edge_angle_deg = 270.0: Sharp-edge pruning gap; 360: off (degrees, [180, 360])
@@ -213,6 +216,16 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     radii = []: Ball radii (default: radii_in_spacings x mean spacing) (cloud units, (0, inf))
     radii_in_spacings = [1.5, 3.0, 6.0]: Ball radii when radii are not given (mean spacings, (0, inf))
     max_mean_normal_angle_deg = 65.0: Largest angle between a triangle and its mean vertex normal (degrees, (0, 180])
+    depth = 0: Finest octree level (2^depth cells across 1.1x the largest extent); 0: the level whose cell is nearest the mean spacing, 6..10 ([0, 16])
+    full_depth = 5: Octree levels 1..full_depth are complete grids ([1, 16])
+    samples_per_node = 1.5: Density output: the depth at which a node holds this many samples (samples, (0, inf))
+    point_weight = 4.0: Screening weight alpha: pull of the surface to the samples; 0: plain Poisson ([0, inf))
+    boundary_condition = 'neumann': Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)
+    confidence = False: Weight each point by its normal's length
+    trim_depth = 0.0: Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off (depth, [0, 16])
+    island_area_ratio = 0.001: After trimming, remove pieces smaller than this share of the largest's area (share of area, [0, 1])
+    max_iterations = 8: Conjugate-gradient iterations per sparse level at most ([1, inf))
+    root_refinement_steps = 2: Secant steps on the function per surface vertex; 0: linear ([0, 20])
     min_component_share = 0.001: Remove components with fewer faces than this share of all; 0: keep all (share of faces, [0, 1])
     region_normal_angle_deg = 15.0: Flat regions: largest normal angle across an edge (degrees, (0, 180])
     region_seed_angle_deg = 30.0: Flat regions: largest normal angle to the region's seed face; 180: off (degrees, (0, 180])
@@ -259,7 +272,7 @@ def render(data: Data, /, filename: Path, *, size: str = ..., view: Literal['fro
     fov_deg = 40.0: Vertical field of view of the camera; 0: orthographic, as high as the eye is far from the target (degrees, [0, 179))
     """
 
-def write(data: Data, /, filename: Path, *, format: Literal['', 'ply', 'xyz', 'pcd', 'las', 'off', 'obj', 'stl'] = ..., ascii: bool = ..., float: bool = ..., double: bool = ..., big_endian: bool = ..., compressed: bool = ..., las_offset: Sequence[float] = ..., las_scale: float = ..., progress: Progress = None) -> dict[str, Any]:
+def write(data: Data, /, filename: Path, *, format: Literal['', 'ply', 'xyz', 'pcd', 'las', 'laz', 'off', 'obj', 'stl', 'e57'] = ..., ascii: bool = ..., float: bool = ..., double: bool = ..., big_endian: bool = ..., compressed: bool = ..., las_offset: Sequence[float] = ..., las_scale: float = ..., e57_scale: float = ..., progress: Progress = None) -> dict[str, Any]:
     """Write a cloud or mesh; the format follows the extension
 
     format = '': Write this format whatever the extension
@@ -270,4 +283,5 @@ def write(data: Data, /, filename: Path, *, format: Literal['', 'ply', 'xyz', 'p
     compressed = False: Write PCD as binary_compressed (LZF)
     las_offset = []: LAS offset (default: near the data's minimum) (cloud units)
     las_scale = 0.0: LAS scale, cloud units per count (default: 1e-4 or coarser for large extents) (cloud units, (0, inf))
+    e57_scale = 0.0: E57: scaled-integer coordinates with this step (default: float64) (cloud units, (0, inf))
     """

@@ -100,8 +100,18 @@ def test_input_error_names_the_file(tmp_path):
         pointsurf.read(tmp_path / "missing.ply")
 
 
+CLOUD_FORMATS = ["ply", "xyz", "pcd", "las", "laz", "e57"]
+MESH_FORMATS = ["ply", "off", "obj", "stl"]
+
+
+def test_every_registered_format_is_tested():
+    read = next(s for s in pointsurf.STAGES if s["name"] == "read")
+    choices = set(next(p for p in read["params"] if p["name"] == "format")["choices"]) - {""}
+    assert choices <= set(CLOUD_FORMATS + MESH_FORMATS), choices
+
+
 def test_every_format_round_trips(tmp_path, cloud):
-    for ext in ["ply", "xyz", "pcd", "las"]:
+    for ext in CLOUD_FORMATS:
         path = tmp_path / f"c.{ext}"
         pointsurf.write(cloud, path)
         back = pointsurf.read(path)
@@ -109,7 +119,7 @@ def test_every_format_round_trips(tmp_path, cloud):
         np.testing.assert_allclose(back.positions, cloud.positions, atol=1e-4)
     v, f = octasphere(2)
     m = pointsurf.TriangleMesh(v, f)
-    for ext in ["ply", "off", "obj", "stl"]:
+    for ext in MESH_FORMATS:
         path = tmp_path / f"m.{ext}"
         pointsurf.write(m, path)
         back = pointsurf.read(path)
