@@ -27,6 +27,8 @@ TEST_PACKAGES=(chromium python3)
 SANITIZE_PACKAGES=(libasan8 libubsan1)
 # Node.js (Debian nodejs, npm; installed in build() when the commands are missing) runs laz-perf and
 # web-e57 (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ and E57.
+# The Python module (python/): pybind11, Debian's Python with numpy, pytest; setuptools and venv for pip.
+PYTHON_PACKAGES=(pybind11-dev python3-dev python3-numpy python3-pytest python3-setuptools python3-venv)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
@@ -95,13 +97,15 @@ demo() {
 }
 
 run_tests() {
-  install_missing "${TEST_PACKAGES[@]}"
-  build
+  install_missing "${TEST_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
+  build -DPOINTSURF_BUILD_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
   # web-e57 (npm) reads pointsurf's E57 in tests/io/e57_test.cpp; the test skips without it.
   [ -d "$BUILD_DIR/npm/node_modules/web-e57" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund web-e57@1.2.0 >/dev/null 2>&1 ||
     log "could not install web-e57 from npm (no network or no npm): the E57 cross-check will skip"
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900
+  # The Python module from this build; pytest exits 5 (failing the script) when it collects nothing.
+  PYTHONPATH="$BUILD_DIR/python" /usr/bin/python3 -m pytest -q -p no:cacheprovider "$ROOT/python/tests"
 }
 
 # Sanitizer run: the whole suite built with -fsanitize=address,undefined in its own build folder.

@@ -1,0 +1,307 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The registry as Python data, and one runner for every stage and for whole pipelines.
+//
+// A stage call is checked exactly as the command line checks it: its values arrive as text
+// (the --set form) and go through build_pipeline, so Python gets the CLI's messages. The step
+// is built behind placeholder readers (one per input) and, where needed, a placeholder writer,
+// then run alone over a Context holding copies of the inputs (the inputs stay unchanged).
+//
+// Threads: the stage runs on a worker thread with the GIL released. The calling thread waits,
+// taking the GIL every 50 ms to run Python's signal handlers (Ctrl-C), which cancels the stage
+// at its next progress report. A user progress callback is called from the reporting thread
+// with the GIL taken for the call only, at most every 20 ms (and at the end).
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/pipeline/pipeline.h"
+#include "pointsurf/pipeline/registry.h"
+
+namespace py = pybind11;
+
+namespace pointsurf::python {
+namespace {
+
+const char* kind_name(DataKind kind) {
+  switch (kind) {
+    case DataKind::Cloud: return "cloud";
+    case DataKind::Mesh: return "mesh";
+    case DataKind::Any: return "any";
+  }
+  return "any";
+}
+
+py::dict param_dict(const ParamSpec& p) {
+  py::dict d;
+  d["name"] = p.name;
+  d["type"] = param_type_name(p.type);
+  d["kind"] = static_cast<int>(p.type);
+  d["default"] = p.default_value;
+  d["unit"] = p.unit;
+  d["min"] = p.min;
+  d["max"] = p.max;
+  d["range"] = p.range_text();
+  d["choices"] = p.choices;
+  d["doc"] = p.doc;
+  d["methods"] = p.methods;
+  d["meta"] = p.meta;
+  return d;
+}
+
+py::list stage_list() {
+  py::list out;
+  for (const StageSpec& s : registered_stages()) {
+    py::dict d;
+    d["name"] = s.name;
+    d["summary"] = s.summary;
+    d["description"] = s.description;
+    py::list consumes;
+    for (const Slot& slot : s.consumes) consumes.append(py::make_tuple(slot.name, kind_name(slot.kind)));
+    d["consumes"] = consumes;
+    d["produces"] = s.produces ? py::object(py::str(kind_name(s.produces->kind))) : py::object(py::none());
+    d["methods"] = s.methods;
+    d["default_method"] = s.default_method;
+    d["method_list"] = s.method_list;
+    d["measures"] = s.measures;
+    d["writes_param"] = s.writes_param;
+    d["examples"] = s.examples;
+    py::list params;
+    for (const ParamSpec& p : s.params) params.append(param_dict(p));
+    d["params"] = params;
+    out.append(d);
+  }
+  return out;
+}
+
+DataItem to_item(const py::handle& obj) {
+  DataItem item;
+  if (py::isinstance<PointCloud>(obj)) {
+    item.cloud = obj.cast<const PointCloud&>();
+    item.cloud.validate();
+  } else if (py::isinstance<TriangleMesh>(obj)) {
+    TriangleMesh mesh = obj.cast<const TriangleMesh&>();
+    mesh.validate();
+    item.assign_mesh(std::move(mesh), "python");
+  } else {
+    throw UsageError(fmt::format("expected a PointCloud or a TriangleMesh, got {}", std::string(py::str(obj.get_type().attr("__name__")))));
+  }
+  return item;
+}
+
+py::object from_item(DataItem&& item) {
+  if (!item.is_mesh) return py::cast(std::move(item.cloud));
+  return py::cast(TriangleMesh::from_cloud(std::move(item.cloud), std::move(item.triangles), std::move(item.face_fields)));
+}
+
+/// Progress and cancellation shared by the worker, the library's threads and the waiting caller.
+class Watch {
+public:
+  explicit Watch(py::object callback) : callback_(std::move(callback)) {}
+
+  /// The library's progress hook: false cancels the stage.
+  bool report(double fraction) {
+    if (stop_.load()) return false;
+    if (callback_.is_none()) return true;
+    {
+      std::lock_guard lock(mutex_);
+      const auto now = std::chrono::steady_clock::now();
+      if (fraction < 1.0 && now - last_ < std::chrono::milliseconds(20)) return true;
+      last_ = now;
+    }
+    py::gil_scoped_acquire gil;
+    try {
+      py::object answer = callback_(fraction);
+      if (!answer.is_none() && !answer.cast<bool>()) stop(Why::Callback);
+    } catch (py::error_already_set& e) {
+      std::lock_guard lock(mutex_);
+      if (!error_) error_.emplace(std::move(e));
+      stop(Why::Raised);
+    }
+    return !stop_.load();
+  }
+
+  /// Runs `work` on a worker thread; the caller (holding the GIL) waits with it released,
+  /// polling Python's signal handlers. Rethrows the work's exception, or the Python one that
+  /// stopped it (KeyboardInterrupt, the callback's own).
+  void run(const std::function<void()>& work) {
+    std::exception_ptr failure;
+    bool done = false;
+    std::mutex m;
+    std::condition_variable cv;
+    {
+      py::gil_scoped_release release;
+      std::thread worker([&] {
+        try {
+          work();
+        } catch (...) {
+          failure = std::current_exception();
+        }
+        std::lock_guard lock(m);
+        done = true;
+        cv.notify_all();
+      });
+      std::unique_lock lock(m);
+      while (!cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) {
+        lock.unlock();
+        {
+          py::gil_scoped_acquire gil;
+          if (PyErr_CheckSignals() != 0) {
+            std::lock_guard elock(mutex_);
+            if (!error_) error_.emplace();  // fetches KeyboardInterrupt (or what the handler raised)
+            stop(Why::Raised);
+          }
+        }
+        lock.lock();
+      }
+      lock.unlock();
+      worker.join();
+    }
+    if (why_ == Why::Raised && error_) throw std::move(*error_);
+    if (failure) {
+      if (why_ == Why::Callback) {
+        try {
+          std::rethrow_exception(failure);
+        } catch (const ComputeError& e) {
+          throw CancelledError(e.what());  // the library names the stage; keep the kind
+        }
+      }
+      std::rethrow_exception(failure);
+    }
+  }
+
+  ProgressCallback hook() {
+    return [this](double f) { return report(f); };
+  }
+
+private:
+  enum class Why { None, Callback, Raised };
+  void stop(Why why) {
+    if (!stop_.exchange(true)) why_ = why;
+  }
+  py::object callback_;
+  std::atomic<bool> stop_{false};
+  Why why_ = Why::None;
+  std::mutex mutex_;
+  std::chrono::steady_clock::time_point last_{};
+  std::optional<py::error_already_set> error_;
+};
+
+/// "ORIGIN: stage N (TYPE): rest" or "stage N (TYPE): rest" -> "TYPE: rest".
+std::string rename_stage(const std::string& message, const std::string& origin, std::size_t index, const std::string& type) {
+  for (const std::string& prefix : {fmt::format("{}: stage {} ({}): ", origin, index, type), fmt::format("stage {} ({}): ", index, type)})
+    if (message.rfind(prefix, 0) == 0) return type + ": " + message.substr(prefix.size());
+  return message;
+}
+
+template <class F>
+void with_stage_messages(const std::string& origin, std::size_t index, const std::string& type, F&& f) {
+  try {
+    f();
+  } catch (const CancelledError& e) {
+    throw CancelledError(rename_stage(e.what(), origin, index, type));
+  } catch (const UsageError& e) {
+    throw UsageError(rename_stage(e.what(), origin, index, type));
+  } catch (const InputError& e) {
+    throw InputError(rename_stage(e.what(), origin, index, type));
+  } catch (const ComputeError& e) {
+    throw ComputeError(rename_stage(e.what(), origin, index, type));
+  }
+}
+
+/// Runs stage `name` over `inputs` (PointCloud / TriangleMesh objects, one per consumed slot, or
+/// any number for a list slot) with `params` as (key, text) pairs. Returns (product or None,
+/// report JSON text).
+py::tuple run_stage(const std::string& name, const py::list& inputs, const std::vector<std::pair<std::string, std::string>>& params,
+                    const py::object& progress) {
+  const StageSpec* spec = find_stage(name);
+  if (spec == nullptr) throw UsageError(fmt::format("unknown stage \"{}\"", name));
+  const std::string origin = "pointsurf." + name;
+  std::vector<StepText> steps;
+  std::vector<std::string> tags;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    tags.push_back(fmt::format("input{}", i + 1));
+    steps.push_back(StepText{"read", tags.back(), {}, {{"filename", "input.ply"}}});
+  }
+  steps.push_back(StepText{name, "output", tags, params});
+  const bool ends = spec->name == "write" || spec->measures || !spec->writes_param.empty();
+  if (!ends) steps.push_back(StepText{"write", "", {"output"}, {{"filename", "output.ply"}}});
+  const std::size_t index = inputs.size();
+
+  Pipeline pipeline;
+  with_stage_messages(origin, index + 1, name, [&] {
+    Pipeline built = build_pipeline(steps, origin);
+    pipeline.origin = origin;
+    pipeline.steps.push_back(std::move(built.steps[index]));
+  });
+  auto context = std::make_shared<Context>();
+  for (std::size_t i = 0; i < inputs.size(); ++i) context->set(tags[i], to_item(inputs[i]));
+
+  RunReport report;
+  report.command = name;
+  Watch watch(progress);
+  RunOptions options;
+  options.progress = [&](const StageRecord&) { return watch.hook(); };
+  with_stage_messages(origin, 1, name, [&] { watch.run([&] { run_pipeline(pipeline, *context, report, options); }); });
+  py::object product = py::none();
+  if (spec->produces && context->has("output")) product = from_item(std::move(context->item("output")));
+  return py::make_tuple(product, report_json(report));
+}
+
+/// Runs a whole JSON pipeline (the CLI's `run`); returns the report JSON text.
+std::string run_json(const std::string& text, const std::string& origin, const std::vector<std::string>& overrides,
+                     const py::object& progress) {
+  const Pipeline pipeline = parse_pipeline(text, origin, overrides);
+  Context context;
+  RunReport report;
+  report.command = "run";
+  Watch watch(progress);
+  RunOptions options;
+  options.progress = [&](const StageRecord&) { return watch.hook(); };
+  watch.run([&] { run_pipeline(pipeline, context, report, options); });
+  return report_json(report);
+}
+
+}  // namespace
+
+void bind_stages(py::module_& m) {
+  // Python's classes for the library's errors; the most derived is registered last (tried first).
+  static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+  static py::exception<UsageError> usage(m, "UsageError", error.ptr());
+  static py::exception<InputError> input(m, "InputError", error.ptr());
+  static py::exception<ComputeError> compute(m, "ComputeError", error.ptr());
+  static py::exception<CancelledError> cancelled(m, "CancelledError", compute.ptr());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const CancelledError& e) {
+      PyErr_SetString(cancelled.ptr(), e.what());
+    } catch (const UsageError& e) {
+      PyErr_SetString(usage.ptr(), e.what());
+    } catch (const InputError& e) {
+      PyErr_SetString(input.ptr(), e.what());
+    } catch (const ComputeError& e) {
+      PyErr_SetString(compute.ptr(), e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    }
+  });
+  m.def("stages", &stage_list, "Every registered stage with its parameters, as plain data.");
+  m.def("run_stage", &run_stage, py::arg("name"), py::arg("inputs"), py::arg("params"), py::arg("progress") = py::none());
+  m.def("run_json", &run_json, py::arg("text"), py::arg("origin"), py::arg("overrides") = std::vector<std::string>{},
+        py::arg("progress") = py::none());
+}
+
+}  // namespace pointsurf::python
