@@ -278,7 +278,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
     t.knn(p, k, neighbors);
     Scratch& local = scratch.local();
     if (primitive_count > 0) {
-      // Amid a primitive's inliers (half of the neighbours) but far from every such
+      // Amid a primitive's inliers (3/4 of the neighbours) but far from every such
       // primitive: an outlier, whatever plane a curved strip below it offers.
       std::vector<std::uint32_t>& votes = local.votes;
       votes.assign(primitive_count, 0);
@@ -286,7 +286,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
         if (nb.index != i && found.labels[nb.index] >= 0) ++votes[static_cast<std::size_t>(found.labels[nb.index])];
       bool owned = false, near = false;
       for (std::size_t l = 0; l < primitive_count; ++l)
-        if (2 * votes[l] >= neighbors.size()) {
+        if (4 * votes[l] >= 3 * neighbors.size()) {
           owned = true;
           near = near || found.primitives[l].distance(p) <= band;
         }
