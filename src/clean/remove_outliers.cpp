@@ -19,6 +19,8 @@
 #include "core/detail/plane_fit.h"
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/shape/primitives.h"
 #include "pointsurf/spatial/voxel_grid.h"
 
 namespace pointsurf {
@@ -156,6 +158,7 @@ void RansacOutlierParams::validate() const {
     throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, min_relative_support));
   detail::check_length(fn, "distance", distance, false);
   if (distance == 0.0) detail::check_positive(fn, "distance_in_spacings", distance_in_spacings);
+  detail::check_positive(fn, "primitive_band", primitive_band);
 }
 
 OutlierResult remove_statistical_outliers(const PointCloud& cloud, const StatisticalOutlierParams& params, const KdTree* tree,
@@ -240,19 +243,60 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   const double distance = detail::resolve_length(params.distance, params.distance_in_spacings, t);
   const std::size_t k = static_cast<std::size_t>(params.k);
 
+  // Primitives first (the detector needs normals: estimated on a copy when there are none).
+  PrimitiveResult found;
+  if (params.primitives) {
+    PrimitiveParams pp;
+    pp.epsilon = distance;
+    pp.seed = params.seed;
+    if (cloud.has_normals()) {
+      found = detect_primitives(cloud, pp);
+    } else {
+      PointCloud oriented;
+      oriented.positions = cloud.positions;
+      estimate_normals(oriented, {.keep_variation = false}, &t);
+      found = detect_primitives(oriented, pp);
+    }
+  }
+  const std::size_t primitive_count = found.primitives.size();
+  const double band = params.primitive_band * distance;
+
   std::vector<std::uint8_t> keep(cloud.size());
   struct Scratch {
     std::vector<Eigen::Vector3d> offsets;
     std::vector<Plane> candidates;
+    std::vector<std::uint32_t> votes;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
   detail::for_each_point(t, reporter, [&](std::uint32_t i, std::vector<Neighbor>& neighbors) {
     const Eigen::Vector3d& p = cloud.positions[i];
+    if (primitive_count > 0 && found.labels[i] >= 0) {
+      keep[i] = 1;
+      return;
+    }
     t.knn(p, k, neighbors);
+    Scratch& local = scratch.local();
+    if (primitive_count > 0) {
+      // Amid a primitive's inliers (3/4 of the neighbours) but far from every such
+      // primitive: an outlier, whatever plane a curved strip below it offers.
+      std::vector<std::uint32_t>& votes = local.votes;
+      votes.assign(primitive_count, 0);
+      for (const Neighbor& nb : neighbors)
+        if (nb.index != i && found.labels[nb.index] >= 0) ++votes[static_cast<std::size_t>(found.labels[nb.index])];
+      bool owned = false, near = false;
+      for (std::size_t l = 0; l < primitive_count; ++l)
+        if (4 * votes[l] >= 3 * neighbors.size()) {
+          owned = true;
+          near = near || found.primitives[l].distance(p) <= band;
+        }
+      if (owned && !near) {
+        keep[i] = 0;
+        return;
+      }
+    }
     // Offsets of the other points from this one: small numbers even for georeferenced clouds.
     // The point itself takes no part in the fits, so it cannot support a plane through itself.
-    Scratch& local = scratch.local();
     std::vector<Eigen::Vector3d>& q = local.offsets;
     q.clear();
     for (const Neighbor& nb : neighbors)

@@ -50,6 +50,8 @@ RansacOutlierParams ransac_params(const StageArgs& a) {
   p.min_support = a.number("min_support");
   p.min_relative_support = a.number("min_relative_support");
   p.seed = static_cast<std::uint64_t>(a.integer("seed"));
+  p.primitives = a.boolean("primitives");
+  p.primitive_band = a.number("primitive_band");
   return p;
 }
 
@@ -198,6 +200,12 @@ StageSpec clean_stage() {
           .range(0.0, 1.0)
           .only({"ransac"}),
       P::integer("seed", static_cast<std::int64_t>(ransac.seed), "Random seed").at_least(0).only({"ransac"}),
+      P::boolean("primitives", ransac.primitives, "Judge points explained by planes, spheres, cylinders, cones (efficient RANSAC) by those")
+          .only({"ransac"}),
+      P::number("primitive_band", ransac.primitive_band, "A point amid a primitive's inliers farther than this from it is an outlier")
+          .unit("plane distances")
+          .positive()
+          .only({"ransac"}),
       P::boolean("exact", dup.exact, "Merge only points with identical coordinates").only({"duplicates"}),
       P::number("distance_in_spacings", dup.distance_in_spacings, "Merge distance when distance is 0").unit("mean spacings").positive().only({"duplicates"}),
       P::number("radius_in_spacings", bil.radius_in_spacings, "Radius when radius is 0").unit("mean spacings").positive().only(smooth),

@@ -134,6 +134,8 @@ std::vector<Expected> library_defaults() {
       {"clean", "ransac", "min_relative_support", ran.min_relative_support},
       {"clean", "ransac", "seed", static_cast<I>(ran.seed)},
       {"clean", "ransac", "distance_in_spacings", ran.distance_in_spacings},
+      {"clean", "ransac", "primitives", ran.primitives},
+      {"clean", "ransac", "primitive_band", ran.primitive_band},
       {"clean", "duplicates", "distance_in_spacings", dup.distance_in_spacings},
       {"clean", "bilateral", "iterations", I{bil.iterations}},
       {"clean", "bilateral", "max_neighbours", I{bil.max_neighbours}},

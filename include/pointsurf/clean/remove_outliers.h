@@ -120,6 +120,11 @@ struct RansacOutlierParams {
                                       // plane, keeps it (see below), in [0, 1]
   std::uint64_t seed = 1;             // random planes depend only on the seed, the point's
                                       // coordinates and its neighbours (not on point order)
+  bool primitives = true;             // also detect planes, spheres, cylinders and cones
+                                      // (detect_primitives, epsilon = distance) and judge the
+                                      // points they explain by them (see below)
+  double primitive_band = 2.0;        // a point amid a primitive's inliers farther than this
+                                      // many `distance` from it is an outlier, > 0
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -149,11 +154,23 @@ struct RansacOutlierParams {
 /// spacings of an edge or 3 of a corner removed; noise 0.5 spacing: 0.980 / 0.980. Limit: within
 /// about 2 spacings of a cube corner a plane cutting the corner can hold 20 of 23 neighbours, and
 /// a few such points go (6 of about 330 over 8 seeded cubes).
+/// With `primitives` (the default), efficient RANSAC primitives (detect_primitives with
+/// epsilon = distance, its other parameters at their defaults; normals are estimated on a copy
+/// when the cloud has none) decide first: a point assigned to a primitive is kept (a sphere or
+/// thin cylinder curves too much for local planes); a point 3/4 of whose neighbours are
+/// inliers of one primitive but which lies farther than primitive_band * distance from every
+/// such primitive is an outlier (a drift point above a curved surface, which a local plane
+/// through a curved strip may pass); the other points, free-form parts no primitive explains
+/// included, are decided by the local planes above, so the mode removes no fewer outliers.
+/// Measured (same tests, primitives on vs off): plane + sphere (r 0.3) + cylinder (r 0.15)
+/// with noise 0.4 spacing and 2 % drift: precision 1.000 / 1.000, recall 1.000 / 0.984; cube,
+/// noise 0.5: 0.985 / 0.980, recall 0.990 / 0.980; drift clusters of 6: recall 0.983 / 0.908.
 /// Per-point random streams are seeded from `seed` and the point's coordinates, so the result is
 /// reproducible and independent of point order and thread count. Parallel (oneTBB),
 /// O(N k iterations), no allocation per point. `threshold` in the result is `distance`.
 /// Throws UsageError for k < 4, iterations < 1, a negative distance, min_support outside (0, 1],
-/// min_relative_support outside [0, 1], fewer than 4 points; CancelledError on cancel.
+/// min_relative_support outside [0, 1], primitive_band <= 0, fewer than 4 points;
+/// CancelledError on cancel.
 OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlierParams& params = {},
                                      const KdTree* tree = nullptr, const ProgressCallback& progress = {});
 
