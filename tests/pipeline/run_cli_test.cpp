@@ -261,6 +261,15 @@ TEST_F(RunCli, CoordinateSystemIsShownByInfoAndKeptThroughAStageChain) {
   const PointCloud back = read_point_cloud(path("out.laz")).cloud;
   EXPECT_TRUE(back.has_normals());
   EXPECT_EQ(back.crs.wkt, cloud.crs.wkt);
+
+  // The boundary stage's GeoJSON outlines name the input's EPSG code when --crs is not given.
+  PointCloud plate = test::sample_plane(4000, 1.0, 6);
+  plate.crs.wkt = cloud.crs.wkt;
+  write_point_cloud(path("plate.las"), plate);
+  r = test::run_cli("boundary " + path("plate.las") + " " + path("rim.las") + " --outlines " + path("rim.geojson"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(test::read_bytes(path("rim.geojson")), "EPSG:32633"));
+  EXPECT_EQ(read_point_cloud(path("rim.las")).cloud.crs.wkt, cloud.crs.wkt);
 }
 
 }  // namespace
