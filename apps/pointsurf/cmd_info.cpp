@@ -71,6 +71,7 @@ int run_info(const std::vector<std::string>& args) {
     cloud.normals = std::move(r.mesh.vertex_normals);
     cloud.colors = std::move(r.mesh.vertex_colors);
     cloud.fields = std::move(r.mesh.vertex_fields);
+    cloud.crs = std::move(r.mesh.crs);
     face_fields = std::move(r.mesh.face_fields);
   } else {
     CloudReadResult r = read_point_cloud(input, options);
@@ -112,6 +113,13 @@ int run_info(const std::vector<std::string>& args) {
   const nlohmann::json fields = describe(cloud.fields);
   info["fields"] = fields;
   if (mesh_format) info["face_fields"] = describe(face_fields);
+  if (!cloud.crs.empty()) {
+    nlohmann::json crs = {{"name", cloud.crs.describe()}};
+    if (cloud.crs.epsg() > 0) crs["epsg"] = cloud.crs.epsg();
+    if (!cloud.crs.wkt.empty()) crs["wkt"] = cloud.crs.wkt;
+    crs["geotiff_keys"] = !cloud.crs.geokeys.empty();
+    info["crs"] = crs;
+  }
 
   if (!common.report_path.empty()) {
     // The one report schema: a run with one stage "info" whose metrics are the description.
@@ -148,6 +156,7 @@ int run_info(const std::vector<std::string>& args) {
     fmt::print("dropped      {} points with NaN/Inf coordinates\n", info["dropped_nonfinite"].get<std::size_t>());
   fmt::print("normals      {}\n", cloud.has_normals() ? "yes" : "no");
   fmt::print("colours      {}\n", cloud.has_colors() ? "yes" : "no");
+  if (!cloud.crs.empty()) fmt::print("crs          {}\n", cloud.crs.describe());
   fmt::print("bbox min     {:.6f} {:.6f} {:.6f}\n", box.min.x(), box.min.y(), box.min.z());
   fmt::print("bbox max     {:.6f} {:.6f} {:.6f}\n", box.max.x(), box.max.y(), box.max.z());
   fmt::print("extent       {:.6g} {:.6g} {:.6g} (diagonal {:.6g})\n", box.extent().x(), box.extent().y(), box.extent().z(), box.diagonal());

@@ -31,6 +31,7 @@ PointCloud TriangleMesh::vertex_cloud() const {
   cloud.normals = vertex_normals;
   cloud.colors = vertex_colors;
   cloud.fields = vertex_fields;
+  cloud.crs = crs;
   return cloud;
 }
 
@@ -40,6 +41,7 @@ TriangleMesh TriangleMesh::from_cloud(PointCloud cloud, std::vector<Triangle> tr
   mesh.vertex_normals = std::move(cloud.normals);
   mesh.vertex_colors = std::move(cloud.colors);
   mesh.vertex_fields = std::move(cloud.fields);
+  mesh.crs = std::move(cloud.crs);
   mesh.triangles = std::move(triangles);
   mesh.face_fields = std::move(face_fields);
   return mesh;

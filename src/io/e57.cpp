@@ -532,6 +532,8 @@ RawData read_e57_bytes(std::string_view bytes, const std::string& name, const Re
     raw.scans.push_back(pose);
     append_cloud(raw.cloud, std::move(part.cloud), raw.warnings, s);
   }
+  // The root's coordinateMetadata: the coordinate system as a string (WKT is what pointsurf writes).
+  raw.cloud.crs.wkt = root.child("coordinateMetadata").child_value();
   if (invalid > 0)
     raw.warnings.push_back(fmt::format("{} point(s) flagged invalid (cartesianInvalidState / sphericalInvalidState) dropped", invalid));
   return raw;
@@ -822,11 +824,11 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
       "  <versionMajor type=\"Integer\">1</versionMajor>\n"
       "  <versionMinor type=\"Integer\">0</versionMinor>\n"
       "  <e57LibraryVersion type=\"String\"><![CDATA[pointsurf {}]]></e57LibraryVersion>\n"
-      "  <coordinateMetadata type=\"String\"/>\n"
+      "  <coordinateMetadata type=\"String\">{}</coordinateMetadata>\n"
       "  <data3D type=\"Vector\" allowHeterogeneousChildren=\"1\">\n{}  </data3D>\n"
       "  <images2D type=\"Vector\" allowHeterogeneousChildren=\"1\"/>\n"
       "</e57Root>\n",
-      namespaces, cdata(guid(rng)), POINTSURF_VERSION, scans_xml);
+      namespaces, cdata(guid(rng)), POINTSURF_VERSION, cloud.crs.wkt.empty() ? std::string() : cdata(cloud.crs.wkt), scans_xml);
   w.pad_to(4);
   const std::uint64_t xml_logical = w.size();
   w.append(xml.data(), xml.size());

@@ -344,6 +344,8 @@ WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud
   else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
   else if (format == "e57") io::detail::write_e57(out.path(), cloud, options, result.notes);
   else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
+  if ((format == "las" || format == "laz") && cloud.crs.wkt.empty() && !cloud.crs.geokeys.empty())
+    result.notes.push_back("coordinate system written as GeoTIFF keys only: LAS 1.4 point format 6/7 expects WKT, which the input did not give");
   out.commit();
   return result;
 }

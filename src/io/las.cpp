@@ -30,6 +30,8 @@ RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
   RawData raw;
   raw.encoding = fmt::format("LAS {}.{} point format {}", header.major, header.minor, header.format);
   LasRecordReader records(header, bytes, name, raw);
+  if (header.evlr_count > 0 && header.evlr_start >= header.point_offset && header.evlr_start < file_size)
+    read_las_crs(las_evlrs(bytes.substr(header.evlr_start), header), raw.cloud.crs);
   const char* record = bytes.data() + header.point_offset;
   for (std::size_t i = 0; i < n; ++i, record += header.record_length) records.read(i, record);
   records.finish();

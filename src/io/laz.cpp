@@ -222,6 +222,8 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions& options) 
   }
   const std::uint64_t n_read = header.count;
   LasRecordReader records(header, head, name, raw);
+  if (header.evlr_count > 0 && header.evlr_start >= header.point_offset && header.evlr_start < file_size)
+    read_las_crs(las_evlrs(file.read(header.evlr_start, static_cast<std::size_t>(file_size - header.evlr_start)), header), raw.cloud.crs);
   std::vector<char> record(header.record_length);
   std::vector<unsigned char> chunk;
   std::uint64_t i = 0, total = 0;  // points read, points before this chunk in the file

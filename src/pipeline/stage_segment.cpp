@@ -173,6 +173,7 @@ void run_boundary(StageRun& run) {
   std::vector<Polyline> lines;
   PolylineWriteOptions write;
   write.crs = a.text("crs");
+  if (write.crs.empty() && cloud.crs.epsg() > 0) write.crs = fmt::format("EPSG:{}", cloud.crs.epsg());  // the input's own
   std::size_t holes = 0;
   double area = 0.0, length = 0.0;
   for (std::size_t i = 0; i < o.outlines.size(); ++i) {

@@ -482,5 +482,17 @@ TEST(E57, AnotherImplementationReadsOurTwoScansWithPoses) {
   }
 }
 
+TEST(E57, CoordinateSystemRoundTripsThroughTheRootCoordinateMetadata) {
+  const auto dir = test::temp_dir("e57_crs");
+  PointCloud c = two_scans();
+  c.crs.wkt = "PROJCS[\"ETRS89 / UTM zone 32N\",GEOGCS[\"ETRS89\"],AUTHORITY[\"EPSG\",\"25832\"]]";
+  write_point_cloud(dir / "crs.e57", c);
+  const PointCloud back = read_point_cloud(dir / "crs.e57").cloud;
+  EXPECT_EQ(back.crs.wkt, c.crs.wkt);
+  EXPECT_EQ(back.crs.describe(), "ETRS89 / UTM zone 32N (EPSG:25832)");
+  write_point_cloud(dir / "none.e57", two_scans());
+  EXPECT_TRUE(read_point_cloud(dir / "none.e57").cloud.crs.empty());
+}
+
 }  // namespace
 }  // namespace pointsurf

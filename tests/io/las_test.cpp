@@ -49,7 +49,10 @@ struct LasFile {
   double scale[3] = {0.01, 0.01, 0.01};
   double offset[3] = {0, 0, 0};
   std::string vlrs;                    // bytes between the header and the points
+  std::uint32_t vlr_count = 0;         // 0: one VLR when `vlrs` holds any
   std::string points;                  // the point records
+  std::string evlrs;                   // LAS 1.4: extended VLRs after the points
+  std::uint32_t evlr_count = 0;
 
   std::string bytes() const {
     const std::size_t size = header_size ? header_size : minor >= 4 ? 375 : minor == 3 ? 235 : 227;
@@ -60,7 +63,7 @@ struct LasFile {
     std::memcpy(h.data() + 58, "handmade", 8);
     put<std::uint16_t>(h, 94, static_cast<std::uint16_t>(size));
     put<std::uint32_t>(h, 96, static_cast<std::uint32_t>(size + vlrs.size()));
-    put<std::uint32_t>(h, 100, vlrs.empty() ? 0 : 1);
+    put<std::uint32_t>(h, 100, vlr_count ? vlr_count : vlrs.empty() ? 0 : 1);
     h[104] = static_cast<char>(format);
     put<std::uint16_t>(h, 105, static_cast<std::uint16_t>(record_length));
     put<std::uint32_t>(h, 107, legacy_count);
@@ -69,7 +72,11 @@ struct LasFile {
       put<double>(h, 155 + 8 * a, offset[a]);
     }
     if (h.size() >= 375) put<std::uint64_t>(h, 247, count64);
-    return h + vlrs + points;
+    if (h.size() >= 375 && evlr_count) {
+      put<std::uint64_t>(h, 235, h.size() + vlrs.size() + points.size());
+      put<std::uint32_t>(h, 243, evlr_count);
+    }
+    return h + vlrs + points + evlrs;
   }
 };
 
@@ -99,6 +106,29 @@ std::string legacy_record(std::size_t length, std::int32_t x, std::int32_t y, st
   put(r, 18, source);
   return r;
 }
+
+// A "LASF_Projection" VLR (or, `extended`, an EVLR with its 60-byte header) holding `body`.
+std::string crs_vlr(std::uint16_t record, const std::string& body, bool extended = false) {
+  std::string v(extended ? 60 : 54, '\0');
+  std::memcpy(v.data() + 2, "LASF_Projection", 15);
+  put<std::uint16_t>(v, 18, record);
+  if (extended) put<std::uint64_t>(v, 20, body.size());
+  else put<std::uint16_t>(v, 20, static_cast<std::uint16_t>(body.size()));
+  return v + body;
+}
+
+// GeoTIFF key directory: version 1.1.0, GTModelType 1 (projected), ProjectedCSType `epsg`, and
+// a citation key pointing into the ASCII params.
+std::string geokeys(std::uint16_t epsg) {
+  const std::uint16_t words[] = {1, 1, 0, 3, 1024, 0, 1, 1, 1026, 34737, 22, 0, 3072, 0, 1, epsg};
+  return std::string(reinterpret_cast<const char*>(words), sizeof words);
+}
+
+const char* const kUtm33Wkt =
+    "PROJCS[\"WGS 84 / UTM zone 33N\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563,"
+    "AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\",\"6326\"]],PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433],"
+    "AUTHORITY[\"EPSG\",\"4326\"]],PROJECTION[\"Transverse_Mercator\"],PARAMETER[\"central_meridian\",15],"
+    "UNIT[\"metre\",1],AUTHORITY[\"EPSG\",\"32633\"]]";
 
 const std::vector<double>& field(const PointCloud& cloud, const char* name) {
   const ScalarField* f = cloud.fields.find(name);
@@ -530,6 +560,70 @@ TEST(Las, MalformedHeadersAreInputErrors) {
     forced.format = "las";
     expect_error<InputError>([&] { read_point_cloud(write_bytes(dir / "text.las", "1 2 3\n"), forced); }, "expected the signature 'LASF'");
   }
+}
+
+TEST(Las, GeoTiffKeysOfAHandBuiltFileAreReadAndWrittenBackByteForByteToLasAndLaz) {
+  const auto dir = test::temp_dir("las_geotiff");
+  LasFile las;
+  las.legacy_count = 1;
+  const std::string keys = geokeys(32633), doubles(16, '\x42'), ascii("WGS 84 / UTM zone 33N|\0", 23);
+  las.vlrs = crs_vlr(34735, keys) + crs_vlr(34736, doubles) + crs_vlr(34737, ascii);
+  las.vlr_count = 3;
+  las.points = legacy_record(20, 100, 200, 300, 0, 1 | (1 << 3), 2, 0, 0, 0);
+  const PointCloud c = read_point_cloud(write_bytes(dir / "keys.las", las.bytes())).cloud;
+  auto bytes = [](const std::string& s) { return std::vector<std::uint8_t>(s.begin(), s.end()); };
+  EXPECT_EQ(c.crs.geokeys, bytes(keys));
+  EXPECT_EQ(c.crs.geodouble, bytes(doubles));
+  EXPECT_EQ(c.crs.geoascii, bytes(ascii));
+  EXPECT_TRUE(c.crs.wkt.empty());
+  EXPECT_EQ(c.crs.epsg(), 32633);
+  EXPECT_EQ(c.crs.describe(), "EPSG:32633 (GeoTIFF keys)");
+  for (const char* out : {"keys_out.las", "keys_out.laz"}) {
+    const WriteResult written = write_point_cloud(dir / out, c);
+    ASSERT_EQ(written.notes.size(), 1u) << out;
+    EXPECT_NE(written.notes[0].find("GeoTIFF keys only"), std::string::npos) << written.notes[0];
+    const PointCloud back = read_point_cloud(dir / out).cloud;
+    EXPECT_EQ(back.crs.geokeys, c.crs.geokeys) << out;
+    EXPECT_EQ(back.crs.geodouble, c.crs.geodouble) << out;
+    EXPECT_EQ(back.crs.geoascii, c.crs.geoascii) << out;
+    EXPECT_TRUE(back.crs.wkt.empty()) << out;
+  }
+}
+
+TEST(Las, WktIsWrittenAsANullTerminatedVlrAndReadBackFromLasLazAndEvlrs) {
+  const auto dir = test::temp_dir("las_wkt");
+  PointCloud cloud = test::sample_sphere(50, 10.0, Vector3d(500'000.0, 5'000'000.0, 100.0), 5);
+  cloud.crs.wkt = kUtm33Wkt;
+  EXPECT_EQ(cloud.crs.describe(), "WGS 84 / UTM zone 33N (EPSG:32633)");
+  EXPECT_EQ(cloud.select(std::vector<std::size_t>{0, 1}).crs.wkt, cloud.crs.wkt);
+  write_point_cloud(dir / "wkt.las", cloud);
+  const std::string file = read_bytes(dir / "wkt.las");
+  EXPECT_EQ(get<std::uint16_t>(file, 6) & 0x10, 0x10);  // global encoding: the CRS is WKT
+  const std::string body = std::string(kUtm33Wkt) + '\0';
+  const std::size_t at = file.find(body);
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(get<std::uint16_t>(file, at - 54 + 18), 2112);
+  EXPECT_EQ(get<std::uint16_t>(file, at - 54 + 20), body.size());
+  for (const char* out : {"wkt.las", "wkt.laz"}) {
+    if (std::string(out) == "wkt.laz") write_point_cloud(dir / out, cloud);
+    const PointCloud back = read_point_cloud(dir / out).cloud;
+    EXPECT_EQ(back.crs.wkt, cloud.crs.wkt) << out;
+    EXPECT_TRUE(back.crs.geokeys.empty()) << out;
+  }
+
+  // A LAS 1.4 file whose WKT is an extended VLR after the points.
+  LasFile las;
+  las.minor = 4;
+  las.format = 6;
+  las.record_length = 30;
+  las.count64 = 1;
+  las.points = std::string(30, '\0');
+  put<std::uint8_t>(las.points, 14, 1 | (1 << 4));
+  las.evlrs = crs_vlr(2112, body, true);
+  las.evlr_count = 1;
+  const PointCloud evlr = read_point_cloud(write_bytes(dir / "evlr.las", las.bytes())).cloud;
+  EXPECT_EQ(evlr.crs.wkt, kUtm33Wkt);
+  ASSERT_EQ(evlr.size(), 1u);
 }
 
 }  // namespace

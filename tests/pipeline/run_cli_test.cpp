@@ -240,5 +240,37 @@ TEST_F(RunCli, AFailedRunStillWritesItsReport) {
   EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
 }
 
+// The coordinate system of a LAS input: shown by info (text and JSON) and kept through
+// read -> normals -> write LAZ.
+TEST_F(RunCli, CoordinateSystemIsShownByInfoAndKeptThroughAStageChain) {
+  PointCloud cloud = test::sample_sphere(500, 1.0, Vector3d(500'000.0, 5'000'000.0, 100.0));
+  cloud.crs.wkt = "PROJCS[\"WGS 84 / UTM zone 33N\",GEOGCS[\"WGS 84\"],AUTHORITY[\"EPSG\",\"32633\"]]";
+  write_point_cloud(path("geo.las"), cloud);
+  test::CliResult r = test::run_cli("info " + path("geo.las"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.out, "crs          WGS 84 / UTM zone 33N (EPSG:32633)")) << r.out;
+  r = test::run_cli("info " + path("geo.las") + " --json", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_EQ(info["crs"]["epsg"], 32633);
+  EXPECT_EQ(info["crs"]["wkt"], cloud.crs.wkt);
+
+  const std::string file = write_pipeline("p.json", "[\"" + path("geo.las") + "\", {\"type\": \"normals\", \"k\": 12}, \"" + path("out.laz") + "\"]");
+  r = test::run_cli("run " + file, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud back = read_point_cloud(path("out.laz")).cloud;
+  EXPECT_TRUE(back.has_normals());
+  EXPECT_EQ(back.crs.wkt, cloud.crs.wkt);
+
+  // The boundary stage's GeoJSON outlines name the input's EPSG code when --crs is not given.
+  PointCloud plate = test::sample_plane(4000, 1.0, 6);
+  plate.crs.wkt = cloud.crs.wkt;
+  write_point_cloud(path("plate.las"), plate);
+  r = test::run_cli("boundary " + path("plate.las") + " " + path("rim.las") + " --outlines " + path("rim.geojson"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(test::read_bytes(path("rim.geojson")), "EPSG:32633"));
+  EXPECT_EQ(read_point_cloud(path("rim.las")).cloud.crs.wkt, cloud.crs.wkt);
+}
+
 }  // namespace
 }  // namespace pointsurf

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -14,6 +16,21 @@ namespace pointsurf {
 using Vector3d = Eigen::Vector3d;
 using Vector3f = Eigen::Vector3f;
 
+/// The coordinate reference system a file declared, kept as the file's own payloads so that a
+/// round trip writes them back byte for byte: OGC WKT (LAS record 2112, E57 coordinateMetadata)
+/// and the GeoTIFF keys of LAS records 34735 (key directory), 34736 (doubles), 34737 (ASCII).
+struct CoordinateSystem {
+  std::string wkt;
+  std::vector<std::uint8_t> geokeys, geodouble, geoascii;
+
+  bool empty() const noexcept { return wkt.empty() && geokeys.empty(); }
+  /// One short line: the WKT's CRS name (and EPSG code when it names one), else the EPSG code
+  /// of the GeoTIFF ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048); "" when empty.
+  std::string describe() const;
+  /// The EPSG code named by the WKT's outermost authority or by the GeoTIFF keys; 0 if none.
+  int epsg() const;
+};
+
 /// An unorganized point cloud. Positions are double precision so that georeferenced
 /// coordinates (1e6..1e7 m) keep sub-millimetre precision. Every optional attribute is either
 /// empty or holds exactly one entry per point; `validate()` checks that.
@@ -22,6 +39,7 @@ struct PointCloud {
   std::vector<Vector3d> normals;    // 0 or N, unit length (zero where undefined)
   std::vector<Vector3f> colors;     // 0 or N, RGB in [0, 1]
   FieldSet fields;                  // each field holds N values
+  CoordinateSystem crs;             // empty when unknown
 
   std::size_t size() const noexcept { return positions.size(); }
   bool empty() const noexcept { return positions.empty(); }

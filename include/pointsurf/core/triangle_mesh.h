@@ -21,6 +21,7 @@ struct TriangleMesh {
   std::vector<Vector3f> vertex_colors;    // 0 or V, RGB in [0, 1]
   FieldSet vertex_fields;                 // each holds V values
   FieldSet face_fields;                   // each holds F values, in triangle order
+  CoordinateSystem crs;                   // empty when unknown
 
   std::size_t vertex_count() const noexcept { return vertices.size(); }
   std::size_t triangle_count() const noexcept { return triangles.size(); }

@@ -294,6 +294,8 @@ LasHeader parse_las_header(std::string_view bytes, std::uint64_t file_size, cons
   if (h.minor >= 4) {
     const auto count64 = load_value<std::uint64_t>(data + kCount64);
     if (count64 != 0) h.count = count64;
+    h.evlr_start = load_value<std::uint64_t>(data + 235);
+    h.evlr_count = load_value<std::uint32_t>(data + 243);
   }
 
   for (int a = 0; a < 3; ++a) {
@@ -324,6 +326,22 @@ std::vector<LasVlr> las_vlrs(std::string_view bytes, const LasHeader& header) {
   return vlrs;
 }
 
+std::vector<LasVlr> las_evlrs(std::string_view tail, const LasHeader& header) {
+  constexpr std::size_t kEvlrHeaderSize = 60;
+  std::vector<LasVlr> vlrs;
+  std::size_t at = 0;
+  for (std::uint32_t v = 0; v < header.evlr_count && at + kEvlrHeaderSize <= tail.size(); ++v) {
+    const char* h = tail.data() + at;
+    const std::string_view user(h + 2, 16);
+    const std::uint64_t length = load_value<std::uint64_t>(h + 20);
+    const std::size_t body = at + kEvlrHeaderSize;
+    if (length > tail.size() - body) break;
+    vlrs.push_back({std::string(user.substr(0, user.find('\0'))), load_value<std::uint16_t>(h + 18), tail.substr(body, length)});
+    at = body + static_cast<std::size_t>(length);
+  }
+  return vlrs;
+}
+
 std::string las_vlr(std::string_view user_id, std::uint16_t record_id, std::string_view description, std::string_view body) {
   std::string vlr(kVlrHeaderSize, '\0');
   char* h = vlr.data();
@@ -332,6 +350,33 @@ std::string las_vlr(std::string_view user_id, std::uint16_t record_id, std::stri
   put<std::uint16_t>(h + 20, static_cast<std::uint16_t>(body.size()));
   std::memcpy(h + 22, description.data(), std::min<std::size_t>(description.size(), 32));
   return vlr.append(body);
+}
+
+void read_las_crs(const std::vector<LasVlr>& vlrs, CoordinateSystem& crs) {
+  auto bytes = [](std::string_view body) { return std::vector<std::uint8_t>(body.begin(), body.end()); };
+  for (const LasVlr& v : vlrs) {
+    if (v.user_id != kProjectionUserId) continue;
+    if (v.record_id == kWktRecord) crs.wkt = std::string(v.body.substr(0, v.body.find('\0')));  // null-terminated
+    else if (v.record_id == kGeoKeysRecord) crs.geokeys = bytes(v.body);
+    else if (v.record_id == kGeoDoubleRecord) crs.geodouble = bytes(v.body);
+    else if (v.record_id == kGeoAsciiRecord) crs.geoascii = bytes(v.body);
+  }
+}
+
+std::string las_crs_vlrs(const CoordinateSystem& crs, int& count) {
+  std::string out;
+  auto add = [&](std::uint16_t record, std::string_view description, std::string_view body) {
+    if (body.empty()) return;
+    out += las_vlr(kProjectionUserId, record, description, body);
+    ++count;
+  };
+  // The WKT VLR holds a null-terminated string (LAS 1.4 R15, 2.5.1).
+  add(kWktRecord, "OGC coordinate system WKT", crs.wkt.empty() ? std::string_view() : std::string_view(crs.wkt.c_str(), crs.wkt.size() + 1));
+  auto view = [](const std::vector<std::uint8_t>& b) { return std::string_view(reinterpret_cast<const char*>(b.data()), b.size()); };
+  add(kGeoKeysRecord, "GeoTIFF GeoKeyDirectoryTag", view(crs.geokeys));
+  add(kGeoDoubleRecord, "GeoTIFF GeoDoubleParamsTag", view(crs.geodouble));
+  add(kGeoAsciiRecord, "GeoTIFF GeoAsciiParamsTag", view(crs.geoascii));
+  return out;
 }
 
 struct LasRecordReader::State {
@@ -364,6 +409,7 @@ LasRecordReader::LasRecordReader(const LasHeader& header, std::string_view head_
   s.extras = read_extra_bytes(head_bytes, header.header_size, std::min(head_bytes.size(), header.point_offset), header.vlr_count,
                               header.record_length - s.layout.size, name, raw.warnings);
   s.extra_values.assign(s.extras.size(), std::vector<double>(n));
+  read_las_crs(las_vlrs(head_bytes, header), raw.cloud.crs);
 }
 
 LasRecordReader::~LasRecordReader() = default;
@@ -480,7 +526,8 @@ struct LasRecordWriter::State {
   int format = 6;
   std::size_t core_length = 30, record_length = 30, extra_size = 0;
   std::vector<ExtraOut> extras;
-  std::string vlr;  // the extra bytes VLR, or empty
+  std::string vlr;  // the extra bytes VLR and the coordinate system VLRs, or empty
+  int vlr_count = 0;
   std::array<double, 3> scale{}, offset{};
   std::string header;  // without the VLR counts and offsets
   std::vector<FieldReader> slots;  // in kSlots order
@@ -570,6 +617,10 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
   if (s.record_length > 65535)
     throw UsageError(fmt::format("{}: {} extra bytes per point make a record longer than LAS's 65535 bytes", name, s.extra_size));
   s.vlr = extras.empty() ? std::string() : extra_bytes_vlr(extras);
+  s.vlr_count = extras.empty() ? 0 : 1;
+  // LAS 1.4 formats 6-10 name the CRS by WKT; GeoTIFF keys a source file carried are written too
+  // (readers of 1.4 files ignore them, older tools still use them) so the round trip keeps them.
+  s.vlr += las_crs_vlrs(cloud.crs, s.vlr_count);
 
   // The header comes first but holds the quantised bounds and the counts per return number:
   // one pass gathers them, a second streams the records.
@@ -631,7 +682,7 @@ std::string LasRecordWriter::head(const std::string& more_vlrs, int more_vlr_cou
   std::string out = s_->header;
   char* h = out.data();
   put<std::uint32_t>(h + kOffsetToPoints, static_cast<std::uint32_t>(kHeaderSize14 + s_->vlr.size() + more_vlrs.size()));
-  put<std::uint32_t>(h + 100, static_cast<std::uint32_t>((s_->vlr.empty() ? 0 : 1) + more_vlr_count));
+  put<std::uint32_t>(h + 100, static_cast<std::uint32_t>(s_->vlr_count + more_vlr_count));
   h[kPointFormat] = static_cast<char>(s_->format | format_bits);
   return out + s_->vlr + more_vlrs;
 }

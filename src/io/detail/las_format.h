@@ -23,6 +23,8 @@ struct LasHeader {
   std::size_t header_size = 0, point_offset = 0, record_length = 0;
   std::uint32_t vlr_count = 0;
   std::uint64_t count = 0;
+  std::uint64_t evlr_start = 0;  // LAS 1.4: byte of the first extended VLR
+  std::uint32_t evlr_count = 0;
   std::array<double, 3> scale{}, offset{};
 };
 
@@ -37,6 +39,19 @@ struct LasVlr {
 };
 /// The VLRs between the header and the points; `bytes` holds the file up to the points.
 std::vector<LasVlr> las_vlrs(std::string_view bytes, const LasHeader& header);
+/// The extended VLRs (LAS 1.4) in `tail`, the file from header.evlr_start on; stops at the first
+/// that overruns it.
+std::vector<LasVlr> las_evlrs(std::string_view tail, const LasHeader& header);
+
+/// The coordinate system VLRs (user "LASF_Projection"): OGC WKT and the three GeoTIFF tags.
+inline constexpr std::string_view kProjectionUserId = "LASF_Projection";
+inline constexpr std::uint16_t kWktRecord = 2112, kGeoKeysRecord = 34735, kGeoDoubleRecord = 34736, kGeoAsciiRecord = 34737;
+/// Fills `crs` from the coordinate system records among `vlrs` (VLRs or EVLRs); a later record
+/// replaces an earlier one of the same kind.
+void read_las_crs(const std::vector<LasVlr>& vlrs, CoordinateSystem& crs);
+/// The VLRs holding `crs` (WKT first, then the GeoTIFF keys, doubles and ASCII), each payload as
+/// stored; adds their number to `count`.
+std::string las_crs_vlrs(const CoordinateSystem& crs, int& count);
 
 /// Turns point records into a cloud: positions with scale and offset applied, the standard
 /// fields that some point sets, extra bytes as named fields (nx, ny, nz as normals), colours.
