@@ -16,6 +16,7 @@
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "spatial/detail/morton.h"
 
 namespace pointsurf {
 namespace {
@@ -310,16 +311,6 @@ std::vector<std::uint32_t> largest_component(const std::vector<Vector3d>& pts, c
   return out;
 }
 
-std::uint64_t spread_bits(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
 }  // namespace
 
 const char* primitive_type_name(PrimitiveType type) noexcept {
@@ -380,7 +371,7 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
   for (std::size_t i = 0; i < n_all; ++i) {
     const Eigen::Array3d t = ((cloud.positions[i] - box.min).array() / side * double((1 << kMortonBits) - 1)).round();
     const auto q = t.cast<std::uint64_t>();
-    codes[i] = spread_bits(q.x()) | spread_bits(q.y()) << 1 | spread_bits(q.z()) << 2;
+    codes[i] = detail::morton_code(q.x(), q.y(), q.z());
   }
   std::vector<std::uint32_t> order(n_all);
   std::iota(order.begin(), order.end(), 0u);

@@ -12,23 +12,13 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "spatial/detail/morton.h"
 
 namespace pointsurf {
 namespace {
 
 constexpr int kBitsPerAxis = 21;  // 3 x 21 = 63 bits: one uint64 key
 constexpr double kCells = double((1u << kBitsPerAxis) - 1);
-
-// Spreads the low 21 bits of v so that two zero bits separate each of them.
-std::uint64_t spread_bits(std::uint64_t v) {
-  v &= 0x1fffffULL;
-  v = (v | (v << 32)) & 0x1f00000000ffffULL;
-  v = (v | (v << 16)) & 0x1f0000ff0000ffULL;
-  v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
-  v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
-  v = (v | (v << 2)) & 0x1249249249249249ULL;
-  return v;
-}
 
 std::uint64_t quantise(double v, double lo, double scale) {
   const double cell = (v - lo) * scale;
@@ -54,9 +44,9 @@ std::vector<std::uint32_t> morton_order(std::span<const Eigen::Vector3d> points)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const Eigen::Vector3d& p = points[i];
-      const std::uint64_t key = spread_bits(quantise(p.x(), box.min.x(), scale.x())) |
-                                (spread_bits(quantise(p.y(), box.min.y(), scale.y())) << 1) |
-                                (spread_bits(quantise(p.z(), box.min.z(), scale.z())) << 2);
+      const std::uint64_t key = detail::morton_spread(quantise(p.x(), box.min.x(), scale.x())) |
+                                (detail::morton_spread(quantise(p.y(), box.min.y(), scale.y())) << 1) |
+                                (detail::morton_spread(quantise(p.z(), box.min.z(), scale.z())) << 2);
       keys[i] = {key, static_cast<std::uint32_t>(i)};
     }
   });

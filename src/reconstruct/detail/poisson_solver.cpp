@@ -44,6 +44,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
+#include "spatial/detail/morton.h"
 
 namespace pointsurf::detail {
 namespace {
@@ -51,16 +52,7 @@ namespace {
 using Key = std::uint64_t;
 constexpr Key kNoKey = ~Key{0};
 
-std::uint64_t spread(std::uint64_t v) {  // 21 bits -> every third bit
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  v = (v | v << 2) & 0x1249249249249249ULL;
-  return v;
-}
-Key morton(int x, int y, int z) { return spread(std::uint64_t(x)) | spread(std::uint64_t(y)) << 1 | spread(std::uint64_t(z)) << 2; }
+Key morton(int x, int y, int z) { return detail::morton_code(std::uint64_t(x), std::uint64_t(y), std::uint64_t(z)); }
 // The hash key of a cell: cheaper than its Morton code, which orders the arrays.
 Key pack(int x, int y, int z) { return Key(std::uint32_t(x)) | Key(std::uint32_t(y)) << 21 | Key(std::uint32_t(z)) << 42; }
 
