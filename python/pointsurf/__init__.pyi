@@ -96,7 +96,7 @@ def merge(clouds: Sequence[Data], /, *, progress: Progress = None) -> PointCloud
     """Merge several clouds into one (attributes present in only some are zero-filled)
     """
 
-def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., std_ratio: float = ..., min_neighbours: int = ..., radius: float = ..., radius_in_spacings: float = ..., distance: float = ..., distance_in_spacings: float = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., exact: bool = ..., max_neighbours: int = ..., height_sigma: float = ..., height_sigma_in_spacings: float = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> PointCloud:
+def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., std_ratio: float = ..., min_neighbours: int = ..., radius: float = ..., radius_in_spacings: float = ..., distance: float = ..., distance_in_spacings: float = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., primitives: bool = ..., primitive_band: float = ..., exact: bool = ..., max_neighbours: int = ..., height_sigma: float = ..., height_sigma_in_spacings: float = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> PointCloud:
     """Remove outliers and duplicates, denoise (local, sor, radius, ransac, duplicates, bilateral, trilateral)
 
     method = 'local': one of local, sor, radius, ransac, duplicates, bilateral, trilateral
@@ -114,6 +114,8 @@ def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac',
     min_support = 0.3: Fraction of the neighbourhood a plane needs ((0, 1])
     min_relative_support = 0.7: A plane through the point holding (or scoring) this fraction of the neighbours (of the dominant plane) keeps it ([0, 1])
     seed = 1: Random seed ([0, inf))
+    primitives = True: Judge points explained by planes, spheres, cylinders, cones (efficient RANSAC) by those
+    primitive_band = 2.0: A point amid a primitive's inliers farther than this from it is an outlier (plane distances, (0, inf))
     exact = False: Merge only points with identical coordinates
     max_neighbours = 48: At most this many nearest points within the radius ([3, inf))
     height_sigma = 0.0: Range sigma along the normal; 0: height_sigma_in_spacings x mean spacing (cloud units, [0, inf))
@@ -193,7 +195,44 @@ def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., 
     truth_field = '': Field marking true feature points (non-zero): report precision and recall
     """
 
-def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot', 'poisson'] = ..., normals_k: int = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., depth: int = ..., full_depth: int = ..., samples_per_node: float = ..., point_weight: float = ..., boundary_condition: Literal['neumann', 'dirichlet'] = ..., confidence: bool = ..., trim_depth: float = ..., island_area_ratio: float = ..., max_iterations: int = ..., root_refinement_steps: int = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
+def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float = ..., radius_in_spacings: float = ..., types: str = ..., epsilon: float = ..., epsilon_in_spacings: float = ..., cluster_epsilon: float = ..., cluster_in_spacings: float = ..., max_normal_deg: float = ..., probability: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:
+    """Split the points into segments: field "segment" (-1 unassigned), by region growing, Euclidean clusters, RANSAC primitives or HK surface type
+
+    method = 'region': one of region, euclidean, ransac, hk
+    k = 16: Neighbours per point (the graph's edges) ([3, inf))
+    max_angle_deg = 8.0: Largest angle between neighbouring normals in one segment (degrees, (0, 90])
+    max_variation = 0.05: Points of higher surface variation join a segment but do not extend it ([0, 0.3333333333333333])
+    use_features = True: Feature points (field "feature" non-zero) do not extend a segment
+    min_points = 10: Fewest points of a segment; smaller ones are unassigned ([1, inf))
+    radius = 0.0: Cluster distance; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
+    radius_in_spacings = 3.0: Cluster distance when radius is 0 (mean spacings, (0, inf))
+    types = 'plane,sphere,cylinder,cone': Primitive types to detect, comma-separated
+    epsilon = 0.0: Largest distance of an inlier; 0: epsilon_in_spacings x mean spacing (cloud units, [0, inf))
+    epsilon_in_spacings = 1.0: Inlier distance when epsilon is 0 (mean spacings, (0, inf))
+    cluster_epsilon = 0.0: Connectivity grid cell; 0: cluster_in_spacings x mean spacing (cloud units, [0, inf))
+    cluster_in_spacings = 3.0: Connectivity cell when cluster_epsilon is 0 (mean spacings, (0, inf))
+    max_normal_deg = 25.0: Largest angle between a point's normal and the primitive's (degrees, (0, 90))
+    probability = 0.01: Accepted chance of missing a primitive of min_points ((0, 1))
+    seed = 42: Random seed ([0, inf))
+    normals_k = 30: Neighbours for normals when the input has none ([3, inf))
+    """
+
+def boundary(cloud: Data, /, *, k: int = ..., min_gap_deg: float = ..., alpha: float = ..., alpha_in_spacings: float = ..., simplify_in_spacings: float = ..., offset_in_spacings: float = ..., max_rms_in_spacings: float = ..., min_points: int = ..., outlines: str = ..., crs: str = ..., progress: Progress = None) -> Data:
+    """Boundary points (field "boundary", angular gap) and alpha-shape outlines of planar segments, holes included
+
+    k = 30: Neighbours per point of the angular-gap test ([4, inf))
+    min_gap_deg = 90.0: A point is on the boundary when its neighbours leave a wider gap (degrees, (0, 360))
+    alpha = 0.0: Alpha radius of the outlines; 0: alpha_in_spacings x mean spacing (cloud units, [0, inf))
+    alpha_in_spacings = 5.0: Alpha radius when alpha is 0 (mean spacings, (0, inf))
+    simplify_in_spacings = 2.0: Douglas-Peucker tolerance of the loops (0: none) (mean spacings, [0, inf))
+    offset_in_spacings = 1.0: Loops are moved this far away from the points (outer out, holes in) (mean spacings, [0, inf))
+    max_rms_in_spacings = 0.5: A segment is planar when its RMS distance to its plane is at most this (mean spacings, [0, inf))
+    min_points = 30: Fewest points of an outlined segment ([3, inf))
+    outlines = '': Write the outlines to this file (.ply, .obj, .geojson)
+    crs = '': GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)
+    """
+
+def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot', 'poisson'] = ..., normals_k: int = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., depth: int = ..., full_depth: int = ..., samples_per_node: float = ..., point_weight: float = ..., boundary_condition: Literal['neumann', 'dirichlet'] = ..., confidence: bool = ..., trim_depth: float = ..., island_area_ratio: float = ..., unsupported_piece_gap: float = ..., max_iterations: int = ..., root_refinement_steps: int = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
     """Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson
 
     method = 'triangulate': one of triangulate, cocone, crust, ball-pivot, poisson
@@ -224,8 +263,9 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     confidence = False: Weight each point by its normal's length
     trim_depth = 0.0: Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off (depth, [0, 16])
     island_area_ratio = 0.001: After trimming, remove pieces smaller than this share of the largest's area (share of area, [0, 1])
+    unsupported_piece_gap = 2.0: Remove closed pieces whose densest vertex is this far below the main surface's median density (outlier bubbles); 0: keep all (depth, [0, 16])
     max_iterations = 8: Conjugate-gradient iterations per sparse level at most ([1, inf))
-    root_refinement_steps = 2: Secant steps on the function per surface vertex; 0: linear ([0, 20])
+    root_refinement_steps = 1: Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps ([0, 20])
     min_component_share = 0.001: Remove components with fewer faces than this share of all; 0: keep all (share of faces, [0, 1])
     region_normal_angle_deg = 15.0: Flat regions: largest normal angle across an edge (degrees, (0, 180])
     region_seed_angle_deg = 30.0: Flat regions: largest normal angle to the region's seed face; 180: off (degrees, (0, 180])

@@ -121,6 +121,7 @@ PoissonParams poisson_params(const StageArgs& a) {
   p.confidence = a.boolean("confidence");
   p.trim_depth = a.number("trim_depth");
   p.island_area_ratio = a.number("island_area_ratio");
+  p.unsupported_piece_gap = a.number("unsupported_piece_gap");
   p.max_iterations = a.int32("max_iterations");
   p.root_refinement_steps = a.int32("root_refinement_steps");
   return p;
@@ -348,6 +349,11 @@ StageSpec reconstruct_stage() {
       P::number("island_area_ratio", pp.island_area_ratio, "After trimming, remove pieces smaller than this share of the largest's area")
           .unit("share of area")
           .range(0, 1)
+          .only(poisson),
+      P::number("unsupported_piece_gap", pp.unsupported_piece_gap,
+                "Remove closed pieces whose densest vertex is this far below the main surface's median density (outlier bubbles); 0: keep all")
+          .unit("depth")
+          .range(0, 16)
           .only(poisson),
       P::integer("max_iterations", pp.max_iterations, "Conjugate-gradient iterations per sparse level at most").at_least(1).only(poisson),
       P::integer("root_refinement_steps", pp.root_refinement_steps, "Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps").range(0, 20).only(poisson),

@@ -7,7 +7,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numeric>
 #include <optional>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -30,6 +36,65 @@ ProgressCallback part(const ProgressCallback& progress, double from, double to) 
   return [progress, from, to](double f) { return progress(from + (to - from) * f); };
 }
 
+// Removes the pieces (vertex-connected components) whose densest vertex lies more than `gap`
+// depth units below the median density of the largest piece, and the vertices they leave
+// unused. Returns the pieces and triangles removed.
+std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh, const std::string& field, double gap) {
+  const std::size_t nv = mesh.vertex_count(), nf = mesh.triangle_count();
+  if (gap <= 0.0 || nf == 0) return {0, 0};
+  std::vector<std::uint32_t> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto find = [&](std::uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 1; k < 3; ++k) {
+      const std::uint32_t a = find(std::uint32_t(t[0])), b = find(std::uint32_t(t[k]));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller index: same roots for any thread count
+    }
+  std::vector<std::size_t> faces(nv, 0);
+  for (const Triangle& t : mesh.triangles) ++faces[find(std::uint32_t(t[0]))];
+  const std::uint32_t largest = std::uint32_t(std::max_element(faces.begin(), faces.end()) - faces.begin());
+  const std::vector<double>& density = mesh.vertex_fields.find(field)->values;
+  std::vector<double> in_largest;
+  std::vector<double> densest(nv, -std::numeric_limits<double>::infinity());
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    const std::uint32_t r = find(v);
+    densest[r] = std::max(densest[r], density[v]);
+    if (r == largest) in_largest.push_back(density[v]);
+  }
+  std::nth_element(in_largest.begin(), in_largest.begin() + std::ptrdiff_t(in_largest.size() / 2), in_largest.end());
+  const double floor = in_largest[in_largest.size() / 2] - gap;
+  std::size_t pieces = 0;
+  for (std::uint32_t v = 0; v < nv; ++v)
+    if (parent[v] == v && faces[v] > 0 && densest[v] < floor) ++pieces;
+  if (pieces == 0) return {0, 0};
+  std::vector<Triangle> kept;
+  std::vector<std::size_t> kept_faces;
+  std::vector<std::int64_t> remap(nv, -1);
+  std::vector<std::size_t> vertices;
+  for (std::size_t f = 0; f < nf; ++f) {
+    Triangle t = mesh.triangles[f];
+    if (densest[find(std::uint32_t(t[0]))] < floor) continue;
+    for (int k = 0; k < 3; ++k) {
+      std::int64_t& m = remap[std::size_t(t[k])];
+      if (m < 0) m = std::int64_t(vertices.size()), vertices.push_back(std::size_t(t[k]));
+      t[k] = int(m);
+    }
+    kept.push_back(t);
+    kept_faces.push_back(f);
+  }
+  FieldSet face_fields;
+  for (const ScalarField& f : mesh.face_fields) {
+    ScalarField& out = face_fields.add(f.name, kept_faces.size(), f.type);
+    for (std::size_t i = 0; i < kept_faces.size(); ++i) out.values[i] = f.values[kept_faces[i]];
+  }
+  const std::size_t removed = nf - kept.size();
+  mesh = TriangleMesh::from_cloud(mesh.vertex_cloud().select(vertices), std::move(kept), std::move(face_fields));
+  return {pieces, removed};
+}
+
 }  // namespace
 
 void PoissonParams::validate() const {
@@ -45,6 +110,8 @@ void PoissonParams::validate() const {
     throw UsageError(fmt::format("reconstruct_poisson: trim_depth must be in [0, {}] (0: off), got {}", kMaxDepth, trim_depth));
   if (!(island_area_ratio >= 0.0 && island_area_ratio <= 1.0))
     throw UsageError(fmt::format("reconstruct_poisson: island_area_ratio must be in [0, 1], got {}", island_area_ratio));
+  if (!(unsupported_piece_gap >= 0.0 && unsupported_piece_gap <= kMaxDepth))
+    throw UsageError(fmt::format("reconstruct_poisson: unsupported_piece_gap must be in [0, {}] (0: keep all), got {}", kMaxDepth, unsupported_piece_gap));
   if (root_refinement_steps < 0 || root_refinement_steps > 20)
     throw UsageError(fmt::format("reconstruct_poisson: root_refinement_steps must be in [0, 20], got {}", root_refinement_steps));
   if (max_iterations < 1) throw UsageError(fmt::format("reconstruct_poisson: max_iterations must be >= 1, got {}", max_iterations));
@@ -163,6 +230,8 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
     for (std::size_t v = 0; v < nv; ++v) out.values[v] = field.values[nearest[v]];
   }
 
+  std::tie(result.unsupported_pieces, result.unsupported_triangles) = remove_unsupported_pieces(mesh, "density", params.unsupported_piece_gap);
+
   detail::TrimResult trim;
   if (params.trim_depth > 0.0) {
     trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
@@ -173,7 +242,8 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   result.stats.counts = {{"skipped_normals", result.skipped_normals}, {"depth", std::size_t(depth)},
                          {"finest_level", std::size_t(lattice.depth)},
                          {"finest_nodes", result.nodes_per_level[std::size_t(lattice.depth)]}, {"trimmed_triangles", result.trimmed_triangles},
-                         {"trim_cut_triangles", trim.cut_triangles}, {"trim_removed_islands", trim.removed_islands}};
+                         {"trim_cut_triangles", trim.cut_triangles}, {"trim_removed_islands", trim.removed_islands},
+                         {"unsupported_pieces", result.unsupported_pieces}, {"unsupported_triangles", result.unsupported_triangles}};
   result.stats.figures = {{"iso_value", result.iso_value}, {"peak_megabytes", double(result.peak_bytes) / 1e6}};
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress && !progress(1.0)) throw CancelledError("reconstruct_poisson: cancelled");

@@ -174,6 +174,7 @@ std::vector<Expected> library_defaults() {
       {"reconstruct", "poisson", "point_weight", pp.point_weight},
       {"reconstruct", "poisson", "trim_depth", pp.trim_depth},
       {"reconstruct", "poisson", "island_area_ratio", pp.island_area_ratio},
+      {"reconstruct", "poisson", "unsupported_piece_gap", pp.unsupported_piece_gap},
       {"reconstruct", "poisson", "max_iterations", I{pp.max_iterations}},
       {"reconstruct", "poisson", "root_refinement_steps", I{pp.root_refinement_steps}},
   };

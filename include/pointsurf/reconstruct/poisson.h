@@ -42,6 +42,11 @@ struct PoissonParams {
   // ... then remove the pieces whose area is below this share of the largest piece's (default
   // 0.001, SurfaceTrimmer's --aRatio). Used only when trimming.
   double island_area_ratio = 0.001;
+  // Remove the closed pieces whose every vertex has a density more than this many depth units
+  // below the median density of the largest piece (each unit: 4 times fewer samples per node):
+  // the bubbles that clusters of outliers raise away from the surface. A second object scanned
+  // like the first keeps its density and stays. Default 2; 0: keep every piece.
+  double unsupported_piece_gap = 2.0;
   // Vertex placement on each edge crossing of the extracted surface: 0 linear in the corner
   // values; 1 (default) the quadratic through the edge's midpoint, exact for this function (along
   // a lattice edge it is one quadratic piece); more: further false-position steps.
@@ -61,6 +66,8 @@ struct PoissonResult : ReconstructionResult {
   std::vector<double> residual_per_level;      // final / initial residual per level (smaller is better)
   double iso_value = 0.0;                      // the weighted mean of the function at the samples
   std::size_t skipped_normals = 0;             // samples left out: zero or non-finite normal
+  std::size_t unsupported_pieces = 0;          // pieces removed by unsupported_piece_gap
+  std::size_t unsupported_triangles = 0;       // and their triangles
   std::size_t trimmed_triangles = 0;           // triangles removed by trimming (below the density level)
   std::size_t peak_bytes = 0;                  // octree, coefficients and per-sample arrays at their largest
 };
