@@ -7,6 +7,7 @@
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/core/scalar_field.h"
+#include "pointsurf/core/rigid_transform.h"
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
