@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Global (initial) alignment of two scans from descriptor matches: correspondences by mutual
+// nearest neighbour in descriptor space, then RANSAC over triples of correspondences pruned by
+// edge-length and normal-angle checks before any model is scored, stopped when the chance of
+// having missed the best model falls below 1 - confidence (or at the iteration cap).
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/register/features.h"
+#include "pointsurf/register/result.h"
+
+namespace pointsurf {
+
+struct AlignParams {
+  double max_distance = 0.0;             // a matched pair is an inlier within this distance after
+                                         // the transform, cloud units; 0: distance_in_spacings x
+                                         // the source's mean spacing
+  double distance_in_spacings = 3.0;     // mean spacings, when max_distance is 0
+  bool mutual = true;                    // keep only mutual nearest neighbours in descriptor space
+  double edge_length_ratio = 0.9;        // pruning: the two triangles' edge lengths agree within
+                                         // this ratio, in (0, 1]
+  double max_normal_deg = 45.0;          // pruning: matched normals agree within this angle after
+                                         // the candidate rotation, degrees; 180 disables
+  std::size_t max_iterations = 100000;   // RANSAC trials at most
+  double confidence = 0.999;             // stop when a better model would have been found with
+                                         // this probability, in (0, 1)
+  std::uint64_t seed = 42;               // random seed
+  void validate() const;
+};
+
+/// Index pairs (source, target) of matched descriptors; invalid descriptors never match.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> match_descriptors(const Descriptors& source, const Descriptors& target,
+                                                                       bool mutual);
+
+/// The transform taking `source` onto `target` from their descriptors (computed on these same
+/// clouds, with normals). `target_tree` is built over the target's positions and is reused for
+/// scoring. Works in a frame centred on the target's centroid, so 1e6 m coordinates lose nothing.
+RegistrationResult align_global(const PointCloud& source, const Descriptors& source_features, const PointCloud& target,
+                                const Descriptors& target_features, const KdTree& target_tree, const AlignParams& params,
+                                const ProgressCallback& progress = {});
+
+}  // namespace pointsurf

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Iterative closest point, point-to-point (Besl and McKay 1992; closed form by SVD) and
+// point-to-plane (Chen and Medioni 1992; linearised least squares), with the target's kd-tree.
+// Pairs are rejected by distance and, the paper's improvement, by the angle between the two
+// normals, which keeps ICP from locking onto the wrong side of thin parts and onto crossings.
+#include <cstddef>
+#include <cstdint>
+
+#include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
+#include "pointsurf/register/result.h"
+
+namespace pointsurf {
+
+class KdTree;
+
+enum class IcpMetric : std::uint8_t { PointToPoint = 0, PointToPlane = 1 };
+/// "point", "plane".
+const char* icp_metric_name(IcpMetric metric) noexcept;
+
+struct IcpParams {
+  IcpMetric metric = IcpMetric::PointToPlane;
+  double max_distance = 0.0;           // pairs farther apart are rejected, cloud units; 0:
+                                       // distance_in_spacings x the source's mean spacing
+  double distance_in_spacings = 3.0;   // mean spacings, when max_distance is 0
+  double max_normal_deg = 45.0;        // pairs whose normals differ more are rejected, degrees;
+                                       // 180 disables the check (plain ICP)
+  std::size_t max_iterations = 50;     // iterations at most
+  double relative_fitness = 1e-6;      // converged when fitness and RMSE change less than these
+  double relative_rmse = 1e-6;         // relative amounts between two iterations
+  void validate() const;
+};
+
+/// Refines `initial` (mapping source onto target) by ICP. Point-to-plane needs the target's
+/// normals; the normal-angle rejection needs both clouds' normals (UsageError when missing and
+/// the check is on). `target_tree` is built over the target's positions. Works in a frame centred
+/// on the target's centroid. Every loop is bounded; a run that does not converge returns with
+/// converged = false.
+RegistrationResult icp(const PointCloud& source, const PointCloud& target, const KdTree& target_tree, const RigidTransform& initial,
+                       const IcpParams& params, const ProgressCallback& progress = {});
+
+/// Fitness and inlier RMSE of `transform` (source onto target) at `max_distance`: the scores
+/// every step reports, evaluated the same way everywhere.
+RegistrationResult evaluate_registration(const PointCloud& source, const PointCloud& target, const KdTree& target_tree,
+                                         const RigidTransform& transform, double max_distance);
+
+}  // namespace pointsurf
