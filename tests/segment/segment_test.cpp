@@ -176,11 +176,17 @@ TEST(Euclidean, InvariantUnderPermutationAndShift) {
   EXPECT_GE(same_share(base, s), 0.999);
 }
 
-TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
-  PointCloud torus = test::sample_torus(40000, 1.0, 0.3, 4);
+// A torus (R 1, r 0.3) of n points with its HK surface_type field (jet fit, k 30).
+PointCloud typed_torus(std::size_t n) {
+  PointCloud torus = test::sample_torus(n, 1.0, 0.3, 4);
   CurvatureParams cp;
   cp.k = 30;
   estimate_curvature(torus, cp);
+  return torus;
+}
+
+TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
+  const PointCloud torus = typed_torus(40000);
   const SegmentResult r = segment_surface_types(torus);
   // Truth from the tube angle v: cos v > 0 elliptic (outer), < 0 hyperbolic (inner); points
   // within 0.3 rad of the parabolic circles are left out.
@@ -210,10 +216,7 @@ TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
 }
 
 TEST(SurfaceTypes, InvariantUnderPermutationAndShift) {
-  PointCloud torus = test::sample_torus(20000, 1.0, 0.3, 4);
-  CurvatureParams cp;
-  cp.k = 30;
-  estimate_curvature(torus, cp);
+  const PointCloud torus = typed_torus(20000);
   const SegmentResult base = segment_surface_types(torus);
   ASSERT_GE(base.sizes.size(), 2u);
   const std::vector<std::size_t> perm = shuffled(torus.size(), 5);
