@@ -20,7 +20,7 @@ enum class DescriptorType : std::uint8_t { Pfh = 0, Fpfh = 1 };
 /// "pfh", "fpfh".
 const char* descriptor_type_name(DescriptorType type) noexcept;
 
-struct FeatureParams {
+struct DescriptorParams {
   DescriptorType type = DescriptorType::Fpfh;
   double radius = 0.0;               // neighbourhood radius, cloud units; 0: radius_in_spacings x
                                      // mean spacing
@@ -45,7 +45,7 @@ struct Descriptors {
 
 /// Descriptors of every point of `cloud` (which must have normals; UsageError otherwise), with
 /// `tree` built over its positions. Parallel (oneTBB), points visited in spatial order.
-Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const FeatureParams& params,
+Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const DescriptorParams& params,
                                 const ProgressCallback& progress = {});
 
 }  // namespace pointsurf
