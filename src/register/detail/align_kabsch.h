@@ -6,6 +6,8 @@
 #include <cstddef>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <Eigen/SVD>
 
 namespace pointsurf::detail {
