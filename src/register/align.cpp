@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <nanoflann.hpp>
 #include <tbb/blocked_range.h>
@@ -90,12 +92,102 @@ struct TrialRng {
 struct Model {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  std::size_t score = 0;  // inlier matches
+  std::size_t count = 0;  // inlier matches
+  std::size_t hits = 0;   // points of the fitness sample with a target point within the distance
   std::size_t trial = std::numeric_limits<std::size_t>::max();
-  // The winner: most inliers, then the earliest trial (so the answer does not depend on the
-  // number of threads or on scheduling).
-  bool better_than(const Model& other) const { return score > other.score || (score == other.score && trial < other.trial); }
+  // Most sample hits, then most inlier matches, then the earliest trial (so the answer does
+  // not depend on the number of threads or on scheduling).
+  bool better_than(const Model& o) const {
+    if (hits != o.hits) return hits > o.hits;
+    if (count != o.count) return count > o.count;
+    return trial < o.trial;
+  }
 };
+
+// Candidates with fewer inlier matches than this are not scored by fitness.
+constexpr double kGateShare = 0.5;  // of the most inlier matches so far
+constexpr std::size_t kMinCount = 3;
+std::size_t gate(std::size_t best_count) {
+  return std::max(kMinCount, static_cast<std::size_t>(std::ceil(kGateShare * double(best_count))));
+}
+
+// Up to kSampleSize source points spread over the cloud, in the frame centred on `center`:
+// the fitness of a candidate is the share of them with a target point within the distance.
+constexpr std::size_t kSampleSize = 1000;
+constexpr int kPolishRounds = 10;  // point-to-point steps on the sample after RANSAC
+
+class FitnessSample {
+public:
+  FitnessSample(const PointCloud& source, const Eigen::Vector3d& center, const KdTree& target_tree, double max_distance)
+      : center_(center), tree_(target_tree), max_distance_(max_distance) {
+    const std::size_t n = source.size(), count = std::min(n, kSampleSize);
+    for (std::size_t k = 0; k < count; ++k) points_.push_back(source.positions[k * n / count] - center);
+  }
+  struct Pair {
+    Eigen::Vector3d source, target;  // local frame
+    std::uint32_t target_index;
+  };
+  // Sample points and their nearest target points within the distance.
+  void pairs(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb, std::vector<Pair>& out) const {
+    out.clear();
+    for (const Eigen::Vector3d& x : points_) {
+      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
+      if (!nb.empty()) out.push_back({x, tree_.point(nb[0].index) - center_, nb[0].index});
+    }
+  }
+  // The truncated squared distance of the sample (MSAC's cost, Torr and Zisserman 2000):
+  // sum of min(d^2, D^2), smaller is better. Unlike the hit count it keeps falling as the
+  // pose gets closer, so it ranks the local optimisation's steps.
+  double cost(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb) const {
+    const double squared_max = max_distance_ * max_distance_;
+    double sum = 0.0;
+    for (const Eigen::Vector3d& x : points_) {
+      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
+      sum += nb.empty() ? squared_max : nb[0].squared_distance;
+    }
+    return sum;
+  }
+  std::size_t hits(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb) const {
+    std::size_t h = 0;
+    for (const Eigen::Vector3d& x : points_) {
+      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
+      h += nb.empty() ? 0 : 1;
+    }
+    return h;
+  }
+
+private:
+  std::vector<Eigen::Vector3d> points_;
+  Eigen::Vector3d center_;
+  const KdTree& tree_;
+  double max_distance_;
+};
+
+// One linearised point-to-plane step (Chen and Medioni 1992) from `from` over the pairs: the
+// small rotation w and shift v minimising sum ((p + w x p + v - y) . n)^2, p = R x + t.
+detail::RigidFit plane_step(const detail::RigidFit& from, const std::vector<FitnessSample::Pair>& pairs,
+                            const std::vector<Eigen::Vector3d>& target_normals) {
+  Eigen::Matrix<double, 6, 6> a = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+  for (const FitnessSample::Pair& pair : pairs) {
+    const Eigen::Vector3d p = from.rotation * pair.source + from.translation;
+    const Eigen::Vector3d& n = target_normals[pair.target_index];
+    Eigen::Matrix<double, 6, 1> row;
+    row << p.cross(n), n;
+    a.noalias() += row * row.transpose();
+    b.noalias() += row * (pair.target - p).dot(n);
+  }
+  const Eigen::Matrix<double, 6, 1> x = a.ldlt().solve(b);
+  if (!x.allFinite()) return from;
+  const Eigen::Vector3d w = x.head<3>();
+  const double angle = w.norm();
+  const Eigen::Matrix3d turn =
+      angle > 0.0 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() : Eigen::Matrix3d::Identity().eval();
+  detail::RigidFit to;
+  to.rotation = RigidTransform::nearest_rotation(turn * from.rotation);
+  to.translation = turn * from.translation + x.tail<3>();
+  return to;
+}
 
 // The matched pairs in a frame centred on the target's centroid.
 struct MatchFrame {
@@ -328,66 +420,98 @@ RegistrationResult align_global(const PointCloud& source, const Descriptors& sou
   const std::size_t m = frame.size();
   const Ransac ransac(frame, params, max_distance);
 
+  const FitnessSample sample(source, center, target_tree, max_distance);
+
+  // Trials run in fixed batches. Each candidate that passes the checks is counted against all
+  // matches; those with at least half the best count so far are then scored by the fitness of
+  // a fixed sample of the source (as Open3D scores every candidate): with few right matches
+  // among many, a wrong model can count as many inlier matches as the right one, but it does
+  // not bring the two surfaces together. The winner: most sample hits, then most inlier
+  // matches, then the earliest trial; each decision uses whole batches, so the answer does
+  // not depend on the number of threads.
   detail::ProgressReporter reporter(progress, 0.0, 0.95, params.max_iterations);
   Model best;
+  std::size_t best_count = 0;  // most inlier matches of any candidate so far
   std::size_t done = 0;
   double needed = double(params.max_iterations);
-  tbb::enumerable_thread_specific<Model> local_best;
+  std::vector<Model> batch(kBatch);
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
   while (done < params.max_iterations && double(done) < needed) {
     const std::size_t end = std::min(done + kBatch, params.max_iterations);
-    const std::size_t to_beat = best.score;  // from earlier batches only: deterministic
-    for (Model& local : local_best) local = Model{};
+    const std::size_t gate_before = gate(best_count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(done, end, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-      Model& local = local_best.local();
-      Model candidate;
       for (std::size_t trial = r.begin(); trial != r.end(); ++trial) {
-        if (!ransac.propose(trial, candidate)) continue;
-        // It must beat the earlier batches' best, and at least tie this thread's (a tie may
-        // still win on the trial index).
-        candidate.score = ransac.score(candidate.rotation, candidate.translation, std::max(to_beat + 1, local.score));
-        if (candidate.score > to_beat && candidate.better_than(local)) local = candidate;
+        Model& candidate = batch[trial - done];
+        candidate = Model{};
+        if (ransac.propose(trial, candidate)) candidate.count = ransac.score(candidate.rotation, candidate.translation, gate_before);
       }
     });
-    for (const Model& local : local_best)
-      if (local.score > 0 && local.better_than(best)) best = local;
+    for (std::size_t k = 0; k < end - done; ++k) best_count = std::max(best_count, batch[k].count);
+    const std::size_t gate_now = gate(best_count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, end - done, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<Neighbor>& nb = buffers.local();
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        if (batch[k].count >= gate_now) batch[k].hits = sample.hits(batch[k].rotation, batch[k].translation, nb);
+    });
+    for (std::size_t k = 0; k < end - done; ++k)
+      if (batch[k].count >= gate_now && batch[k].better_than(best)) best = batch[k];
     done = end;
-    if (best.score > 0) needed = trials_needed(double(best.score) / double(m), params.confidence);
+    if (best.count > 0) needed = trials_needed(double(best.count) / double(m), params.confidence);
     reporter.report(0.95 * double(done) / std::min(needed, double(params.max_iterations)));
     reporter.throw_if_cancelled();
   }
   result.iterations = done;
-  if (best.score == 0) {
+  if (best.count == 0) {
     result.message = fmt::format("no triple of the {} matches passed the edge-length, distance and normal checks in {} trials", m, done);
     return result;
   }
 
-  // Refit on the inliers while that gains inliers (a few rounds at most).
-  for (int round = 0; round < 5; ++round) {
-    std::vector<std::uint32_t> inliers;
-    for (std::size_t k = 0; k < m; ++k)
-      if (ransac.inlier(best.rotation, best.translation, k)) inliers.push_back(static_cast<std::uint32_t>(k));
-    const detail::RigidFit fit = detail::fit_rigid(inliers.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
-      x = frame.source[inliers[k]];
-      y = frame.target[inliers[k]];
-    });
-    const std::size_t score = ransac.score(fit.rotation, fit.translation, 0);
-    if (score < best.score) break;
-    const bool gained = score > best.score;
-    best.rotation = fit.rotation;
-    best.translation = fit.translation;
-    best.score = score;
-    if (!gained) break;
+  // Local optimisation (Chum, Matas, Kittler 2003): refit on the inlier matches, then on the
+  // sample's nearest target points within the distance (a few point-to-point steps), while that
+  // brings more of the sample onto the target. A bounded number of rounds.
+  std::vector<Neighbor> nb;
+  struct Step {
+    detail::RigidFit fit;
+    double cost = 0.0;
+  };
+  const auto step = [&](const detail::RigidFit& fit) { return Step{fit, sample.cost(fit.rotation, fit.translation, nb)}; };
+  Step kept = step({best.rotation, best.translation});
+  std::vector<std::uint32_t> inliers;
+  for (std::size_t k = 0; k < m; ++k)
+    if (ransac.inlier(best.rotation, best.translation, k)) inliers.push_back(static_cast<std::uint32_t>(k));
+  Step current = step(detail::fit_rigid(inliers.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
+    x = frame.source[inliers[k]];
+    y = frame.target[inliers[k]];
+  }));
+  if (current.cost < kept.cost) kept = current;
+  // Steps on the sample's nearest target points from there (point-to-plane where the target
+  // has normals, point-to-point otherwise); the step of least cost is kept.
+  std::vector<FitnessSample::Pair> pairs;
+  for (int round = 0; round < kPolishRounds; ++round) {
+    sample.pairs(current.fit.rotation, current.fit.translation, nb, pairs);
+    if (pairs.size() < 6) break;
+    const Eigen::Matrix3d before = current.fit.rotation;
+    current = step(target.has_normals() ? plane_step(current.fit, pairs, target.normals)
+                                        : detail::fit_rigid(pairs.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
+                                            x = pairs[k].source;
+                                            y = pairs[k].target;
+                                          }));
+    if (current.cost < kept.cost) kept = current;
+    if ((current.fit.rotation - before).norm() < 1e-9) break;
   }
+  best.rotation = kept.fit.rotation;
+  best.translation = kept.fit.translation;
+  best.count = ransac.score(best.rotation, best.translation, 0);
 
   result.transform = RigidTransform::about(center, RigidTransform::nearest_rotation(best.rotation), best.translation);
-  result.correspondences = best.score;
+  result.correspondences = best.count;
   score_by_tree(source, target_tree, result.transform, max_distance, result);
   result.converged = double(done) >= needed;
   result.message =
       result.converged
-          ? fmt::format("confidence {} reached after {} trials: {} of {} matches are inliers", params.confidence, done, best.score, m)
+          ? fmt::format("confidence {} reached after {} trials: {} of {} matches are inliers", params.confidence, done, best.count, m)
           : fmt::format("iteration cap {} reached before confidence {} ({} of {} matches are inliers; about {:.3g} trials needed)",
-                        params.max_iterations, params.confidence, best.score, m, needed);
+                        params.max_iterations, params.confidence, best.count, m, needed);
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return result;

@@ -45,6 +45,11 @@ struct Descriptors {
 
 /// Descriptors of every point of `cloud` (which must have normals; UsageError otherwise), with
 /// `tree` built over its positions. Parallel (oneTBB), points visited in spatial order.
+/// The neighbourhood is the point and at most max_neighbors - 1 others within the radius (as
+/// Open3D's hybrid search). Pair features as PCL's computePairFeatures; FPFH weights the
+/// neighbours' SPFH by 1 / squared distance (as PCL and Open3D), each third of the weighted sum
+/// scaled to 100, plus the point's own SPFH (so an FPFH row sums to 600, a PFH row to 100).
+/// Cost: FPFH O(N k), PFH O(N k^2) pair features (k = neighbours). Thread-safe.
 Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const DescriptorParams& params,
                                 const ProgressCallback& progress = {});
 
