@@ -130,33 +130,36 @@ public:
   // Sample points and their nearest target points within the distance.
   void pairs(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb, std::vector<Pair>& out) const {
     out.clear();
-    for (const Eigen::Vector3d& x : points_) {
-      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
-      if (!nb.empty()) out.push_back({x, tree_.point(nb[0].index) - center_, nb[0].index});
-    }
+    each_nearest(r, t, nb, [&](const Eigen::Vector3d& x, const Neighbor* hit) {
+      if (hit != nullptr) out.push_back({x, tree_.point(hit->index) - center_, hit->index});
+    });
   }
   // The truncated squared distance of the sample (MSAC's cost, Torr and Zisserman 2000):
   // sum of min(d^2, D^2), smaller is better. Unlike the hit count it keeps falling as the
   // pose gets closer, so it ranks the local optimisation's steps.
   double cost(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb) const {
-    const double squared_max = max_distance_ * max_distance_;
     double sum = 0.0;
-    for (const Eigen::Vector3d& x : points_) {
-      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
-      sum += nb.empty() ? squared_max : nb[0].squared_distance;
-    }
+    each_nearest(r, t, nb, [&](const Eigen::Vector3d&, const Neighbor* hit) {
+      sum += hit != nullptr ? hit->squared_distance : max_distance_ * max_distance_;
+    });
     return sum;
   }
   std::size_t hits(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb) const {
     std::size_t h = 0;
-    for (const Eigen::Vector3d& x : points_) {
-      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
-      h += nb.empty() ? 0 : 1;
-    }
+    each_nearest(r, t, nb, [&](const Eigen::Vector3d&, const Neighbor* hit) { h += hit != nullptr ? 1 : 0; });
     return h;
   }
 
 private:
+  // visit(x, nearest target point within the distance or nullptr) for every sample point x.
+  template <class Visit>
+  void each_nearest(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::vector<Neighbor>& nb, Visit&& visit) const {
+    for (const Eigen::Vector3d& x : points_) {
+      tree_.hybrid(Eigen::Vector3d(r * x + t + center_), 1, max_distance_, nb);
+      visit(x, nb.empty() ? nullptr : &nb[0]);
+    }
+  }
+
   std::vector<Eigen::Vector3d> points_;
   Eigen::Vector3d center_;
   const KdTree& tree_;
