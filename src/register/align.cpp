@@ -249,12 +249,21 @@ public:
   }
 
   // Inlier matches of (R, t); gives up (returning 0) once fewer than `needed` are possible.
+  // The matches are in random order, so the count over the first k is a sample: a model
+  // whose share of inliers reaches needed / m falls more than 4 standard deviations below
+  // k * needed / m with a probability under 1e-4, and one that does is dropped early (a bounded
+  // variant of Matas and Chum's sequential test; most survivors of the checks are wrong).
   std::size_t score(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::size_t needed) const {
     const std::size_t m = frame_.size();
+    const double share = double(needed) / double(m);
     std::size_t count = 0;
     for (std::size_t k = 0; k < m; ++k) {
       if ((r * frame_.source[k] + t - frame_.target[k]).squaredNorm() <= squared_distance_) ++count;
-      if ((k & 255) == 255 && count + (m - k - 1) < needed) return 0;
+      if ((k & 255) == 255) {
+        if (count + (m - k - 1) < needed) return 0;
+        const double expected = share * double(k + 1);
+        if (double(count) < expected - 4.0 * std::sqrt(expected)) return 0;
+      }
     }
     return count;
   }
@@ -408,11 +417,18 @@ RegistrationResult align_global(const PointCloud& source, const Descriptors& sou
     return result;
   }
 
+  // The matches in a seeded random order (Fisher-Yates), so that any prefix is a random sample
+  // for the early exit of the count.
+  std::vector<std::uint32_t> order(matches.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) order[k] = k;
+  TrialRng shuffle{params.seed};
+  for (std::size_t k = order.size() - 1; k > 0; --k) std::swap(order[k], order[shuffle.below(static_cast<std::uint32_t>(k + 1))]);
   const Eigen::Vector3d center = centroid(target.positions);
   MatchFrame frame;
   frame.source.reserve(matches.size());
   frame.target.reserve(matches.size());
-  for (const auto& [s, t] : matches) {
+  for (const std::uint32_t k : order) {
+    const auto [s, t] = matches[k];
     frame.source.push_back(source.positions[s] - center);
     frame.target.push_back(target.positions[t] - center);
     if (check_normals) {
@@ -460,7 +476,7 @@ RegistrationResult align_global(const PointCloud& source, const Descriptors& sou
       if (batch[k].count >= gate_now && batch[k].better_than(best)) best = batch[k];
     done = end;
     if (best.count > 0) needed = trials_needed(double(best.count) / double(m), params.confidence);
-    reporter.report(0.95 * double(done) / std::min(needed, double(params.max_iterations)));
+    reporter.report(0.95 * std::min(1.0, double(done) / std::min(needed, double(params.max_iterations))));
     reporter.throw_if_cancelled();
   }
   result.iterations = done;

@@ -266,6 +266,23 @@ TEST(AlignGlobal, BadParametersAndInputsThrowUsageError) {
   expect_usage({}, "source descriptors are pfh (125 values), target fpfh (33 values)", nullptr, &pfh_source);
 }
 
+TEST(AlignGlobal, ProgressReachesOneAndCancels) {
+  const ScanPair pair = make_pair(4);
+  const KdTree source_tree(pair.source.positions), target_tree(pair.target.positions);
+  const Descriptors fs = compute_descriptors(pair.source, source_tree, {});
+  const Descriptors ft = compute_descriptors(pair.target, target_tree, {});
+  double last = -1.0;
+  bool monotone = true;
+  align_global(pair.source, fs, pair.target, ft, target_tree, {}, [&](double f) {
+    monotone = monotone && f >= last;
+    last = f;
+    return true;
+  });
+  EXPECT_TRUE(monotone);
+  EXPECT_EQ(last, 1.0);
+  EXPECT_THROW(align_global(pair.source, fs, pair.target, ft, target_tree, {}, [](double) { return false; }), CancelledError);
+}
+
 TEST(MatchDescriptors, NearestNeighboursInDescriptorSpace) {
   // Rows 0..4 of the target are rows 4..0 of the source; an invalid row never matches.
   Descriptors a, b;
