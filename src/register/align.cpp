@@ -268,6 +268,7 @@ public:
     return count;
   }
 
+  std::size_t matches() const { return frame_.size(); }
   bool inlier(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, std::size_t k) const {
     return (r * frame_.source[k] + t - frame_.target[k]).squaredNorm() <= squared_distance_;
   }
@@ -329,6 +330,92 @@ void score_by_tree(const PointCloud& source, const KdTree& target_tree, const Ri
       });
   result.fitness = double(total.inliers) / double(source.size());
   result.inlier_rmse = total.inliers == 0 ? 0.0 : std::sqrt(total.squared / double(total.inliers));
+}
+
+struct Search {
+  Model best;           // count 0 when no trial passed the checks
+  std::size_t trials = 0;
+  double needed = 0.0;  // trials the confidence asks for, from the winner's share of inliers
+};
+
+// Trials run in fixed batches. Each candidate that passes the checks is counted against all
+// matches; those with at least half the best count so far are then scored by the fitness of
+// a fixed sample of the source (as Open3D scores every candidate): with few right matches
+// among many, a wrong model can count as many inlier matches as the right one, but it does
+// not bring the two surfaces together. The winner: most sample hits, then most inlier
+// matches, then the earliest trial; each decision uses whole batches, so the answer does
+// not depend on the number of threads.
+Search run_trials(const Ransac& ransac, const FitnessSample& sample, const AlignParams& params, detail::ProgressReporter& reporter) {
+  const std::size_t m = ransac.matches();
+  Model best;
+  std::size_t best_count = 0;  // most inlier matches of any candidate so far
+  std::size_t done = 0;
+  double needed = double(params.max_iterations);
+  std::vector<Model> batch(kBatch);
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  while (done < params.max_iterations && double(done) < needed) {
+    const std::size_t end = std::min(done + kBatch, params.max_iterations);
+    const std::size_t gate_before = gate(best_count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(done, end, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t trial = r.begin(); trial != r.end(); ++trial) {
+        Model& candidate = batch[trial - done];
+        candidate = Model{};
+        if (ransac.propose(trial, candidate)) candidate.count = ransac.score(candidate.rotation, candidate.translation, gate_before);
+      }
+    });
+    for (std::size_t k = 0; k < end - done; ++k) best_count = std::max(best_count, batch[k].count);
+    const std::size_t gate_now = gate(best_count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, end - done, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<Neighbor>& nb = buffers.local();
+      for (std::size_t k = r.begin(); k != r.end(); ++k)
+        if (batch[k].count >= gate_now) batch[k].hits = sample.hits(batch[k].rotation, batch[k].translation, nb);
+    });
+    for (std::size_t k = 0; k < end - done; ++k)
+      if (batch[k].count >= gate_now && batch[k].better_than(best)) best = batch[k];
+    done = end;
+    if (best.count > 0) needed = trials_needed(double(best.count) / double(m), params.confidence);
+    reporter.report(0.95 * std::min(1.0, double(done) / std::min(needed, double(params.max_iterations))));
+    reporter.throw_if_cancelled();
+  }
+  return {best, done, needed};
+}
+
+// Local optimisation (Chum, Matas, Kittler 2003) of the winner: a refit on its inlier matches,
+// then up to kPolishRounds point-to-plane steps (point-to-point where the target has no
+// normals) on the sample's nearest target points within the distance; the pose of least
+// truncated squared distance over the sample is kept.
+void refine(const MatchFrame& frame, const Ransac& ransac, const FitnessSample& sample, const PointCloud& target, Model& best) {
+  std::vector<Neighbor> nb;
+  struct Step {
+    detail::RigidFit fit;
+    double cost = 0.0;
+  };
+  const auto step = [&](const detail::RigidFit& fit) { return Step{fit, sample.cost(fit.rotation, fit.translation, nb)}; };
+  Step kept = step({best.rotation, best.translation});
+  std::vector<std::uint32_t> inliers;
+  for (std::size_t k = 0; k < frame.size(); ++k)
+    if (ransac.inlier(best.rotation, best.translation, k)) inliers.push_back(static_cast<std::uint32_t>(k));
+  Step current = step(detail::fit_rigid(inliers.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
+    x = frame.source[inliers[k]];
+    y = frame.target[inliers[k]];
+  }));
+  if (current.cost < kept.cost) kept = current;
+  std::vector<FitnessSample::Pair> pairs;
+  for (int round = 0; round < kPolishRounds; ++round) {
+    sample.pairs(current.fit.rotation, current.fit.translation, nb, pairs);
+    if (pairs.size() < 6) break;
+    const Eigen::Matrix3d before = current.fit.rotation;
+    current = step(target.has_normals() ? plane_step(current.fit, pairs, target.normals)
+                                        : detail::fit_rigid(pairs.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
+                                            x = pairs[k].source;
+                                            y = pairs[k].target;
+                                          }));
+    if (current.cost < kept.cost) kept = current;
+    if ((current.fit.rotation - before).norm() < 1e-9) break;
+  }
+  best.rotation = kept.fit.rotation;
+  best.translation = kept.fit.translation;
+  best.count = ransac.score(best.rotation, best.translation, 0);
 }
 
 }  // namespace
@@ -441,96 +528,26 @@ RegistrationResult align_global(const PointCloud& source, const Descriptors& sou
 
   const FitnessSample sample(source, center, target_tree, max_distance);
 
-  // Trials run in fixed batches. Each candidate that passes the checks is counted against all
-  // matches; those with at least half the best count so far are then scored by the fitness of
-  // a fixed sample of the source (as Open3D scores every candidate): with few right matches
-  // among many, a wrong model can count as many inlier matches as the right one, but it does
-  // not bring the two surfaces together. The winner: most sample hits, then most inlier
-  // matches, then the earliest trial; each decision uses whole batches, so the answer does
-  // not depend on the number of threads.
   detail::ProgressReporter reporter(progress, 0.0, 0.95, params.max_iterations);
-  Model best;
-  std::size_t best_count = 0;  // most inlier matches of any candidate so far
-  std::size_t done = 0;
-  double needed = double(params.max_iterations);
-  std::vector<Model> batch(kBatch);
-  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  while (done < params.max_iterations && double(done) < needed) {
-    const std::size_t end = std::min(done + kBatch, params.max_iterations);
-    const std::size_t gate_before = gate(best_count);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(done, end, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t trial = r.begin(); trial != r.end(); ++trial) {
-        Model& candidate = batch[trial - done];
-        candidate = Model{};
-        if (ransac.propose(trial, candidate)) candidate.count = ransac.score(candidate.rotation, candidate.translation, gate_before);
-      }
-    });
-    for (std::size_t k = 0; k < end - done; ++k) best_count = std::max(best_count, batch[k].count);
-    const std::size_t gate_now = gate(best_count);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, end - done, 4), [&](const tbb::blocked_range<std::size_t>& r) {
-      std::vector<Neighbor>& nb = buffers.local();
-      for (std::size_t k = r.begin(); k != r.end(); ++k)
-        if (batch[k].count >= gate_now) batch[k].hits = sample.hits(batch[k].rotation, batch[k].translation, nb);
-    });
-    for (std::size_t k = 0; k < end - done; ++k)
-      if (batch[k].count >= gate_now && batch[k].better_than(best)) best = batch[k];
-    done = end;
-    if (best.count > 0) needed = trials_needed(double(best.count) / double(m), params.confidence);
-    reporter.report(0.95 * std::min(1.0, double(done) / std::min(needed, double(params.max_iterations))));
-    reporter.throw_if_cancelled();
-  }
-  result.iterations = done;
+  const Search search = run_trials(ransac, sample, params, reporter);
+  result.iterations = search.trials;
+  Model best = search.best;
   if (best.count == 0) {
-    result.message = fmt::format("no triple of the {} matches passed the edge-length, distance and normal checks in {} trials", m, done);
+    result.message = fmt::format("no triple of the {} matches passed the edge-length, distance and normal checks in {} trials", m,
+                                 search.trials);
     return result;
   }
-
-  // Local optimisation (Chum, Matas, Kittler 2003): refit on the inlier matches, then on the
-  // sample's nearest target points within the distance (a few point-to-point steps), while that
-  // brings more of the sample onto the target. A bounded number of rounds.
-  std::vector<Neighbor> nb;
-  struct Step {
-    detail::RigidFit fit;
-    double cost = 0.0;
-  };
-  const auto step = [&](const detail::RigidFit& fit) { return Step{fit, sample.cost(fit.rotation, fit.translation, nb)}; };
-  Step kept = step({best.rotation, best.translation});
-  std::vector<std::uint32_t> inliers;
-  for (std::size_t k = 0; k < m; ++k)
-    if (ransac.inlier(best.rotation, best.translation, k)) inliers.push_back(static_cast<std::uint32_t>(k));
-  Step current = step(detail::fit_rigid(inliers.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
-    x = frame.source[inliers[k]];
-    y = frame.target[inliers[k]];
-  }));
-  if (current.cost < kept.cost) kept = current;
-  // Steps on the sample's nearest target points from there (point-to-plane where the target
-  // has normals, point-to-point otherwise); the step of least cost is kept.
-  std::vector<FitnessSample::Pair> pairs;
-  for (int round = 0; round < kPolishRounds; ++round) {
-    sample.pairs(current.fit.rotation, current.fit.translation, nb, pairs);
-    if (pairs.size() < 6) break;
-    const Eigen::Matrix3d before = current.fit.rotation;
-    current = step(target.has_normals() ? plane_step(current.fit, pairs, target.normals)
-                                        : detail::fit_rigid(pairs.size(), [&](std::size_t k, Eigen::Vector3d& x, Eigen::Vector3d& y) {
-                                            x = pairs[k].source;
-                                            y = pairs[k].target;
-                                          }));
-    if (current.cost < kept.cost) kept = current;
-    if ((current.fit.rotation - before).norm() < 1e-9) break;
-  }
-  best.rotation = kept.fit.rotation;
-  best.translation = kept.fit.translation;
-  best.count = ransac.score(best.rotation, best.translation, 0);
+  refine(frame, ransac, sample, target, best);
 
   result.transform = RigidTransform::about(center, RigidTransform::nearest_rotation(best.rotation), best.translation);
   result.correspondences = best.count;
   score_by_tree(source, target_tree, result.transform, max_distance, result);
-  result.converged = double(done) >= needed;
+  result.converged = double(search.trials) >= search.needed;
   result.message =
       result.converged
-          ? fmt::format("confidence {} reached after {} trials: {} of {} matches are inliers", params.confidence, done, best.count, m)
+          ? fmt::format("confidence {} reached after {} trials: {} of {} matches are inliers", params.confidence, search.trials, best.count, m)
           : fmt::format("iteration cap {} reached before confidence {} ({} of {} matches are inliers; about {:.3g} trials needed)",
-                        params.max_iterations, params.confidence, best.count, m, needed);
+                        params.max_iterations, params.confidence, best.count, m, search.needed);
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return result;
