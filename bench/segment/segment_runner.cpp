@@ -2,7 +2,7 @@
 // Stage runner for bench/segment/run_segment_bench.sh; prints one JSON line, writes N int32
 // labels (-1 unassigned).
 //   segment_runner ransac IN.ply TYPES EPSILON CLUSTER_EPSILON NORMAL_DEG MIN_POINTS PROBABILITY OUT.labels
-//       TYPES: all or plane
+//       TYPES: all (plane, sphere, cylinder, cone: the CGAL peer's four) or plane
 //   segment_runner euclidean IN.ply RADIUS OUT.labels
 //   segment_runner region IN.ply OUT.labels
 #include <chrono>
@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   if (mode == "ransac") {
     PrimitiveParams p;
-    p.types = std::string(argv[3]) == "plane" ? kPlanes : kAllPrimitives;
+    p.types = std::string(argv[3]) == "plane" ? kPlanes : kDefaultPrimitives;
     p.epsilon = std::stod(argv[4]);
     p.cluster_epsilon = std::stod(argv[5]);
     p.max_normal_deg = std::stod(argv[6]);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// Geometric primitives (planes, spheres, cylinders, cones) found in an oriented point cloud by
+// Geometric primitives (planes, spheres, cylinders, cones, tori) found in an oriented point cloud by
 // efficient RANSAC (Schnabel, Wahl, Klein 2007).
 #include <cstddef>
 #include <cstdint>
@@ -12,22 +12,34 @@
 
 namespace pointsurf {
 
-enum class PrimitiveType : std::uint8_t { Plane = 0, Sphere = 1, Cylinder = 2, Cone = 3 };
+enum class PrimitiveType : std::uint8_t { Plane = 0, Sphere = 1, Cylinder = 2, Cone = 3, Torus = 4 };
 
-/// "plane", "sphere", "cylinder", "cone".
+/// "plane", "sphere", "cylinder", "cone", "torus".
 const char* primitive_type_name(PrimitiveType type) noexcept;
 
 /// Bit flags of the primitive types to look for.
-enum PrimitiveMask : unsigned { kPlanes = 1u, kSpheres = 2u, kCylinders = 4u, kCones = 8u, kAllPrimitives = 15u };
+enum PrimitiveMask : unsigned {
+  kPlanes = 1u,
+  kSpheres = 2u,
+  kCylinders = 4u,
+  kCones = 8u,
+  kTori = 16u,
+  kAllPrimitives = 31u,
+  kDefaultPrimitives = 15u,  // planes, spheres, cylinders, cones: tori on request
+};
 
 struct PrimitiveParams {
-  unsigned types = kAllPrimitives;      // PrimitiveMask bits
+  unsigned types = kDefaultPrimitives;  // PrimitiveMask bits
   double epsilon = 0.0;                 // largest point-to-primitive distance of an inlier, cloud
                                         // units; 0: epsilon_in_spacings x mean spacing
   double epsilon_in_spacings = 1.0;     // mean spacings, when epsilon is 0
   double cluster_epsilon = 0.0;         // cell size of the connectivity grid, cloud units; 0:
                                         // cluster_in_spacings x mean spacing
   double cluster_in_spacings = 3.0;     // mean spacings, when cluster_epsilon is 0
+  double band_in_epsilons = 3.0;        // extraction: the refitted primitive takes the points within
+                                        // band_in_epsilons x epsilon (normal within max_normal_deg),
+                                        // as CGAL's Efficient_RANSAC does with 3; candidates are
+                                        // scored within epsilon. >= 1
   double max_normal_deg = 25.0;         // largest angle between a point's normal and the
                                         // primitive's normal there, degrees, in (0, 90)
   std::size_t min_points = 0;           // fewest inliers of a primitive; 0: max(30, N / 200)
@@ -41,15 +53,17 @@ struct PrimitiveParams {
 /// One primitive in the cloud's coordinates.
 struct Primitive {
   PrimitiveType type = PrimitiveType::Plane;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // plane: inliers' centroid; sphere: centre;
-                                                    // cylinder: axis point nearest the inliers'
-                                                    // centroid; cone: apex
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // plane: unit normal; cylinder, cone: unit
-                                                    // axis (cone: from the apex into the cone)
-  double radius = 0.0;                              // sphere, cylinder: radius, cloud units
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // plane: inliers' centroid; sphere, torus:
+                                                    // centre; cylinder: axis point nearest the
+                                                    // inliers' centroid; cone: apex
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // plane: unit normal; cylinder, cone, torus:
+                                                    // unit axis (cone: from the apex into the cone)
+  double radius = 0.0;                              // sphere, cylinder: radius; torus: major
+                                                    // radius (centre to tube centre), cloud units
   double angle_deg = 0.0;                           // cone: half opening angle, degrees
   std::size_t inliers = 0;                          // points assigned to it
   double rms = 0.0;                                 // RMS distance of those to it, cloud units
+  double minor_radius = 0.0;                        // torus: tube radius, cloud units
   /// Distance of `p` to the primitive's surface, cloud units.
   double distance(const Eigen::Vector3d& p) const;
 };
