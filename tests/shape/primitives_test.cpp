@@ -7,7 +7,9 @@
 #include <numeric>
 #include <random>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "pointsurf/core/error.h"
 #include "support/primitive_scene.h"
@@ -37,6 +39,9 @@ bool matches(const Primitive& found, const Primitive& truth, double size) {
     case PrimitiveType::Cone:
       return axis_angle_deg(found.axis, truth.axis) < 1.0 && found.axis.dot(truth.axis) > 0.0 && (found.point - truth.point).norm() < tol &&
              std::abs(found.angle_deg - truth.angle_deg) < 1.0;
+    case PrimitiveType::Torus:
+      return axis_angle_deg(found.axis, truth.axis) < 1.0 && (found.point - truth.point).norm() < tol && std::abs(found.radius - truth.radius) < tol &&
+             std::abs(found.minor_radius - truth.minor_radius) < tol;
   }
   return false;
 }
@@ -60,20 +65,94 @@ std::vector<std::pair<double, int>> majority(const PointCloud& cloud, const std:
 
 TEST(DetectPrimitives, RecoversEachPrimitiveOfTheScene) {
   const test::PrimitiveScene scene = test::make_primitive_scene();
-  const PrimitiveResult r = detect_primitives(scene.cloud);
-  ASSERT_EQ(r.labels.size(), scene.cloud.size());
-  const auto major = majority(scene.cloud, r.labels, scene.truth.size());
-  for (std::size_t t = 0; t < scene.truth.size(); ++t) {
-    SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(scene.truth[t].type) << ")");
+  for (const unsigned types : {unsigned(kDefaultPrimitives), unsigned(kAllPrimitives)}) {
+    SCOPED_TRACE(testing::Message() << "types " << types);
+    PrimitiveParams params;
+    params.types = types;
+    const PrimitiveResult r = detect_primitives(scene.cloud, params);
+    ASSERT_EQ(r.labels.size(), scene.cloud.size());
+    const auto major = majority(scene.cloud, r.labels, scene.truth.size());
+    for (std::size_t t = 0; t < scene.truth.size(); ++t) {
+      SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(scene.truth[t].type) << ")");
+      EXPECT_GE(major[t].first, 0.95);
+      ASSERT_GE(major[t].second, 0);
+      const Primitive& found = r.primitives[std::size_t(major[t].second)];
+      EXPECT_TRUE(matches(found, scene.truth[t], scene.size))
+          << primitive_type_name(found.type) << " point " << found.point.transpose() << " axis " << found.axis.transpose() << " radius "
+          << found.radius << " angle " << found.angle_deg;
+      EXPECT_LT(found.rms, 0.01);
+    }
+    EXPECT_EQ(r.primitives.size(), scene.truth.size());
+  }
+}
+
+// A torus sampled uniformly by area with noise `sigma` along the normal, appended to `cloud`
+// with truth label `label`.
+void add_torus(PointCloud& cloud, const Primitive& torus, double per_unit_area, double sigma, int label, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, sigma);
+  const Vector3d x = (std::abs(torus.axis.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY()).cross(torus.axis).normalized();
+  const Vector3d y = torus.axis.cross(x);
+  const double R = torus.radius, r = torus.minor_radius;
+  std::vector<double>& truth = cloud.fields.contains("truth") ? cloud.fields.find("truth")->values : cloud.fields.add("truth", cloud.size()).values;
+  for (std::size_t i = 0, n = std::size_t(4 * M_PI * M_PI * R * r * per_unit_area); i < n;) {
+    const double a = 2 * M_PI * u(rng), b = 2 * M_PI * u(rng);
+    if (u(rng) * (R + r) > R + r * std::cos(b)) continue;  // area element (R + r cos b)
+    const Vector3d radial = std::cos(a) * x + std::sin(a) * y;
+    const Vector3d normal = std::cos(b) * radial + std::sin(b) * torus.axis;
+    cloud.positions.push_back(torus.point + R * radial + r * normal + noise(rng) * normal);
+    cloud.normals.push_back(normal);
+    truth.push_back(label);
+    ++i;
+  }
+}
+
+TEST(DetectPrimitives, RecoversANoisyTorus) {
+  Primitive torus{PrimitiveType::Torus, Vector3d(0.3, -0.2, 0.5), Vector3d(0.2, -0.3, 1.0).normalized(), 2.0};
+  torus.minor_radius = 0.6;
+  PointCloud cloud;
+  add_torus(cloud, torus, 250.0, 0.005, 0, 5);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult r = detect_primitives(cloud, params);
+  const auto major = majority(cloud, r.labels, 1);
+  EXPECT_GE(major[0].first, 0.95);
+  ASSERT_GE(major[0].second, 0);
+  const Primitive& found = r.primitives[std::size_t(major[0].second)];
+  EXPECT_TRUE(matches(found, torus, 2.0 * (torus.radius + torus.minor_radius)))
+      << primitive_type_name(found.type) << " centre " << found.point.transpose() << " axis " << found.axis.transpose() << " radii "
+      << found.radius << " " << found.minor_radius;
+  EXPECT_LT(found.rms, 0.01);
+  // Without the torus model no primitive holds it.
+  params.types = kDefaultPrimitives;
+  const auto without = majority(cloud, detect_primitives(cloud, params).labels, 1);
+  EXPECT_FALSE(without[0].first >= 0.95 && without[0].second >= 0);
+}
+
+TEST(DetectPrimitives, TorusBesidePlanesIsOneSegment) {
+  test::PrimitiveScene scene = test::make_primitive_scene();
+  // Keep the ground and the wall, add a tilted torus clear of both.
+  std::vector<std::size_t> planes;
+  const std::vector<double>& truth = scene.cloud.fields.find("truth")->values;
+  for (std::size_t i = 0; i < scene.cloud.size(); ++i)
+    if (truth[i] <= 1.0) planes.push_back(i);
+  PointCloud cloud = scene.cloud.select(planes);
+  Primitive torus{PrimitiveType::Torus, Vector3d(-0.5, -1.0, 2.5), Vector3d(0.5, 0.0, 1.0).normalized(), 1.5};
+  torus.minor_radius = 0.4;
+  add_torus(cloud, torus, 300.0, 0.005, 2, 6);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult r = detect_primitives(cloud, params);
+  const std::vector<Primitive> truths = {scene.truth[0], scene.truth[1], torus};
+  const auto major = majority(cloud, r.labels, truths.size());
+  for (std::size_t t = 0; t < truths.size(); ++t) {
+    SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(truths[t].type) << ")");
     EXPECT_GE(major[t].first, 0.95);
     ASSERT_GE(major[t].second, 0);
-    const Primitive& found = r.primitives[std::size_t(major[t].second)];
-    EXPECT_TRUE(matches(found, scene.truth[t], scene.size))
-        << primitive_type_name(found.type) << " point " << found.point.transpose() << " axis " << found.axis.transpose() << " radius "
-        << found.radius << " angle " << found.angle_deg;
-    EXPECT_LT(found.rms, 0.01);
+    EXPECT_TRUE(matches(r.primitives[std::size_t(major[t].second)], truths[t], scene.size));
   }
-  EXPECT_EQ(r.primitives.size(), scene.truth.size());
+  EXPECT_EQ(r.primitives.size(), truths.size());
 }
 
 TEST(DetectPrimitives, InvariantUnderPermutationAndShift) {
@@ -102,9 +181,35 @@ TEST(DetectPrimitives, InvariantUnderPermutationAndShift) {
   }
 }
 
-TEST(DetectPrimitives, DeterministicForASeed) {
+TEST(DetectPrimitives, DeterministicForASeedWhateverTheThreads) {
   const test::PrimitiveScene scene = test::make_primitive_scene(100.0);
-  EXPECT_EQ(detect_primitives(scene.cloud).labels, detect_primitives(scene.cloud).labels);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult base = detect_primitives(scene.cloud, params);
+  EXPECT_EQ(detect_primitives(scene.cloud, params).labels, base.labels);
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_EQ(detect_primitives(scene.cloud, params).labels, base.labels);
+  }
+  params.seed = 7;
+  EXPECT_EQ(detect_primitives(scene.cloud, params).primitives.size(), base.primitives.size());
+}
+
+TEST(DetectPrimitives, ReportsProgressAndCancels) {
+  const test::PrimitiveScene scene = test::make_primitive_scene(100.0);
+  std::vector<double> seen;
+  detect_primitives(scene.cloud, {}, [&](double f) {
+    seen.push_back(f);
+    return true;
+  });
+  ASSERT_FALSE(seen.empty());
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_GE(seen.front(), 0.0);
+  EXPECT_LE(seen.back(), 1.0);
+  EXPECT_GT(seen.back(), 0.9);  // the five primitives hold nearly every point
+  int calls = 0;
+  EXPECT_THROW(detect_primitives(scene.cloud, {}, [&](double) { return ++calls < 3; }), CancelledError);
+  EXPECT_EQ(calls, 3);
 }
 
 TEST(DetectPrimitives, FlatCloudGivesOnePlane) {
@@ -147,6 +252,17 @@ TEST(DetectPrimitives, RejectsBadParametersAndMissingNormals) {
   p = {};
   p.probability = 1.0;
   EXPECT_THROW(p.validate(), UsageError);
+  p = {};
+  p.types = 32;
+  EXPECT_THROW(p.validate(), UsageError);
+  p = {};
+  p.band_in_epsilons = 0.5;
+  try {
+    p.validate();
+    FAIL() << "no throw";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("band_in_epsilons"), std::string::npos);
+  }
 }
 
 }  // namespace

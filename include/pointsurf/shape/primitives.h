@@ -30,8 +30,9 @@ enum PrimitiveMask : unsigned {
 
 struct PrimitiveParams {
   unsigned types = kDefaultPrimitives;  // PrimitiveMask bits
-  double epsilon = 0.0;                 // largest point-to-primitive distance of an inlier, cloud
-                                        // units; 0: epsilon_in_spacings x mean spacing
+  double epsilon = 0.0;                 // a candidate's score counts the compatible points this
+                                        // close to it, cloud units; 0: epsilon_in_spacings x mean
+                                        // spacing
   double epsilon_in_spacings = 1.0;     // mean spacings, when epsilon is 0
   double cluster_epsilon = 0.0;         // cell size of the connectivity grid, cloud units; 0:
                                         // cluster_in_spacings x mean spacing
@@ -80,20 +81,30 @@ struct PrimitiveResult {
 
 /// Efficient RANSAC (Schnabel, Wahl, Klein 2007, "Efficient RANSAC for point-cloud shape
 /// detection"): candidates are built from minimal sets of points with their normals (plane 3,
-/// sphere 2, cylinder 2, cone 3) drawn locally, the first point uniformly and the others from
-/// the same cell of an octree at a random level (levels chosen in proportion to the scores
-/// they gave); each candidate is scored lazily on random subsets of growing size (points
-/// within `epsilon` whose normal deviates less than `max_normal_deg`) and refined only while
-/// its score interval overlaps the best one's. The best candidate is extracted once the chance
-/// of having missed a larger one falls below `probability`: its compatible points are cut to
-/// their largest connected component on a grid of `cluster_epsilon`, the primitive is refitted
-/// by least squares to them (plane: PCA; sphere: algebraic; cylinder: axis from the normals,
-/// circle fit across it; cone: apex from the tangent planes, axis from the unit directions),
-/// and the points are assigned. Extraction repeats until no primitive of `min_points` is left.
+/// sphere 2, cylinder 2, cone 3, torus 4) drawn locally, the first point uniformly and the
+/// others from the same cell of an octree at a random level (levels chosen in proportion to the
+/// primitives they gave). Each candidate is scored lazily on random subsets of growing size
+/// (points within `epsilon` whose normal deviates less than `max_normal_deg`), each subset
+/// held in an octree whose cells out of the candidate's epsilon band are skipped; only the
+/// best candidate and those whose score interval (about two standard deviations) overlaps
+/// its are refined. The best is extracted once the chance of having missed a larger one falls
+/// below `probability`: its compatible points are cut to their largest connected component on
+/// a grid of `cluster_epsilon`, the primitive is refitted by least squares to them (plane:
+/// PCA; sphere: algebraic; cylinder: axis from the normals, circle fit across it; cone: apex
+/// from the tangent planes, axis from the unit directions; torus: Levenberg-Marquardt on the
+/// geometric distance), twice, taking the compatible points within `band_in_epsilons` x
+/// `epsilon` of the refit, and the points are assigned. A candidate whose component is below
+/// `min_points` is dropped with the candidates describing the same shape, and later draws of
+/// it too. Candidates and the draws made so far are kept across extractions. Extraction
+/// repeats until no primitive of `min_points` is left. Torus candidates: the axis is a common
+/// transversal of the four normal lines, the tube's core circle the normals' meeting point in
+/// the meridian half-plane.
 /// The cloud needs normals (sign free). Coordinates are taken relative to the box centre, so a
 /// georeferenced cloud keeps its precision; sampling follows a Morton order of the points, so
-/// the result does not depend on their order. Deterministic for a seed. Throws UsageError for
-/// a bad parameter or a cloud without normals. Single-threaded; thread-safe (reads `cloud`).
+/// the result does not depend on their order. Parallel (oneTBB); the result is the same for a
+/// seed whatever the number of threads. `progress` gets the assigned fraction after each
+/// extraction and batch of draws; returning false cancels (CancelledError). Throws UsageError
+/// for a bad parameter or a cloud without normals. Thread-safe (reads `cloud`).
 PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams& params = {}, const ProgressCallback& progress = {});
 
 }  // namespace pointsurf
