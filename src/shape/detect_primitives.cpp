@@ -178,8 +178,8 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
   const double band = params.band_in_epsilons * eps;
   const int samples = (params.types & kTori) ? 4 : 3;  // a torus needs a fourth oriented point
 
-  // Points relative to the box centre, in Morton order (ties by coordinates), so that sampling
-  // does not depend on the input order.
+  // Points relative to the box centre, in Morton order, so that sampling does not depend on the
+  // input order.
   const BoundingBox box = bounding_box(cloud.positions);
   const Vector3d centre = box.center();
   const double side = std::max(box.extent().maxCoeff(), 1e-300);
@@ -194,8 +194,12 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
   for (std::uint32_t i = 0; i < n_all; ++i) keyed[i] = {codes[i], i};
   tbb::parallel_sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
     if (a.first != b.first) return a.first < b.first;
+    // Ties by coordinates, then normal, then index (equal points), so that the order is total.
     const Vector3d &pa = cloud.positions[a.second], &pb = cloud.positions[b.second];
-    return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
+    if (pa != pb) return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
+    const Vector3d &na = cloud.normals[a.second], &nb = cloud.normals[b.second];
+    if (na != nb) return std::lexicographical_compare(na.data(), na.data() + 3, nb.data(), nb.data() + 3);
+    return a.second < b.second;
   });
   std::vector<std::uint32_t> order(n_all);
   for (std::size_t r = 0; r < n_all; ++r) order[r] = keyed[r].second;
