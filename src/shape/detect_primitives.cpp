@@ -414,13 +414,27 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
     candidates.erase(candidates.begin() + std::ptrdiff_t(best));
     Primitive shape = chosen.shape;
     std::vector<std::uint32_t> idx = largest_component(pts, collect(shape, eps), cluster);
-    for (int pass = 0; pass < 2 && idx.size() >= min_points; ++pass) {
-      const std::optional<Primitive> fitted = detail::refit(shape, pts, nrm, idx);
-      if (!fitted) break;
-      std::vector<std::uint32_t> again = largest_component(pts, collect(*fitted, band), cluster);
-      if (again.size() < idx.size() * 9 / 10) break;  // the refit lost its points: keep the sample's fit
-      shape = *fitted;
-      idx = std::move(again);
+    auto settle = [&](Primitive& s, std::vector<std::uint32_t>& points) {
+      for (int pass = 0; pass < 2 && points.size() >= min_points; ++pass) {
+        const std::optional<Primitive> fitted = detail::refit(s, pts, nrm, points);
+        if (!fitted) break;
+        std::vector<std::uint32_t> again = largest_component(pts, collect(*fitted, band), cluster);
+        if (again.size() < points.size() * 9 / 10) break;  // the refit lost its points: keep the sample's fit
+        s = *fitted;
+        points = std::move(again);
+      }
+    };
+    settle(shape, idx);
+    if (shape.type != PrimitiveType::Plane && (params.types & kPlanes) && idx.size() >= min_points) {
+      // A curved primitive can stand in for a noisy plane (a flat cone, a wide cylinder): the
+      // plane, the simpler model, is taken when it holds at least as many points.
+      Primitive plane;
+      plane.type = PrimitiveType::Plane;
+      if (std::optional<Primitive> fitted = detail::refit(plane, pts, nrm, idx)) {
+        std::vector<std::uint32_t> flat = largest_component(pts, collect(*fitted, band), cluster);
+        settle(*fitted, flat);
+        if (flat.size() >= idx.size()) shape = *fitted, idx = std::move(flat);
+      }
     }
     if (idx.size() < min_points) {
       // Its points are scattered (Schnabel et al.: the score is the largest component): it and

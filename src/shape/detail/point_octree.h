@@ -69,39 +69,14 @@ public:
   /// `reach` of the primitive whose 1-Lipschitz distance is `distance(x)`, in Morton order.
   template <class Distance, class Leaf>
   void visit(const Distance& distance, double reach, const Leaf& leaf) const {
-    if (nodes_.empty() || nodes_[0].alive == 0) return;
-    std::uint32_t stack[512];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& node = nodes_[stack[--top]];
-      if (node.alive == 0 || distance(node.centre) > node.radius + reach) continue;
-      if (node.children == 0) {
-        leaf(ranks_.data() + node.begin, ranks_.data() + node.end);
-        continue;
-      }
-      for (std::uint32_t c = node.first_child + node.children; c-- > node.first_child;) stack[top++] = c;
-    }
+    walk(distance, reach, [&](std::uint32_t i) { leaf(leaf_begin(i), leaf_end(i)); });
   }
 
-  /// Leaves of `visit` collected into `out` (replaced), for parallel loops over them.
+  /// The leaves of `visit` in `out` (replaced), for parallel loops over them.
   template <class Distance>
   void leaves(const Distance& distance, double reach, std::vector<std::uint32_t>& out) const {
     out.clear();
-    if (nodes_.empty() || nodes_[0].alive == 0) return;
-    std::uint32_t stack[512];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const std::uint32_t i = stack[--top];
-      const Node& node = nodes_[i];
-      if (node.alive == 0 || distance(node.centre) > node.radius + reach) continue;
-      if (node.children == 0) {
-        out.push_back(i);
-        continue;
-      }
-      for (std::uint32_t c = node.first_child + node.children; c-- > node.first_child;) stack[top++] = c;
-    }
+    walk(distance, reach, [&](std::uint32_t i) { out.push_back(i); });
   }
 
   /// The ranks of leaf `i` (from `leaves`).
@@ -117,6 +92,24 @@ public:
   }
 
 private:
+  template <class Distance, class Leaf>
+  void walk(const Distance& distance, double reach, const Leaf& leaf) const {
+    if (nodes_.empty() || nodes_[0].alive == 0) return;
+    std::uint32_t stack[8 * 64];  // at most 8 children a level, 21 levels
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const std::uint32_t i = stack[--top];
+      const Node& node = nodes_[i];
+      if (node.alive == 0 || distance(node.centre) > node.radius + reach) continue;
+      if (node.children == 0) {
+        leaf(i);
+        continue;
+      }
+      for (std::uint32_t c = node.first_child + node.children; c-- > node.first_child;) stack[top++] = c;
+    }
+  }
+
   struct Node {
     std::uint32_t begin, end;   // range in ranks_
     std::uint32_t first_child;  // children are contiguous
