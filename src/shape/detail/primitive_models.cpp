@@ -153,45 +153,6 @@ std::optional<Primitive> refit_torus(const Primitive& s, const std::vector<Vecto
 
 }  // namespace
 
-Residual residual(const Primitive& s, const Vector3d& p, const Vector3d& n) {
-  switch (s.type) {
-    case PrimitiveType::Plane: return {std::abs(s.axis.dot(p - s.point)), std::abs(s.axis.dot(n))};
-    case PrimitiveType::Sphere: {
-      const Vector3d v = p - s.point;
-      const double l = v.norm();
-      return {std::abs(l - s.radius), l > 0.0 ? std::abs(v.dot(n)) / l : 0.0};
-    }
-    case PrimitiveType::Cylinder: {
-      const Vector3d v = p - s.point;
-      const Vector3d radial = v - s.axis.dot(v) * s.axis;
-      const double r = radial.norm();
-      return {std::abs(r - s.radius), r > 0.0 ? std::abs(radial.dot(n)) / r : 0.0};
-    }
-    case PrimitiveType::Cone: {
-      const Vector3d v = p - s.point;
-      const double h = s.axis.dot(v);
-      const Vector3d radial = v - h * s.axis;
-      const double r = radial.norm();
-      const double c = std::cos(s.angle_deg * kDeg), sn = std::sin(s.angle_deg * kDeg);
-      if (h * c + r * sn < 0.0) return {v.norm(), 0.0};  // behind the apex
-      const Vector3d normal = (r > 0.0 ? Vector3d(radial / r) : Vector3d::Zero()) * c - s.axis * sn;
-      return {std::abs(r * c - h * sn), std::abs(normal.dot(n))};
-    }
-    case PrimitiveType::Torus: {
-      // Distance to the tube's core circle in the meridian half-plane, less the tube radius.
-      const Vector3d v = p - s.point;
-      const double h = s.axis.dot(v);
-      const Vector3d radial = v - h * s.axis;
-      const double r = radial.norm();
-      const double dr = r - s.radius, core = std::hypot(dr, h);
-      if (!(core > 0.0)) return {s.minor_radius, 0.0};
-      const Vector3d normal = (r > 0.0 ? Vector3d(radial * (dr / (r * core))) : Vector3d::Zero()) + s.axis * (h / core);
-      return {std::abs(core - s.minor_radius), std::abs(normal.dot(n))};
-    }
-  }
-  return {std::numeric_limits<double>::infinity(), 0.0};
-}
-
 void make_candidates(const Vector3d* p, const Vector3d* n, int count, unsigned types, double eps, double cos_max, double scene,
                      std::vector<Primitive>& out) {
   out.clear();
