@@ -86,10 +86,12 @@ def range(cloud: Data, /, *, field: str = ..., min: float = ..., max: float = ..
     max = inf: Largest value kept (included)
     """
 
-def transform(cloud: Data, /, *, matrix: Sequence[float] = ..., progress: Progress = None) -> Data:
+def transform(cloud: Data, /, *, matrix: Sequence[float] = ..., file: str = ..., invert: bool = ..., progress: Progress = None) -> Data:
     """Apply a rigid 4x4 transform (rotation and translation) to points and normals
 
     matrix = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]: 16 numbers, row by row: [R t; 0 0 0 1] with R a rotation (orthonormal, det +1)
+    file = '': Read the matrix from a T.json file (as `pointsurf register --out` writes it) instead of --matrix
+    invert = False: Apply the inverse transform (a T.json maps the source onto the target: this maps back)
     """
 
 def merge(clouds: Sequence[Data], /, *, progress: Progress = None) -> PointCloud:

@@ -16,20 +16,26 @@ namespace pointsurf {
 using io::detail::display_name;
 
 void write_transform_file(const std::filesystem::path& path, const TransformFile& file) {
-  // nlohmann's ordered_json keeps the members in the order given: matrix first, as users read it.
-  nlohmann::ordered_json j;
+  // One matrix row per line, as people read a 4x4; every number in the shortest form that reads
+  // back exactly (nlohmann's).
   const Eigen::Matrix4d m = file.transform.matrix();
-  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
-  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
-  j["matrix"] = rows;
+  std::string text = "{\n  \"matrix\": [\n";
+  for (int r = 0; r < 4; ++r) {
+    nlohmann::json row = {m(r, 0), m(r, 1), m(r, 2), m(r, 3)};
+    text += "    " + row.dump() + (r < 3 ? ",\n" : "\n");
+  }
+  text += "  ]";
   for (const auto& [name, value] : file.members) {
     if (name == "matrix") throw UsageError(fmt::format("write_transform_file: {}: a member may not be named \"matrix\"", display_name(path)));
-    std::visit([&j, &name](const auto& v) { j[name] = v; }, value);
+    nlohmann::json v;
+    std::visit([&v](const auto& x) { v = x; }, value);
+    text += ",\n  " + nlohmann::json(name).dump() + ": " + v.dump();
   }
+  text += "\n}\n";
   io::detail::TemporaryOutput out(path);
   {
     io::detail::FileWriter writer(out.path());
-    writer.write(j.dump(2) + "\n");
+    writer.write(text);
     writer.close();
   }
   out.commit();
