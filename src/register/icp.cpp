@@ -18,6 +18,9 @@ using detail::IcpFrame;
 using detail::IcpSums;
 using detail::IcpSystem;
 
+// Standstill: an update smaller than this share of the max distance ends the iterations.
+constexpr double kStandstill = 1e-3;
+
 double rmse_of(std::size_t count, double squared) { return count == 0 ? 0.0 : std::sqrt(squared / static_cast<double>(count)); }
 
 // The local (R, t) of the frame centred on `c` that describes the world transform `t`:
@@ -92,6 +95,10 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
   IcpSums sums = frame.pass(rotation, translation, max_distance, cos_max, system);
   // An update this small is below what double coordinates of the object's size can express.
   const double tiny_step = 1e-12 * frame.scale();
+  // An update that moves the points (RMS, about the centre) by less than this is a standstill:
+  // near the optimum ICP often swaps between two pairings, each a few 1e-4 of the max distance
+  // from the other, and would go on doing so up to the iteration cap.
+  const double standstill = kStandstill * max_distance;
   for (std::size_t it = 1;; ++it) {
     if (sums.used < min_pairs) {
       result.message = fmt::format("too few pairs ({}; {} needed) within {:.6g}{}", sums.used, min_pairs, max_distance,
@@ -124,11 +131,12 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
     const bool small_change = std::abs(fit_after - fit_before) <= params.relative_fitness * fit_before &&
                               std::abs(rmse_after - rmse_before) <= params.relative_rmse * rmse_before + tiny_step;
     const double step_angle = Eigen::AngleAxisd(step_rotation).angle();
-    const bool small_step = step_angle * frame.scale() <= tiny_step && step_translation.norm() <= tiny_step;
+    const bool small_step = step_angle * frame.scale() + step_translation.norm() <= standstill;
     if (sums.used >= min_pairs && (small_change || small_step)) {
       result.converged = true;
       result.message = small_change ? fmt::format("converged after {} iteration{}", it, it == 1 ? "" : "s")
-                                    : fmt::format("converged after {} iteration{}: the update vanished", it, it == 1 ? "" : "s");
+                                    : fmt::format("converged after {} iteration{}: the update fell below {:.3g}", it, it == 1 ? "" : "s",
+                                                  standstill);
       break;
     }
   }

@@ -1,0 +1,22 @@
+#!/bin/bash
+# Registration benchmark (issue 20), interleaved rounds, medians of REPEATS:
+#   icp: pointsurf icp (point / plane, with and without the normal-angle check) vs Open3D
+#        registration_icp (default threads and one thread) and PCL pcl_icp, same pairs, start,
+#        max correspondence distance and iteration cap (icp_bench.py says which pairs)
+# Writes raw rows to bench/results/register.csv (commit, date, machine, load) and prints a
+# Markdown table.
+#   bench/register/run_register_bench.sh [BUILD_DIR] [REPEATS]
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+BUILD=${1:-$ROOT/build}
+REPEATS=${2:-5}
+PY=/usr/bin/python3
+WORK=$(mktemp -d /tmp/pointsurf_register_bench.XXXX)
+tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$WORK" data/points_3/hippo1.ply data/points_3/hippo2.ply
+CSV="$ROOT/bench/results/register.csv"
+COMMIT=$(git -C "$ROOT" rev-parse --short HEAD)
+DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ)
+MACHINE="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
+$PY "$ROOT/bench/register/icp_bench.py" "$BUILD" "$REPEATS" "$WORK/icp" "$WORK/data/points_3/hippo1.ply" "$WORK/data/points_3/hippo2.ply" \
+  "$ROOT/data/kitten.xyz" "$CSV" "$COMMIT" "$DATE" "$MACHINE"
+rm -rf "$WORK"
