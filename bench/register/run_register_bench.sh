@@ -21,6 +21,11 @@ DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ)
 MACHINE="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
 $PY "$ROOT/bench/register/icp_bench.py" "$BUILD" "$REPEATS" "$WORK/icp" "$WORK/data/points_3/hippo1.ply" "$WORK/data/points_3/hippo2.ply" \
   "$ROOT/data/kitten.xyz" "$CSV" "$COMMIT" "$DATE" "$MACHINE"
+if [ ! -x "$BUILD/bench/icp_pipeline_runner" ]; then
+  echo "no $BUILD/bench/icp_pipeline_runner: the pipeline rows need register/ features and align" >&2
+  rm -rf "$WORK"
+  exit 0
+fi
 $PY "$ROOT/bench/register/icp_pipeline.py" "$BUILD" "$REPEATS" "$WORK/pipeline" "$WORK/data/points_3/hippo1.ply" \
   "$WORK/data/points_3/hippo2.ply" "$ROOT/data/kitten.xyz" "$CSV" "$COMMIT" "$DATE" "$MACHINE"
 rm -rf "$WORK"
