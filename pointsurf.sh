@@ -29,7 +29,7 @@ SANITIZE_PACKAGES=(libasan8 libubsan1)
 # web-e57 (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ and E57.
 # The Python module (python/): pybind11, Debian's Python with numpy, pytest; setuptools and venv for pip.
 PYTHON_PACKAGES=(pybind11-dev python3-dev python3-numpy python3-pytest python3-setuptools python3-venv)
-BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev)
+BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev libpcl-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
 

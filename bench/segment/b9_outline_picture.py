@@ -25,6 +25,31 @@ def read_ply(path):
         return np.frombuffer(f.read(n * np.dtype(fields).itemsize), dtype=np.dtype(fields), count=n)
 
 
+def outline_points(features, step, lift=1.0):
+    """The outlines of GeoJSON features as points every `step`, lifted `lift` so that a top view
+    shows them above the cloud (N x 3)."""
+    lines = []
+    for feature in features:
+        c = np.array(feature["geometry"]["coordinates"], dtype=float)
+        for a, b in zip(c[:-1], c[1:]):
+            k = max(int(np.linalg.norm(b - a) / step), 1)
+            lines.append(a + (b - a) * np.linspace(0.0, 1.0, k, endpoint=False)[:, None])
+    return np.concatenate(lines) + [0.0, 0.0, lift] if lines else np.zeros((0, 3))
+
+
+def write_picture(path, xyz, rgb, value):
+    """A binary PLY of points with colours and the int field `segment` (`value`) for `pointsurf render`."""
+    out = np.zeros(len(xyz), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("red", "u1"), ("green", "u1"), ("blue", "u1"), ("segment", "<i4")])
+    out["x"], out["y"], out["z"] = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    out["red"], out["green"], out["blue"] = rgb[:, 0], rgb[:, 1], rgb[:, 2]
+    out["segment"] = value
+    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(out)}"]
+    header += [f"property {t} {name}" for name, t in [("x", "double"), ("y", "double"), ("z", "double"), ("red", "uchar"), ("green", "uchar"), ("blue", "uchar"), ("segment", "int")]]
+    with open(path, "wb") as f:
+        f.write(("\n".join(header + ["end_header"]) + "\n").encode())
+        f.write(out.tobytes())
+
+
 def main():
     cloud = read_ply(sys.argv[1])
     outlines = json.load(open(sys.argv[2]))["features"]
@@ -34,24 +59,9 @@ def main():
     # Golden-ratio hues: neighbouring segment numbers get distant colours.
     palette = np.array([colorsys.hsv_to_rgb((0.618034 * i) % 1.0, 0.55, 0.95) for i in range(max(seg.max() + 1, 1))]) * 255
     rgb = np.where(seg[:, None] >= 0, palette[np.maximum(seg, 0)], 150).astype(np.uint8)
-    lines = []
-    for feature in outlines:
-        c = np.array(feature["geometry"]["coordinates"], dtype=float)
-        for a, b in zip(c[:-1], c[1:]):
-            k = max(int(np.linalg.norm(b - a) / step), 1)
-            lines.append(a + (b - a) * np.linspace(0.0, 1.0, k, endpoint=False)[:, None])
-    line_xyz = np.concatenate(lines) + [0.0, 0.0, 1.0]  # lifted 1 unit so a top view shows them
-    out = np.zeros(len(xyz) + len(line_xyz), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("red", "u1"), ("green", "u1"), ("blue", "u1"), ("segment", "<i4")])
-    all_xyz = np.concatenate([xyz, line_xyz])
-    out["x"], out["y"], out["z"] = all_xyz[:, 0], all_xyz[:, 1], all_xyz[:, 2]
-    all_rgb = np.concatenate([rgb, np.zeros((len(line_xyz), 3), np.uint8)])
-    out["red"], out["green"], out["blue"] = all_rgb[:, 0], all_rgb[:, 1], all_rgb[:, 2]
-    out["segment"] = np.concatenate([seg, np.full(len(line_xyz), -2, np.int32)])
-    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(out)}"]
-    header += [f"property {t} {name}" for name, t in [("x", "double"), ("y", "double"), ("z", "double"), ("red", "uchar"), ("green", "uchar"), ("blue", "uchar"), ("segment", "int")]]
-    with open(sys.argv[3], "wb") as f:
-        f.write(("\n".join(header + ["end_header"]) + "\n").encode())
-        f.write(out.tobytes())
+    line_xyz = outline_points(outlines, step)
+    write_picture(sys.argv[3], np.concatenate([xyz, line_xyz]), np.concatenate([rgb, np.zeros((len(line_xyz), 3), np.uint8)]),
+                  np.concatenate([seg, np.full(len(line_xyz), -2, np.int32)]))
     print(f"{len(xyz)} points, {len(outlines)} outlines as {len(line_xyz)} points")
 
 

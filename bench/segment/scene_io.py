@@ -16,3 +16,14 @@ def write_scene(points_normals, truth, out_ply, out_bin):
     with open(out_bin, "wb") as f:
         f.write(np.uint64(len(rec)).tobytes())
         f.write(np.ascontiguousarray(points_normals, dtype="<f8").tobytes())
+
+
+def truth_of(path):
+    """The int field "truth" of a scene PLY written by write_scene."""
+    with open(path, "rb") as f:
+        head = b""
+        while not head.endswith(b"end_header\n"):
+            head += f.readline()
+        n = int([l for l in head.split(b"\n") if l.startswith(b"element vertex")][0].split()[2])
+        rec = np.frombuffer(f.read(), dtype=[("p", "<f8", 6), ("truth", "<i4")], count=n)
+    return rec["truth"]

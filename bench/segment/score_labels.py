@@ -6,14 +6,7 @@
 import json, sys
 import numpy as np
 
-def truth_of(path):
-    with open(path, "rb") as f:
-        head = b""
-        while not head.endswith(b"end_header\n"):
-            head += f.readline()
-        n = int([l for l in head.split(b"\n") if l.startswith(b"element vertex")][0].split()[2])
-        rec = np.frombuffer(f.read(), dtype=[("p", "<f8", 6), ("truth", "<i4")], count=n)
-    return rec["truth"]
+from scene_io import truth_of
 
 truth = truth_of(sys.argv[1])
 labels = np.fromfile(sys.argv[2], dtype=np.int32)

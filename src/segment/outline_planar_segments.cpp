@@ -203,7 +203,14 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
     std::sort(edges.begin(), edges.end());
     const std::vector<std::vector<std::uint32_t>> chains = chain_loops(edges);
     std::vector<std::vector<Eigen::Vector2d>> loops2;
-    for (const auto& c : chains) {
+    for (std::vector<std::uint32_t> c : chains) {
+      // Douglas-Peucker depends on where the loop starts: start at its lexicographically
+      // smallest point, so that the outline does not depend on the order of the points.
+      const auto lowest = std::min_element(c.begin(), c.end(), [&](std::uint32_t a, std::uint32_t b) {
+        const Eigen::Vector3d &pa = cloud.positions[idx[a]], &pb = cloud.positions[idx[b]];
+        return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
+      });
+      std::rotate(c.begin(), lowest, c.end());
       std::vector<Eigen::Vector2d> l;
       for (std::uint32_t j : c) l.push_back(uv[j]);
       loops2.push_back(simplify_loop(l, params.simplify_in_spacings * spacing));

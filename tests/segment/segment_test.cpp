@@ -57,6 +57,29 @@ PointCloud estimated_cube(std::size_t n) {
   return cube;
 }
 
+// A seeded permutation of 0 .. n-1.
+std::vector<std::size_t> shuffled(std::size_t n, std::uint64_t seed) {
+  std::vector<std::size_t> perm(n);
+  std::iota(perm.begin(), perm.end(), 0);
+  std::shuffle(perm.begin(), perm.end(), std::mt19937_64(seed));
+  return perm;
+}
+
+// Labels of a permuted cloud must be the base labels, permuted: segments are numbered by size
+// and position, not by point order.
+void expect_permuted(const SegmentResult& base, const SegmentResult& permuted, const std::vector<std::size_t>& perm) {
+  ASSERT_EQ(permuted.labels.size(), perm.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) ASSERT_EQ(permuted.labels[i], base.labels[perm[i]]) << i;
+  EXPECT_EQ(permuted.sizes, base.sizes);
+}
+
+// Share of points with the same label in two results over the same points.
+double same_share(const SegmentResult& a, const SegmentResult& b) {
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < a.labels.size(); ++i) same += a.labels[i] == b.labels[i];
+  return double(same) / double(a.labels.size());
+}
+
 TEST(RegionGrowing, SeparatesTheSixFacesOfACube) {
   const PointCloud cube = estimated_cube(30000);
   const SegmentResult r = segment_region_growing(cube);
@@ -97,24 +120,19 @@ TEST(RegionGrowing, FeaturePointsAreBarriers) {
 TEST(RegionGrowing, InvariantUnderPermutationAndShift) {
   const PointCloud cube = estimated_cube(8000);
   const SegmentResult base = segment_region_growing(cube);
-  std::vector<std::size_t> perm(cube.size());
-  std::iota(perm.begin(), perm.end(), 0);
-  std::shuffle(perm.begin(), perm.end(), std::mt19937_64(9));
-  const SegmentResult p = segment_region_growing(cube.select(perm));
-  for (std::size_t i = 0; i < perm.size(); ++i) ASSERT_EQ(p.labels[i], base.labels[perm[i]]) << i;
+  const std::vector<std::size_t> perm = shuffled(cube.size(), 9);
+  expect_permuted(base, segment_region_growing(cube.select(perm)), perm);
   PointCloud shifted = cube;
   for (Vector3d& x : shifted.positions) x += Vector3d(1e6, 1e6, -1e6);
-  const SegmentResult s = segment_region_growing(shifted);
-  std::size_t same = 0;
-  for (std::size_t i = 0; i < cube.size(); ++i) same += s.labels[i] == base.labels[i];
-  EXPECT_GT(double(same), 0.99 * double(cube.size()));
+  EXPECT_GT(same_share(base, segment_region_growing(shifted)), 0.99);
 }
 
-TEST(Euclidean, SeparatesBlobsAndDropsSmallOnes) {
+// Three Gaussian blobs (3000, 2000, 1000 points, sigma 0.1) 3 apart and a lone point far off
+// (truth -1).
+PointCloud three_blobs(std::vector<int>& truth) {
   PointCloud cloud;
   std::mt19937_64 rng(2);
   std::normal_distribution<double> g(0.0, 0.1);
-  std::vector<int> truth;
   const Vector3d centres[3] = {{0, 0, 0}, {3, 0, 0}, {0, 3, 0}};
   const int counts[3] = {3000, 2000, 1000};
   for (int c = 0; c < 3; ++c)
@@ -123,8 +141,14 @@ TEST(Euclidean, SeparatesBlobsAndDropsSmallOnes) {
       cloud.positions.push_back(centres[c] + Vector3d(x, y, z));
       truth.push_back(c);
     }
-  cloud.positions.emplace_back(10, 10, 10);  // a lone point
+  cloud.positions.emplace_back(10, 10, 10);
   truth.push_back(-1);
+  return cloud;
+}
+
+TEST(Euclidean, SeparatesBlobsAndDropsSmallOnes) {
+  std::vector<int> truth;
+  const PointCloud cloud = three_blobs(truth);
   EuclideanParams p;
   p.radius = 0.3;
   const SegmentResult r = segment_euclidean(cloud, p);
@@ -137,11 +161,32 @@ TEST(Euclidean, SeparatesBlobsAndDropsSmallOnes) {
   EXPECT_EQ(segment_euclidean(cloud).sizes.size(), 3u);
 }
 
-TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
-  PointCloud torus = test::sample_torus(40000, 1.0, 0.3, 4);
+TEST(Euclidean, InvariantUnderPermutationAndShift) {
+  std::vector<int> truth;
+  const PointCloud cloud = three_blobs(truth);
+  EuclideanParams p;
+  p.radius = 0.15;  // the blobs' cores stay joined; fewer neighbours than 0.3 keep the test short
+  const SegmentResult base = segment_euclidean(cloud, p);
+  const std::vector<std::size_t> perm = shuffled(cloud.size(), 9);
+  expect_permuted(base, segment_euclidean(cloud.select(perm), p), perm);
+  PointCloud shifted = cloud;
+  for (Vector3d& x : shifted.positions) x += Vector3d(1e6, -1e6, 1e6);
+  const SegmentResult s = segment_euclidean(shifted, p);
+  EXPECT_EQ(s.sizes, base.sizes);
+  EXPECT_GE(same_share(base, s), 0.999);
+}
+
+// A torus (R 1, r 0.3) of n points with its HK surface_type field (jet fit, k 30).
+PointCloud typed_torus(std::size_t n) {
+  PointCloud torus = test::sample_torus(n, 1.0, 0.3, 4);
   CurvatureParams cp;
   cp.k = 30;
   estimate_curvature(torus, cp);
+  return torus;
+}
+
+TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
+  const PointCloud torus = typed_torus(40000);
   const SegmentResult r = segment_surface_types(torus);
   // Truth from the tube angle v: cos v > 0 elliptic (outer), < 0 hyperbolic (inner); points
   // within 0.3 rad of the parabolic circles are left out.
@@ -168,6 +213,17 @@ TEST(SurfaceTypes, TorusGivesAnEllipticAndAHyperbolicBand) {
   EXPECT_EQ(outer.begin()->first, int(SurfaceType::Peak));
   EXPECT_EQ(inner.size(), 1u);
   EXPECT_EQ(inner.begin()->first, int(SurfaceType::SaddleRidge));
+}
+
+TEST(SurfaceTypes, InvariantUnderPermutationAndShift) {
+  const PointCloud torus = typed_torus(20000);
+  const SegmentResult base = segment_surface_types(torus);
+  ASSERT_GE(base.sizes.size(), 2u);
+  const std::vector<std::size_t> perm = shuffled(torus.size(), 5);
+  expect_permuted(base, segment_surface_types(torus.select(perm)), perm);
+  PointCloud shifted = torus;  // the same surface_type field, the positions 1e6 m away
+  for (Vector3d& x : shifted.positions) x += Vector3d(-1e6, 1e6, 1e6);
+  EXPECT_GE(same_share(base, segment_surface_types(shifted)), 0.99);
 }
 
 TEST(Segment, EmptyCloudsAndBadInputs) {
