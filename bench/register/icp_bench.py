@@ -19,7 +19,6 @@ Pairs:
   icp_bench.py BUILD_DIR REPEATS WORK HIPPO1 HIPPO2 KITTEN CSV COMMIT DATE MACHINE
 Appends raw rows to CSV and prints a Markdown table of medians.
 """
-import csv
 import json
 import os
 import resource
@@ -31,7 +30,7 @@ import time
 import numpy as np
 import open3d as o3d
 
-from icp_pairs import HEADER, apply, hippo_pair, kitten_pair, score, wall_pair
+from icp_pairs import apply, hippo_pair, kitten_pair, open_csv, score, wall_pair, write_pair
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 build, repeats, work, hippo1, hippo2, kitten_path, csv_path, commit, date, machine = sys.argv[1:]
@@ -75,17 +74,10 @@ pairs = {"hippo": hippo_pair(hippo1, hippo2), "kitten": kitten_pair(kitten_path,
 configs = [("pointsurf", "point", 45), ("pointsurf", "point", 180), ("pointsurf", "plane", 45), ("pointsurf", "plane", 180),
            ("open3d", "point", 180), ("open3d", "plane", 180), ("open3d-1t", "point", 180), ("open3d-1t", "plane", 180),
            ("pcl", "point", 180)]
-new = not os.path.exists(csv_path)
-out = open(csv_path, "a", newline="")
-w = csv.writer(out)
-if new:
-    w.writerow(HEADER)
+out, w = open_csv(csv_path)
 files = {}
 for name, (source, target, truth, start, dist) in pairs.items():
-    d = os.path.join(work, name)
-    os.makedirs(d, exist_ok=True)
-    o3d.io.write_point_cloud(os.path.join(d, "source.ply"), source)
-    o3d.io.write_point_cloud(os.path.join(d, "target.ply"), target)
+    d = write_pair(work, name, source, target)
     np.savetxt(os.path.join(d, "start.txt"), start.reshape(1, 16))
     write_pcd(os.path.join(d, "target.pcd"), target)
     write_pcd(os.path.join(d, "started.pcd"), apply(start, source))

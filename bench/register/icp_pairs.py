@@ -2,6 +2,9 @@
 """The pairs of the registration benches (icp_bench.py, icp_pipeline.py) and how a pose is
 scored. Each pair builder returns (source, target, truth, start, max_distance) as Open3D clouds
 with normals and 4x4 matrices mapping the source onto the target."""
+import csv
+import os
+
 import numpy as np
 import open3d as o3d
 
@@ -125,3 +128,22 @@ def score(source, target, dist, m, truth):
     rot = angle_deg(m[:3, :3].T @ truth[:3, :3])
     trans = float(np.linalg.norm((m[:3, :3] @ c + m[:3, 3]) - (truth[:3, :3] @ c + truth[:3, 3])))
     return e.fitness, e.inlier_rmse, rot, trans
+
+
+def open_csv(path):
+    """The CSV opened for appending (its header written when new) and its writer."""
+    new = not os.path.exists(path)
+    out = open(path, "a", newline="")
+    writer = csv.writer(out)
+    if new:
+        writer.writerow(HEADER)
+    return out, writer
+
+
+def write_pair(work, name, source, target):
+    """WORK/NAME/source.ply and target.ply (with normals); returns the folder."""
+    d = os.path.join(work, name)
+    os.makedirs(d, exist_ok=True)
+    o3d.io.write_point_cloud(os.path.join(d, "source.ply"), source)
+    o3d.io.write_point_cloud(os.path.join(d, "target.ply"), target)
+    return d

@@ -14,7 +14,6 @@ and inlier RMSE (Open3D evaluate_registration) within 0.4 v, ICP's max distance.
 
   icp_pipeline.py BUILD_DIR REPEATS WORK HIPPO1 HIPPO2 KITTEN CSV COMMIT DATE MACHINE
 """
-import csv
 import json
 import os
 import statistics
@@ -22,9 +21,8 @@ import subprocess
 import sys
 
 import numpy as np
-import open3d as o3d
 
-from icp_pairs import HEADER, apply, hippo_pair, kitten_pair, motion, score, spacing
+from icp_pairs import apply, hippo_pair, kitten_pair, motion, open_csv, score, spacing, write_pair
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 build, repeats, work, hippo1, hippo2, kitten_path, csv_path, commit, date, machine = sys.argv[1:]
@@ -49,17 +47,10 @@ def kitten_turned():
 os.makedirs(work, exist_ok=True)
 pairs = {"hippo": hippo_turned(), "kitten": kitten_turned()}
 configs = [("pointsurf", 45), ("pointsurf", 180), ("open3d", 180), ("open3d-1t", 180)]
-new = not os.path.exists(csv_path)
-out = open(csv_path, "a", newline="")
-w = csv.writer(out)
-if new:
-    w.writerow(HEADER)
+out, w = open_csv(csv_path)
 files = {}
 for name, (source, target, truth) in pairs.items():
-    d = os.path.join(work, name)
-    os.makedirs(d, exist_ok=True)
-    o3d.io.write_point_cloud(os.path.join(d, "source.ply"), source)
-    o3d.io.write_point_cloud(os.path.join(d, "target.ply"), target)
+    d = write_pair(work, name, source, target)
     files[name] = (d, 2.0 * spacing(source))
 
 results = []
