@@ -13,10 +13,12 @@ Pairs:
             of it overlaps), noise 0.1 spacing, known motion; start 4 degrees and 2 spacings off
   kitten-resampled  the same, but the target keeps the even-ranked points and the source the
             odd-ranked ones: no point in both, as with two real scans
+  armadillo two samplings of CGAL's armadillo.off, 154k points each, 70 % overlap, known motion,
+            start 4 degrees and 2 spacings off
   wall      a hollow box (wall 0.1) scanned all round as target, three outer faces as source,
             start 0.07 inwards on each face: the case the normal-angle check is for
 
-  icp_bench.py BUILD_DIR REPEATS WORK HIPPO1 HIPPO2 KITTEN CSV COMMIT DATE MACHINE
+  icp_bench.py BUILD_DIR REPEATS WORK HIPPO1 HIPPO2 KITTEN ARMADILLO CSV COMMIT DATE MACHINE
 Appends raw rows to CSV and prints a Markdown table of medians.
 """
 import json
@@ -30,14 +32,14 @@ import time
 import numpy as np
 import open3d as o3d
 
-from icp_pairs import apply, hippo_pair, kitten_pair, open_csv, score, wall_pair, write_pair
+from icp_pairs import apply, armadillo_pair, hippo_pair, kitten_pair, open_csv, score, wall_pair, write_pair
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-build, repeats, work, hippo1, hippo2, kitten_path, csv_path, commit, date, machine = sys.argv[1:]
+build, repeats, work, hippo1, hippo2, kitten_path, armadillo, csv_path, commit, date, machine = sys.argv[1:]
 repeats = int(repeats)
 runner = os.path.join(build, "bench", "icp_runner")
 os.makedirs(work, exist_ok=True)
-ITERATIONS, RELATIVE, INNER = 50, 1e-6, 5
+ITERATIONS, RELATIVE, INNER = 50, 1e-6, 3
 
 
 def write_pcd(path, c):
@@ -70,7 +72,7 @@ def run_pcl(pair_dir, dist):
 
 
 pairs = {"hippo": hippo_pair(hippo1, hippo2), "kitten": kitten_pair(kitten_path, False), "kitten-resampled": kitten_pair(kitten_path, True),
-         "wall": wall_pair()}
+         "armadillo": armadillo_pair(armadillo), "wall": wall_pair()}
 configs = [("pointsurf", "point", 45), ("pointsurf", "point", 180), ("pointsurf", "plane", 45), ("pointsurf", "plane", 180),
            ("open3d", "point", 180), ("open3d", "plane", 180), ("open3d-1t", "point", 180), ("open3d-1t", "plane", 180),
            ("pcl", "point", 180)]

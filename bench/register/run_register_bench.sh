@@ -14,13 +14,13 @@ BUILD=${1:-$ROOT/build}
 REPEATS=${2:-5}
 PY=/usr/bin/python3
 WORK=$(mktemp -d /tmp/pointsurf_register_bench.XXXX)
-tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$WORK" data/points_3/hippo1.ply data/points_3/hippo2.ply
+tar xzf /usr/share/doc/libcgal-demo/data.tar.gz -C "$WORK" data/points_3/hippo1.ply data/points_3/hippo2.ply data/meshes/armadillo.off
 CSV="$ROOT/bench/results/register.csv"
 COMMIT=$(git -C "$ROOT" rev-parse --short HEAD)
 DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ)
 MACHINE="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
 $PY "$ROOT/bench/register/icp_bench.py" "$BUILD" "$REPEATS" "$WORK/icp" "$WORK/data/points_3/hippo1.ply" "$WORK/data/points_3/hippo2.ply" \
-  "$ROOT/data/kitten.xyz" "$CSV" "$COMMIT" "$DATE" "$MACHINE"
+  "$ROOT/data/kitten.xyz" "$WORK/data/meshes/armadillo.off" "$CSV" "$COMMIT" "$DATE" "$MACHINE"
 if [ ! -x "$BUILD/bench/icp_pipeline_runner" ]; then
   echo "no $BUILD/bench/icp_pipeline_runner: the pipeline rows need register/ features and align" >&2
   rm -rf "$WORK"
