@@ -281,6 +281,29 @@ TEST(Icp, NoOverlapOrTooFewPointsIsAnAnswerNotAnException) {
   }
 }
 
+// A sphere turned about its centre fits itself at every rotation: the rotation is free, the
+// centre is not. ICP must stop with the centre found, not wander or run to the cap.
+TEST(Icp, ASphereTurnedAboutItsCentreStopsWithTheCentreFound) {
+  const Eigen::Vector3d center(3.0, -1.0, 2.0);
+  const PointCloud target = test::sample_sphere(5000, 1.0, center, 1);
+  const KdTree tree(target.positions);
+  PointCloud source = test::sample_sphere(5000, 1.0, center, 2);
+  std::mt19937_64 rng(1);
+  const RigidTransform moved = exact_motion(rng, 10.0, 0.05, center);
+  moved.inverse().apply(source);
+  for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
+    IcpParams params;
+    params.metric = metric;
+    params.max_distance = 0.2;
+    const RegistrationResult r = icp(source, target, tree, RigidTransform(), params);
+    SCOPED_TRACE(icp_metric_name(metric));
+    EXPECT_TRUE(r.converged) << r.message;
+    EXPECT_LT(r.iterations, params.max_iterations);
+    EXPECT_LT((r.transform.apply(moved.inverse().apply(center)) - center).norm(), 0.005);
+    EXPECT_GT(r.fitness, 0.99);
+  }
+}
+
 TEST(Icp, StopsAtTheIterationCapWithConvergedFalse) {
   std::mt19937_64 rng(3);
   const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 4);
