@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Stage runner for bench/segment/run_segment_bench.sh; prints one JSON line, writes N int32
 // labels (-1 unassigned).
-//   segment_runner ransac IN.ply TYPES EPSILON CLUSTER_EPSILON NORMAL_DEG MIN_POINTS PROBABILITY OUT.labels
-//       TYPES: all or plane
+//   segment_runner ransac IN.ply TYPES EPSILON CLUSTER_EPSILON NORMAL_DEG MIN_POINTS PROBABILITY OUT.labels [SEED]
+//       TYPES: all (plane, sphere, cylinder, cone: the CGAL peer's four) or plane
 //   segment_runner euclidean IN.ply RADIUS OUT.labels
 //   segment_runner region IN.ply K MAX_ANGLE_DEG MAX_VARIATION MIN_POINTS OUT.labels
 //       (the input's normals; no feature barriers, as PCL's RegionGrowing has none)
@@ -32,7 +32,7 @@ double since(std::chrono::steady_clock::time_point t0) { return std::chrono::dur
 
 int main(int argc, char** argv) {
   const std::string mode = argc > 1 ? argv[1] : "";
-  if (!((mode == "ransac" && argc == 10) || (mode == "euclidean" && argc == 5) || (mode == "region" && argc == 8))) {
+  if (!((mode == "ransac" && (argc == 10 || argc == 11)) || (mode == "euclidean" && argc == 5) || (mode == "region" && argc == 8))) {
     std::cerr << "usage: see the header of bench/segment/segment_runner.cpp\n";
     return 1;
   }
@@ -41,12 +41,13 @@ int main(int argc, char** argv) {
   const std::clock_t c0 = std::clock();  // CPU of all threads: knn_all is parallel, PCL is not
   if (mode == "ransac") {
     PrimitiveParams p;
-    p.types = std::string(argv[3]) == "plane" ? kPlanes : kAllPrimitives;
+    p.types = std::string(argv[3]) == "plane" ? kPlanes : kDefaultPrimitives;
     p.epsilon = std::stod(argv[4]);
     p.cluster_epsilon = std::stod(argv[5]);
     p.max_normal_deg = std::stod(argv[6]);
     p.min_points = std::stoul(argv[7]);
     p.probability = std::stod(argv[8]);
+    if (argc == 11) p.seed = std::stoull(argv[10]);
     const PrimitiveResult r = detect_primitives(cloud, p);
     const double s = since(t0);
     std::string types;

@@ -195,7 +195,7 @@ def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., 
     truth_field = '': Field marking true feature points (non-zero): report precision and recall
     """
 
-def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float = ..., radius_in_spacings: float = ..., types: str = ..., epsilon: float = ..., epsilon_in_spacings: float = ..., cluster_epsilon: float = ..., cluster_in_spacings: float = ..., max_normal_deg: float = ..., probability: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:
+def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float = ..., radius_in_spacings: float = ..., types: str = ..., epsilon: float = ..., epsilon_in_spacings: float = ..., cluster_epsilon: float = ..., cluster_in_spacings: float = ..., max_normal_deg: float = ..., probability: float = ..., band_in_epsilons: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:
     """Split the points into segments: field "segment" (-1 unassigned), by region growing, Euclidean clusters, RANSAC primitives or HK surface type
 
     method = 'region': one of region, euclidean, ransac, hk
@@ -206,13 +206,14 @@ def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 
     min_points = 10: Fewest points of a segment; smaller ones are unassigned ([1, inf))
     radius = 0.0: Cluster distance; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
     radius_in_spacings = 3.0: Cluster distance when radius is 0 (mean spacings, (0, inf))
-    types = 'plane,sphere,cylinder,cone': Primitive types to detect, comma-separated
-    epsilon = 0.0: Largest distance of an inlier; 0: epsilon_in_spacings x mean spacing (cloud units, [0, inf))
-    epsilon_in_spacings = 1.0: Inlier distance when epsilon is 0 (mean spacings, (0, inf))
+    types = 'plane,sphere,cylinder,cone': Primitive types to detect, comma-separated: plane, sphere, cylinder, cone, torus
+    epsilon = 0.0: A candidate's score counts the points this close; 0: epsilon_in_spacings x mean spacing (cloud units, [0, inf))
+    epsilon_in_spacings = 1.0: Scoring distance when epsilon is 0 (mean spacings, (0, inf))
     cluster_epsilon = 0.0: Connectivity grid cell; 0: cluster_in_spacings x mean spacing (cloud units, [0, inf))
     cluster_in_spacings = 3.0: Connectivity cell when cluster_epsilon is 0 (mean spacings, (0, inf))
     max_normal_deg = 25.0: Largest angle between a point's normal and the primitive's (degrees, (0, 90))
     probability = 0.01: Accepted chance of missing a primitive of min_points ((0, 1))
+    band_in_epsilons = 3.0: A found primitive takes the points within this many epsilons of its refit (epsilons, [1, inf))
     seed = 42: Random seed ([0, inf))
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     """

@@ -248,6 +248,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   if (params.primitives) {
     PrimitiveParams pp;
     pp.epsilon = distance;
+    pp.band_in_epsilons = 1.0;  // a primitive's points are kept: only those within distance
     pp.seed = params.seed;
     if (cloud.has_normals()) {
       found = detect_primitives(cloud, pp);

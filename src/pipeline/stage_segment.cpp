@@ -51,9 +51,17 @@ unsigned primitive_types(const std::string& list) {
     else if (word == "sphere") types |= kSpheres;
     else if (word == "cylinder") types |= kCylinders;
     else if (word == "cone") types |= kCones;
-    else throw UsageError(fmt::format("types: unknown primitive \"{}\" (expected a comma-separated list of plane, sphere, cylinder, cone)", word));
+    else if (word == "torus") types |= kTori;
+    else throw UsageError(fmt::format("types: unknown primitive \"{}\" (expected a comma-separated list of plane, sphere, cylinder, cone, torus)", word));
   }
   return types;
+}
+
+std::string primitive_type_list(unsigned types) {
+  std::string list;
+  for (unsigned bit = 0; bit < 5; ++bit)
+    if (types & (1u << bit)) list += (list.empty() ? "" : ",") + std::string(primitive_type_name(PrimitiveType(bit)));
+  return list;
 }
 
 PrimitiveParams primitive_params(const StageArgs& a) {
@@ -66,6 +74,7 @@ PrimitiveParams primitive_params(const StageArgs& a) {
   p.max_normal_deg = a.number("max_normal_deg");
   p.min_points = static_cast<std::size_t>(a.integer("min_points"));
   p.probability = a.number("probability");
+  p.band_in_epsilons = a.number("band_in_epsilons");
   p.seed = static_cast<std::uint64_t>(a.integer("seed"));
   return p;
 }
@@ -77,10 +86,11 @@ void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
   rec.count("candidates", as_count(r.candidates));
   for (std::size_t i = 0; i < r.primitives.size(); ++i) {
     const Primitive& s = r.primitives[i];
-    // Per primitive: its type, then point (3), axis (3), radius, half angle (degrees), inliers, RMS.
+    // Per primitive: its type, then point (3), axis (3), radius, half angle (degrees), inliers, RMS,
+    // minor radius (torus).
     rec.metric(fmt::format("primitive_{}_type", i), std::string(primitive_type_name(s.type)));
     rec.metric(fmt::format("primitive_{}", i), std::vector<double>{s.point.x(), s.point.y(), s.point.z(), s.axis.x(), s.axis.y(), s.axis.z(),
-                                                                   s.radius, s.angle_deg, double(s.inliers), s.rms});
+                                                                   s.radius, s.angle_deg, double(s.inliers), s.rms, s.minor_radius});
   }
 }
 
@@ -248,7 +258,7 @@ StageSpec segment_stage() {
   s.name = "segment";
   s.summary = "Split the points into segments: field \"segment\" (-1 unassigned), by region growing, Euclidean clusters, RANSAC primitives or HK surface type";
   s.description = "region: grows over the kNN graph while normals turn less than max_angle_deg, stopping at curved points and "
-                  "feature points; euclidean: points closer than the radius; ransac: planes, spheres, cylinders and cones by "
+                  "feature points; euclidean: points closer than the radius; ransac: planes, spheres, cylinders, cones and tori by "
                   "efficient RANSAC (Schnabel et al. 2007), listed in the report; hk: connected regions of one surface_type (run "
                   "curvature first). Segments are numbered by size, largest first.";
   s.order = 80;
@@ -265,14 +275,15 @@ StageSpec segment_stage() {
       P::number("radius", eu.radius, "Cluster distance; 0: radius_in_spacings x mean spacing").unit("cloud units").non_negative().meta("R").only({"euclidean"}),
       P::number("radius_in_spacings", eu.radius_in_spacings, "Cluster distance when radius is 0").unit("mean spacings").positive().only({"euclidean"}),
       P::integer("k", hk.k, "Neighbours per point (the graph's edges)").at_least(2).only({"hk"}),
-      P::text("types", "plane,sphere,cylinder,cone", "Primitive types to detect, comma-separated").meta("LIST").only({"ransac"}),
-      P::number("epsilon", pr.epsilon, "Largest distance of an inlier; 0: epsilon_in_spacings x mean spacing").unit("cloud units").non_negative().meta("E").only({"ransac"}),
-      P::number("epsilon_in_spacings", pr.epsilon_in_spacings, "Inlier distance when epsilon is 0").unit("mean spacings").positive().only({"ransac"}),
+      P::text("types", primitive_type_list(pr.types), "Primitive types to detect, comma-separated: plane, sphere, cylinder, cone, torus").meta("LIST").only({"ransac"}),
+      P::number("epsilon", pr.epsilon, "A candidate's score counts the points this close; 0: epsilon_in_spacings x mean spacing").unit("cloud units").non_negative().meta("E").only({"ransac"}),
+      P::number("epsilon_in_spacings", pr.epsilon_in_spacings, "Scoring distance when epsilon is 0").unit("mean spacings").positive().only({"ransac"}),
       P::number("cluster_epsilon", pr.cluster_epsilon, "Connectivity grid cell; 0: cluster_in_spacings x mean spacing").unit("cloud units").non_negative().meta("C").only({"ransac"}),
       P::number("cluster_in_spacings", pr.cluster_in_spacings, "Connectivity cell when cluster_epsilon is 0").unit("mean spacings").positive().only({"ransac"}),
       P::number("max_normal_deg", pr.max_normal_deg, "Largest angle between a point's normal and the primitive's").unit("degrees").range(0.0, 90.0, true, true).only({"ransac"}),
       P::integer("min_points", static_cast<std::int64_t>(pr.min_points), "Fewest inliers of a primitive; 0: max(30, N / 200)").at_least(0).only({"ransac"}),
       P::number("probability", pr.probability, "Accepted chance of missing a primitive of min_points").range(0.0, 1.0, true, true).only({"ransac"}),
+      P::number("band_in_epsilons", pr.band_in_epsilons, "A found primitive takes the points within this many epsilons of its refit").unit("epsilons").at_least(1.0).only({"ransac"}),
       P::integer("seed", static_cast<std::int64_t>(pr.seed), "Random seed").at_least(0).only({"ransac"}),
       P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"region", "ransac"}),
   };

@@ -40,9 +40,9 @@ TEST(SegmentStage, RegionEuclideanAndErrors) {
   EXPECT_TRUE(test::contains(hk.err, "surface_type")) << hk.err;
   const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max_angle_deg 120", dir);
   EXPECT_EQ(bad.exit_code, 1);
-  const test::RunResult types = test::run_cli("segment " + cube + out + " --method ransac --types plane,torus", dir);
+  const test::RunResult types = test::run_cli("segment " + cube + out + " --method ransac --types plane,ellipsoid", dir);
   EXPECT_EQ(types.exit_code, 1);
-  EXPECT_TRUE(test::contains(types.err, "torus")) << types.err;
+  EXPECT_TRUE(test::contains(types.err, "ellipsoid")) << types.err;
 }
 
 }  // namespace

@@ -7,9 +7,14 @@
 #include <numeric>
 #include <random>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "pointsurf/core/error.h"
+#include "shape/detail/point_octree.h"
+#include "shape/detail/primitive_models.h"
+#include "spatial/detail/morton.h"
 #include "support/primitive_scene.h"
 #include "support/shapes.h"
 
@@ -37,6 +42,9 @@ bool matches(const Primitive& found, const Primitive& truth, double size) {
     case PrimitiveType::Cone:
       return axis_angle_deg(found.axis, truth.axis) < 1.0 && found.axis.dot(truth.axis) > 0.0 && (found.point - truth.point).norm() < tol &&
              std::abs(found.angle_deg - truth.angle_deg) < 1.0;
+    case PrimitiveType::Torus:
+      return axis_angle_deg(found.axis, truth.axis) < 1.0 && (found.point - truth.point).norm() < tol && std::abs(found.radius - truth.radius) < tol &&
+             std::abs(found.minor_radius - truth.minor_radius) < tol;
   }
   return false;
 }
@@ -60,20 +68,182 @@ std::vector<std::pair<double, int>> majority(const PointCloud& cloud, const std:
 
 TEST(DetectPrimitives, RecoversEachPrimitiveOfTheScene) {
   const test::PrimitiveScene scene = test::make_primitive_scene();
-  const PrimitiveResult r = detect_primitives(scene.cloud);
-  ASSERT_EQ(r.labels.size(), scene.cloud.size());
-  const auto major = majority(scene.cloud, r.labels, scene.truth.size());
-  for (std::size_t t = 0; t < scene.truth.size(); ++t) {
-    SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(scene.truth[t].type) << ")");
+  for (const unsigned types : {unsigned(kDefaultPrimitives), unsigned(kAllPrimitives)}) {
+    SCOPED_TRACE(testing::Message() << "types " << types);
+    PrimitiveParams params;
+    params.types = types;
+    const PrimitiveResult r = detect_primitives(scene.cloud, params);
+    ASSERT_EQ(r.labels.size(), scene.cloud.size());
+    const auto major = majority(scene.cloud, r.labels, scene.truth.size());
+    for (std::size_t t = 0; t < scene.truth.size(); ++t) {
+      SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(scene.truth[t].type) << ")");
+      EXPECT_GE(major[t].first, 0.95);
+      ASSERT_GE(major[t].second, 0);
+      const Primitive& found = r.primitives[std::size_t(major[t].second)];
+      EXPECT_TRUE(matches(found, scene.truth[t], scene.size))
+          << primitive_type_name(found.type) << " point " << found.point.transpose() << " axis " << found.axis.transpose() << " radius "
+          << found.radius << " angle " << found.angle_deg;
+      EXPECT_LT(found.rms, 0.01);
+    }
+    EXPECT_EQ(r.primitives.size(), scene.truth.size());
+  }
+}
+
+// A torus sampled uniformly by area with noise `sigma` along the normal, appended to `cloud`
+// with truth label `label`.
+void add_torus(PointCloud& cloud, const Primitive& torus, double per_unit_area, double sigma, int label, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, sigma);
+  const Vector3d x = (std::abs(torus.axis.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY()).cross(torus.axis).normalized();
+  const Vector3d y = torus.axis.cross(x);
+  const double R = torus.radius, r = torus.minor_radius;
+  std::vector<double>& truth = cloud.fields.contains("truth") ? cloud.fields.find("truth")->values : cloud.fields.add("truth", cloud.size()).values;
+  for (std::size_t i = 0, n = std::size_t(4 * M_PI * M_PI * R * r * per_unit_area); i < n;) {
+    const double a = 2 * M_PI * u(rng), b = 2 * M_PI * u(rng);
+    if (u(rng) * (R + r) > R + r * std::cos(b)) continue;  // area element (R + r cos b)
+    const Vector3d radial = std::cos(a) * x + std::sin(a) * y;
+    const Vector3d normal = std::cos(b) * radial + std::sin(b) * torus.axis;
+    cloud.positions.push_back(torus.point + R * radial + r * normal + noise(rng) * normal);
+    cloud.normals.push_back(normal);
+    truth.push_back(label);
+    ++i;
+  }
+}
+
+TEST(DetectPrimitives, RecoversANoisyTorus) {
+  Primitive torus{PrimitiveType::Torus, Vector3d(0.3, -0.2, 0.5), Vector3d(0.2, -0.3, 1.0).normalized(), 2.0};
+  torus.minor_radius = 0.6;
+  PointCloud cloud;
+  add_torus(cloud, torus, 250.0, 0.005, 0, 5);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult r = detect_primitives(cloud, params);
+  const auto major = majority(cloud, r.labels, 1);
+  EXPECT_GE(major[0].first, 0.95);
+  ASSERT_GE(major[0].second, 0);
+  const Primitive& found = r.primitives[std::size_t(major[0].second)];
+  EXPECT_TRUE(matches(found, torus, 2.0 * (torus.radius + torus.minor_radius)))
+      << primitive_type_name(found.type) << " centre " << found.point.transpose() << " axis " << found.axis.transpose() << " radii "
+      << found.radius << " " << found.minor_radius;
+  EXPECT_LT(found.rms, 0.01);
+  // Without the torus model no primitive holds it.
+  params.types = kDefaultPrimitives;
+  const auto without = majority(cloud, detect_primitives(cloud, params).labels, 1);
+  EXPECT_FALSE(without[0].first >= 0.95 && without[0].second >= 0);
+}
+
+TEST(DetectPrimitives, TorusBesidePlanesIsOneSegment) {
+  test::PrimitiveScene scene = test::make_primitive_scene();
+  // Keep the ground and the wall, add a tilted torus clear of both.
+  std::vector<std::size_t> planes;
+  const std::vector<double>& truth = scene.cloud.fields.find("truth")->values;
+  for (std::size_t i = 0; i < scene.cloud.size(); ++i)
+    if (truth[i] <= 1.0) planes.push_back(i);
+  PointCloud cloud = scene.cloud.select(planes);
+  Primitive torus{PrimitiveType::Torus, Vector3d(-0.5, -1.0, 2.5), Vector3d(0.5, 0.0, 1.0).normalized(), 1.5};
+  torus.minor_radius = 0.4;
+  add_torus(cloud, torus, 300.0, 0.005, 2, 6);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult r = detect_primitives(cloud, params);
+  const std::vector<Primitive> truths = {scene.truth[0], scene.truth[1], torus};
+  const auto major = majority(cloud, r.labels, truths.size());
+  for (std::size_t t = 0; t < truths.size(); ++t) {
+    SCOPED_TRACE(testing::Message() << "truth " << t << " (" << primitive_type_name(truths[t].type) << ")");
     EXPECT_GE(major[t].first, 0.95);
     ASSERT_GE(major[t].second, 0);
-    const Primitive& found = r.primitives[std::size_t(major[t].second)];
-    EXPECT_TRUE(matches(found, scene.truth[t], scene.size))
-        << primitive_type_name(found.type) << " point " << found.point.transpose() << " axis " << found.axis.transpose() << " radius "
-        << found.radius << " angle " << found.angle_deg;
-    EXPECT_LT(found.rms, 0.01);
+    EXPECT_TRUE(matches(r.primitives[std::size_t(major[t].second)], truths[t], scene.size));
   }
-  EXPECT_EQ(r.primitives.size(), scene.truth.size());
+  EXPECT_EQ(r.primitives.size(), truths.size());
+}
+
+// One primitive of each type, with parameters in a unit-sized box.
+std::vector<Primitive> one_of_each() {
+  Primitive plane{PrimitiveType::Plane, Vector3d(0.1, 0.2, 0.3), Vector3d(1, 2, 3).normalized()};
+  Primitive sphere{PrimitiveType::Sphere, Vector3d(0.2, -0.1, 0.0), Vector3d::UnitZ(), 0.6};
+  Primitive cylinder{PrimitiveType::Cylinder, Vector3d(-0.1, 0.1, 0.2), Vector3d(0.3, -1, 0.5).normalized(), 0.4};
+  Primitive cone{PrimitiveType::Cone, Vector3d(0.0, 0.3, 0.9), Vector3d(0.1, -0.2, -1).normalized(), 0.0, 35.0};
+  Primitive torus{PrimitiveType::Torus, Vector3d(0.1, 0.0, -0.1), Vector3d(1, 1, 2).normalized(), 0.5};
+  torus.minor_radius = 0.2;
+  return {plane, sphere, cylinder, cone, torus};
+}
+
+TEST(PrimitiveModels, DistancesAreOneLipschitzAndTheOctreeCullsExactly) {
+  // The octree skips a cell when the distance at its centre exceeds its radius plus the reach:
+  // exact only for 1-Lipschitz distances. Checked against brute force on 20k points.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vector3d> pts(20000);
+  for (Vector3d& p : pts) p = Vector3d(u(rng), u(rng), u(rng));
+  std::vector<std::uint64_t> codes(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Array3d t = ((pts[i].array() + 1.0) / 2.0 * double((1 << 21) - 1)).round();
+    codes[i] = detail::morton_code(std::uint64_t(t.x()), std::uint64_t(t.y()), std::uint64_t(t.z()));
+  }
+  std::vector<std::uint32_t> order(pts.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return codes[a] < codes[b]; });
+  std::vector<Vector3d> sorted(pts.size());
+  std::vector<std::uint64_t> sorted_codes(pts.size());
+  for (std::size_t r = 0; r < pts.size(); ++r) sorted[r] = pts[order[r]], sorted_codes[r] = codes[order[r]];
+  std::vector<std::uint32_t> ranks(pts.size()), leaf_of(pts.size());
+  std::iota(ranks.begin(), ranks.end(), 0u);
+  const detail::PointOctree tree(ranks, sorted, sorted_codes, 21, leaf_of);
+  for (const Primitive& s : one_of_each()) {
+    SCOPED_TRACE(primitive_type_name(s.type));
+    auto distance = [&](const Vector3d& x) { return s.distance(x); };
+    for (std::size_t i = 0; i + 1 < pts.size(); i += 2)
+      ASSERT_LE(std::abs(distance(pts[i]) - distance(pts[i + 1])), (pts[i] - pts[i + 1]).norm() + 1e-12) << i;
+    for (const double reach : {0.01, 0.05}) {
+      std::vector<std::uint32_t> culled, brute;
+      tree.visit(distance, reach, [&](const std::uint32_t* r, const std::uint32_t* end) {
+        for (; r != end; ++r)
+          if (distance(sorted[*r]) <= reach) culled.push_back(*r);
+      });
+      for (std::uint32_t r = 0; r < sorted.size(); ++r)
+        if (distance(sorted[r]) <= reach) brute.push_back(r);
+      EXPECT_EQ(culled, brute);
+      EXPECT_FALSE(brute.empty());
+    }
+  }
+}
+
+TEST(PrimitiveModels, MinimalSetsOfExactPointsGiveTheirPrimitive) {
+  // Points with normals sampled on each primitive; the candidates from them must hold the
+  // primitive itself (a torus from 4 points, the others from the first 3).
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const Primitive& s : one_of_each()) {
+    SCOPED_TRACE(primitive_type_name(s.type));
+    const Vector3d x = (std::abs(s.axis.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY()).cross(s.axis).normalized(), y = s.axis.cross(x);
+    int hits = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+      Vector3d p[4], n[4];
+      for (int k = 0; k < 4; ++k) {
+        const double a = 2 * M_PI * u(rng), b = 2 * M_PI * u(rng), h = 0.2 + 0.6 * u(rng);
+        const Vector3d radial = std::cos(a) * x + std::sin(a) * y;
+        switch (s.type) {
+          case PrimitiveType::Plane: p[k] = s.point + (u(rng) - 0.5) * x + (u(rng) - 0.5) * y, n[k] = s.axis; break;
+          case PrimitiveType::Sphere: n[k] = std::cos(b) * radial + std::sin(b) * s.axis, p[k] = s.point + s.radius * n[k]; break;
+          case PrimitiveType::Cylinder: p[k] = s.point + (h - 0.5) * s.axis + s.radius * radial, n[k] = radial; break;
+          case PrimitiveType::Cone: {
+            const double t = std::tan(s.angle_deg * M_PI / 180.0);
+            p[k] = s.point + h * s.axis + h * t * radial;
+            n[k] = (std::cos(s.angle_deg * M_PI / 180.0) * radial - std::sin(s.angle_deg * M_PI / 180.0) * s.axis).normalized();
+            break;
+          }
+          case PrimitiveType::Torus:
+            n[k] = std::cos(b) * radial + std::sin(b) * s.axis, p[k] = s.point + s.radius * radial + s.minor_radius * n[k];
+            break;
+        }
+      }
+      std::vector<Primitive> made;
+      detail::make_candidates(p, n, 4, kAllPrimitives, 1e-6, std::cos(1e-3), 100.0, made);
+      hits += std::any_of(made.begin(), made.end(), [&](const Primitive& m) { return m.type == s.type && matches(m, s, 1e-4); });
+    }
+    EXPECT_GE(hits, 18);  // a few draws are near-degenerate (e.g. a torus's 4 points on one meridian)
+  }
 }
 
 TEST(DetectPrimitives, InvariantUnderPermutationAndShift) {
@@ -102,9 +272,35 @@ TEST(DetectPrimitives, InvariantUnderPermutationAndShift) {
   }
 }
 
-TEST(DetectPrimitives, DeterministicForASeed) {
+TEST(DetectPrimitives, DeterministicForASeedWhateverTheThreads) {
   const test::PrimitiveScene scene = test::make_primitive_scene(100.0);
-  EXPECT_EQ(detect_primitives(scene.cloud).labels, detect_primitives(scene.cloud).labels);
+  PrimitiveParams params;
+  params.types = kAllPrimitives;
+  const PrimitiveResult base = detect_primitives(scene.cloud, params);
+  EXPECT_EQ(detect_primitives(scene.cloud, params).labels, base.labels);
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_EQ(detect_primitives(scene.cloud, params).labels, base.labels);
+  }
+  params.seed = 7;
+  EXPECT_EQ(detect_primitives(scene.cloud, params).primitives.size(), base.primitives.size());
+}
+
+TEST(DetectPrimitives, ReportsProgressAndCancels) {
+  const test::PrimitiveScene scene = test::make_primitive_scene(100.0);
+  std::vector<double> seen;
+  detect_primitives(scene.cloud, {}, [&](double f) {
+    seen.push_back(f);
+    return true;
+  });
+  ASSERT_FALSE(seen.empty());
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_GE(seen.front(), 0.0);
+  EXPECT_LE(seen.back(), 1.0);
+  EXPECT_GT(seen.back(), 0.9);  // the five primitives hold nearly every point
+  int calls = 0;
+  EXPECT_THROW(detect_primitives(scene.cloud, {}, [&](double) { return ++calls < 3; }), CancelledError);
+  EXPECT_EQ(calls, 3);
 }
 
 TEST(DetectPrimitives, FlatCloudGivesOnePlane) {
@@ -147,6 +343,17 @@ TEST(DetectPrimitives, RejectsBadParametersAndMissingNormals) {
   p = {};
   p.probability = 1.0;
   EXPECT_THROW(p.validate(), UsageError);
+  p = {};
+  p.types = 32;
+  EXPECT_THROW(p.validate(), UsageError);
+  p = {};
+  p.band_in_epsilons = 0.5;
+  try {
+    p.validate();
+    FAIL() << "no throw";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("band_in_epsilons"), std::string::npos);
+  }
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ enum class DescriptorType : std::uint8_t { Pfh = 0, Fpfh = 1 };
 /// "pfh", "fpfh".
 const char* descriptor_type_name(DescriptorType type) noexcept;
 
-struct FeatureParams {
+struct DescriptorParams {
   DescriptorType type = DescriptorType::Fpfh;
   double radius = 0.0;               // neighbourhood radius, cloud units; 0: radius_in_spacings x
                                      // mean spacing
@@ -45,7 +45,12 @@ struct Descriptors {
 
 /// Descriptors of every point of `cloud` (which must have normals; UsageError otherwise), with
 /// `tree` built over its positions. Parallel (oneTBB), points visited in spatial order.
-Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const FeatureParams& params,
+/// The neighbourhood is the point and at most max_neighbors - 1 others within the radius (as
+/// Open3D's hybrid search). Pair features as PCL's computePairFeatures; FPFH weights the
+/// neighbours' SPFH by 1 / squared distance (as PCL and Open3D), each third of the weighted sum
+/// scaled to 100, plus the point's own SPFH (so an FPFH row sums to 600, a PFH row to 100).
+/// Cost: FPFH O(N k), PFH O(N k^2) pair features (k = neighbours). Thread-safe.
+Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const DescriptorParams& params,
                                 const ProgressCallback& progress = {});
 
 }  // namespace pointsurf
