@@ -11,7 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "pointsurf/core/error.h"
-#include "pointsurf/core/rigid_transform.h"
+#include "register/detail/align_kabsch.h"
 
 namespace pointsurf::detail {
 namespace {
@@ -132,12 +132,9 @@ void solve_point_to_point(const IcpSums& sums, Eigen::Matrix3d& rotation, Eigen:
   const double n = static_cast<double>(sums.used);
   const Eigen::Vector3d mean_p = sums.sum_p / n, mean_q = sums.sum_q / n;
   // Cross-covariance; the frame is centred on the target, so neither term is large against it.
-  const Eigen::Matrix3d h = sums.sum_pq / n - mean_p * mean_q.transpose();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-  rotation = svd.matrixV() * d * svd.matrixU().transpose();
-  translation = mean_q - rotation * mean_p;
+  const RigidFit fit = fit_rigid(Eigen::Matrix3d(sums.sum_pq / n - mean_p * mean_q.transpose()), mean_p, mean_q);
+  rotation = fit.rotation;
+  translation = fit.translation;
 }
 
 void solve_point_to_plane(const IcpSums& sums, double scale, Eigen::Matrix3d& rotation, Eigen::Vector3d& translation) {
