@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/register/icp.h"
@@ -182,6 +183,28 @@ TEST(Icp, DoesNotDependOnThePointOrder) {
     EXPECT_DOUBLE_EQ(a.fitness, b.fitness);
     EXPECT_LT(RigidTransform::rotation_error_degrees(a.transform, b.transform), 1e-9);
     EXPECT_LT(RigidTransform::translation_error(a.transform, b.transform, centroid(p.source)), 1e-9 * p.spacing);
+  }
+}
+
+// Fixed blocks summed in order: one thread gives the very same answer as all of them.
+TEST(Icp, OneThreadGivesTheSameAnswerAsMany) {
+  std::mt19937_64 rng(13);
+  const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 14);
+  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, centroid(p.source));
+  const KdTree tree(p.target.positions);
+  for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
+    IcpParams params;
+    params.metric = metric;
+    const RegistrationResult many = icp(p.source, p.target, tree, start, params);
+    RegistrationResult one;
+    {
+      const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+      one = icp(p.source, p.target, tree, start, params);
+    }
+    EXPECT_EQ(one.iterations, many.iterations);
+    EXPECT_EQ(one.correspondences, many.correspondences);
+    EXPECT_EQ(one.inlier_rmse, many.inlier_rmse);
+    EXPECT_EQ(one.transform.matrix(), many.transform.matrix());
   }
 }
 
