@@ -99,6 +99,10 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
   // near the optimum ICP often swaps between two pairings, each a few 1e-4 of the max distance
   // from the other, and would go on doing so up to the iteration cap.
   const double standstill = kStandstill * max_distance;
+  // The estimate before the current one: back there again after two updates, ICP alternates
+  // between two pairings (a couple of pairs in and out at the max distance) and would go on so.
+  Eigen::Matrix3d older_rotation = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d older_translation = Eigen::Vector3d::Zero();
   for (std::size_t it = 1;; ++it) {
     if (sums.used < min_pairs) {
       result.message = fmt::format("too few pairs ({}; {} needed) within {:.6g}{}", sums.used, min_pairs, max_distance,
@@ -118,8 +122,13 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
     Eigen::Vector3d step_translation;
     if (plane) detail::solve_point_to_plane(sums, frame.scale(), step_rotation, step_translation);
     else detail::solve_point_to_point(sums, step_rotation, step_translation);
+    const Eigen::Matrix3d last_rotation = rotation;
+    const Eigen::Vector3d last_translation = translation;
     rotation = RigidTransform::nearest_rotation(step_rotation * rotation);
     translation = step_rotation * translation + step_translation;
+    const bool cycle = (rotation - older_rotation).norm() * frame.scale() + (translation - older_translation).norm() <= 0.01 * standstill;
+    older_rotation = last_rotation;
+    older_translation = last_translation;
 
     const IcpSums previous = sums;
     sums = frame.pass(rotation, translation, max_distance, cos_max, system);
@@ -132,11 +141,12 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
                               std::abs(rmse_after - rmse_before) <= params.relative_rmse * rmse_before + tiny_step;
     const double step_angle = Eigen::AngleAxisd(step_rotation).angle();
     const bool small_step = step_angle * frame.scale() + step_translation.norm() <= standstill;
-    if (sums.used >= min_pairs && (small_change || small_step)) {
+    if (sums.used >= min_pairs && (small_change || small_step || cycle)) {
       result.converged = true;
-      result.message = small_change ? fmt::format("converged after {} iteration{}", it, it == 1 ? "" : "s")
-                                    : fmt::format("converged after {} iteration{}: the update fell below {:.3g}", it, it == 1 ? "" : "s",
-                                                  standstill);
+      const std::string why = small_change ? std::string()
+                              : small_step ? fmt::format(": the update fell below {:.3g}", standstill)
+                                           : std::string(": it alternates between two pairings");
+      result.message = fmt::format("converged after {} iteration{}{}", it, it == 1 ? "" : "s", why);
       break;
     }
   }

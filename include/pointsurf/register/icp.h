@@ -36,8 +36,9 @@ struct IcpParams {
   std::size_t max_iterations = 50;     // iterations at most
   double relative_fitness = 1e-6;      // converged when the number of pairs used and their RMSE
   double relative_rmse = 1e-6;         // change by less than these relative amounts between two
-                                       // iterations, or when an update moves the points by less
-                                       // than 0.001 x the max distance (RMS)
+                                       // iterations, when an update moves the points by less
+                                       // than 0.001 x the max distance (RMS), or when ICP comes
+                                       // back to where it was two updates before (a 2-cycle)
   void validate() const;
 };
 
