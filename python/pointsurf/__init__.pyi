@@ -278,7 +278,7 @@ def quality(mesh: TriangleMesh, /, *, progress: Progress = None) -> TriangleMesh
     """Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume
     """
 
-def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., progress: Progress = None) -> PointCloud:
+def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., align: bool = ..., align_max_distance: float = ..., align_iterations: int = ..., progress: Progress = None) -> PointCloud:
     """Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality
 
     tolerance = 0.0: Share within +-tolerance is reported; 0: the reference's mean spacing (cloud units, [0, inf))
@@ -290,6 +290,9 @@ def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., 
     seed = 3: Seed of the sampling ([0, inf))
     region_field = '': Field with region labels for a per-region breakdown; default segment or region when present
     allow_far = False: Measure even when the reference lies farther from the mesh than their size
+    align = False: Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported
+    align_max_distance = 0.0: Pairs farther apart are ignored while aligning; 0: 10 x the reference's mean spacing (cloud units, [0, inf))
+    align_iterations = 50: ICP iterations at most while aligning ([1, 100000])
     """
 
 def render(data: Data, /, filename: Path, *, size: str = ..., view: Literal['front', 'side', 'top', 'iso'] = ..., field: str = ..., diverging: bool = ..., range: Sequence[float] = ..., tolerance: float = ..., unit: str = ..., legend: bool = ..., title: str = ..., flat: bool = ..., wireframe: bool = ..., point_size: float = ..., eye_dome: bool = ..., supersample: int = ..., eye: Sequence[float] = ..., target: Sequence[float] = ..., up: Sequence[float] = ..., fov_deg: float = ..., progress: Progress = None) -> dict[str, Any]:

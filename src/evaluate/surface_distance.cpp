@@ -17,7 +17,8 @@
 namespace pointsurf {
 
 std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, std::span<const Triangle> triangles, std::size_t n,
-                                          std::uint64_t seed) {
+                                          std::uint64_t seed, std::vector<std::uint32_t>* triangle_of) {
+  if (triangle_of != nullptr) triangle_of->clear();
   std::vector<double> cumulative(triangles.size());
   double total = 0.0;
   for (std::size_t t = 0; t < triangles.size(); ++t) {
@@ -30,6 +31,7 @@ std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, st
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   samples.reserve(n);
+  if (triangle_of != nullptr) triangle_of->reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double pick = uniform(rng) * total;
     const std::size_t t =
@@ -41,6 +43,7 @@ std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, st
     }
     const Vector3d& a = vertices[static_cast<std::size_t>(triangles[t][0])];
     samples.push_back(a + u * (vertices[static_cast<std::size_t>(triangles[t][1])] - a) + v * (vertices[static_cast<std::size_t>(triangles[t][2])] - a));
+    if (triangle_of != nullptr) triangle_of->push_back(static_cast<std::uint32_t>(t));
   }
   return samples;
 }

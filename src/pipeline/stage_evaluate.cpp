@@ -4,10 +4,13 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <span>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/align_to_mesh.h"
 #include "pointsurf/evaluate/deviation_stats.h"
 #include "pointsurf/evaluate/mesh_distance.h"
 #include "pointsurf/evaluate/mesh_quality.h"
@@ -142,6 +145,36 @@ double box_gap(const BoundingBox& a, const BoundingBox& b) {
   return gap.norm();
 }
 
+// The best fit of the reference onto the mesh, recorded under align/.
+RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const std::string& ref_tag) {
+  const StageArgs& a = run.args;
+  StageRecord& rec = run.record;
+  MeshAlignParams p;
+  p.samples = static_cast<std::size_t>(a.integer("samples"));
+  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
+  p.max_iterations = static_cast<std::size_t>(a.integer("align_iterations"));
+  p.max_distance = a.number("align_max_distance");
+  if (p.max_distance == 0.0) {
+    p.max_distance = p.distance_in_spacings * run.context.mean_spacing(ref_tag);
+    rec.set_used("align_max_distance", p.max_distance);
+  }
+  const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud.positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
+  const Eigen::Matrix4d m = r.transform.matrix();
+  std::vector<double> matrix;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) matrix.push_back(m(i, j));
+  rec.metric("align/matrix", matrix);  // row-major, maps the reference as read onto the mesh
+  rec.metric("align/rotation_deg", r.transform.angle_degrees());
+  rec.metric("align/translation", std::vector<double>{m(0, 3), m(1, 3), m(2, 3)});
+  rec.metric("align/fitness", r.fitness);
+  rec.metric("align/inlier_rmse", r.inlier_rmse);
+  rec.metric("align/iterations", as_count(r.iterations));
+  rec.metric("align/converged", r.converged);
+  rec.metric("align/message", r.message);
+  if (!r.converged) rec.warnings.push_back("align: " + r.message + "; measured as aligned so far");
+  return r.transform;
+}
+
 void run_quality(StageRun& run) {
   const DataItem& item = run.context.item(run.output);
   const TriangleMesh mesh = mesh_of(item, run.inputs.front());
@@ -170,14 +203,23 @@ void run_evaluate(StageRun& run) {
                                  "coordinate system? (allow_far measures it anyway)",
                                  ref_tag, gap, mesh_tag, ref_box.diagonal(), mesh_box.diagonal()));
 
+  // The points measured: the reference cloud, or the vertices of a reference mesh; moved onto
+  // the mesh first when asked to (a best fit).
+  const std::optional<RigidTransform> fit = a.boolean("align") ? std::optional(align_reference(run, mesh, ref_tag)) : std::nullopt;
+  std::vector<Vector3d> moved;
+  if (fit) {
+    moved = ref.cloud.positions;
+    fit->apply(std::span<Vector3d>(moved));
+  }
+  const std::vector<Vector3d>& measured = fit ? moved : ref.cloud.positions;
+
   const TriangleBvh bvh(mesh);
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
-  // The points measured: the reference cloud, or the vertices of a reference mesh.
   MeshDistanceParams dp;
   dp.sign = sign_from(a.text("sign"));
   dp.max_distance = a.number("max_distance");
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
-  const MeshDistanceResult dist = mesh_distances(ref.cloud.positions, mesh, dp, &bvh, sub_progress(run.progress, 0.0, 0.7));
+  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, fit ? 0.3 : 0.0, 0.7));
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
   DeviationParams sp;
@@ -231,7 +273,7 @@ void run_evaluate(StageRun& run) {
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
   const std::size_t samples = static_cast<std::size_t>(a.integer("samples"));
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, samples, static_cast<std::uint64_t>(a.integer("seed")));
-  const SurfaceView ref_view{ref.cloud.positions, ref.triangles};
+  const SurfaceView ref_view{measured, ref.triangles};
   const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);
   double back_sum = 0.0, back_max = 0.0;
   for (double d : back) {
@@ -251,9 +293,10 @@ void run_evaluate(StageRun& run) {
 
   record_quality(rec, q);
 
-  rec.summary = fmt::format("evaluate: {} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
+  rec.summary = fmt::format("evaluate: {}{} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
                             "Hausdorff {:.4g}; mesh {}",
-                            plural(ref.cloud.size(), "point"), mesh_tag, distance_sign_name(dist.sign_used), stats.max_positive,
+                            plural(ref.cloud.size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
+                            distance_sign_name(dist.sign_used), stats.max_positive,
                             stats.max_negative, stats.mean_positive, stats.mean_negative, stats.rms, 100.0 * stats.within_tolerance,
                             stats.tolerance, std::max(forward_max, back_max), quality_line(q));
 
@@ -263,6 +306,7 @@ void run_evaluate(StageRun& run) {
   out.triangles.clear();
   out.is_mesh = false;
   out.cloud.fields.add("deviation", out.cloud.size()).values = dist.distances;
+  if (fit) fit->apply(out.cloud);
 }
 
 }  // namespace
@@ -271,12 +315,14 @@ StageSpec evaluate_stage() {
   const MeshDistanceParams mp;
   const DeviationParams dp;
   const SurfaceDistanceParams sd;
+  const MeshAlignParams ap;
   StageSpec s;
   s.name = "evaluate";
   s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
   s.description = "Every reference point gets its exact distance to the mesh's triangles, positive outside (where the normals point). "
                   "In a pipeline the reference is the cloud as read, unless reference names another tag. The output is the reference "
-                  "with a field deviation.";
+                  "with a field deviation. With align the reference is first moved onto the mesh by a best fit (point-to-plane ICP), "
+                  "measured and written where it was moved to, and the transform is reported under align/.";
   s.order = 130;
   s.consumes = {Slot{"mesh", DataKind::Mesh}, Slot{"reference", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
@@ -293,8 +339,14 @@ StageSpec evaluate_stage() {
       P::integer("seed", static_cast<std::int64_t>(sd.seed), "Seed of the sampling").non_negative(),
       P::text("region_field", "", "Field with region labels for a per-region breakdown; default segment or region when present").meta("NAME"),
       P::boolean("allow_far", false, "Measure even when the reference lies farther from the mesh than their size"),
+      P::boolean("align", false, "Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported"),
+      P::number("align_max_distance", ap.max_distance,
+                fmt::format("Pairs farther apart are ignored while aligning; 0: {:g} x the reference's mean spacing", ap.distance_in_spacings))
+          .unit("cloud units").non_negative(),
+      P::integer("align_iterations", static_cast<std::int64_t>(ap.max_iterations), "ICP iterations at most while aligning").range(1, 100000),
   };
-  s.examples = {"pointsurf evaluate mesh.ply --reference scan.ply --tolerance 0.5 --out deviation.ply"};
+  s.examples = {"pointsurf evaluate mesh.ply --reference scan.ply --tolerance 0.5 --out deviation.ply",
+                "pointsurf evaluate part.stl --reference scan.ply --align --report fit.json"};
   s.run = run_evaluate;
   return s;
 }

@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/cli_run.h"
+#include "pointsurf/core/rigid_transform.h"
+#include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/io/io.h"
 #include "support/files.h"
 #include "support/mesh_shapes.h"
@@ -126,6 +128,40 @@ TEST_F(EvaluateCli, BadInputGetsAClearAnswer) {
   r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("scan.ply") + " --tolerance -1", dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "--tolerance")) << r.err;
+}
+
+// A scan of a box moved by a small rigid motion measures the motion without --align and ~0 with
+// it; the report gives the transform (the motion's inverse) and the written cloud is moved.
+TEST_F(EvaluateCli, AlignMovesTheReferenceOntoTheMeshBeforeMeasuring) {
+  const Vector3d center(1.0e6, 2.0e6, 10.0);
+  TriangleMesh mesh = test::cube_mesh(1.0, Vector3d::Zero());
+  for (Vector3d& v : mesh.vertices) v = center + Vector3d(v.x(), 0.6 * v.y(), 0.3 * v.z());
+  PointCloud scan;
+  scan.positions = sample_mesh_surface(mesh, 20000, 5);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.02, Vector3d(0.3, 1.0, -0.4).normalized()).toRotationMatrix();
+  const RigidTransform motion = RigidTransform::about(center, rotation, Vector3d(0.01, 0.02, -0.015));
+  motion.apply(scan);
+  write_mesh(path("mesh.ply"), mesh);
+  write_point_cloud(path("scan.ply"), scan);
+  const std::string common = "evaluate " + path("mesh.ply") + " --reference " + path("scan.ply");
+  test::CliResult r = test::run_cli(common + " --report " + path("plain.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_cli(common + " --align --out " + path("dev.ply") + " --report " + path("fit.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json plain = stage("plain.json", "evaluate"), fit = stage("fit.json", "evaluate");
+  EXPECT_FALSE(plain["metrics"].contains("align"));
+  EXPECT_GT(plain["metrics"]["deviation"]["rms"].get<double>(), 0.01);
+  EXPECT_LT(fit["metrics"]["deviation"]["rms"].get<double>(), 1e-4);
+  const nlohmann::json& align = fit["metrics"]["align"];
+  EXPECT_TRUE(align["converged"].get<bool>());
+  EXPECT_NEAR(align["rotation_deg"].get<double>(), 0.02 * 180.0 / std::numbers::pi, 1e-3);
+  Eigen::Matrix4d m;
+  for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = align["matrix"][static_cast<std::size_t>(i)].get<double>();
+  EXPECT_LT(RigidTransform::translation_error(RigidTransform::from_matrix(m), motion.inverse(), center), 1e-4);
+  EXPECT_GT(fit["parameters"]["align_max_distance"].get<double>(), 0.0);
+  const PointCloud written = read_point_cloud(path("dev.ply")).cloud;
+  ASSERT_EQ(written.size(), scan.size());
+  EXPECT_LT((written.positions[7] - motion.inverse().apply(scan.positions[7])).norm(), 1e-4);
 }
 
 TEST_F(EvaluateCli, InAPipelineTheReferenceIsTheCloudAsRead) {

@@ -13,9 +13,10 @@ namespace pointsurf {
 
 /// `n` points drawn area-uniformly on the triangles of `mesh` (seeded, so repeatable).
 /// Degenerate triangles get no samples; a mesh without area gives none. O(n log F).
+/// `triangle_of`, when given, receives the triangle each sample lies on (same size).
 std::vector<Vector3d> sample_mesh_surface(const TriangleMesh& mesh, std::size_t n, std::uint64_t seed = 3);
 std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, std::span<const Triangle> triangles, std::size_t n,
-                                          std::uint64_t seed = 3);
+                                          std::uint64_t seed = 3, std::vector<std::uint32_t>* triangle_of = nullptr);
 
 /// One surface: points, with triangles when it is a mesh.
 struct SurfaceView {

@@ -17,12 +17,22 @@ struct RigidFit {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 };
 
+/// The fit from the cross-covariance h = sum (x_k - mean_x) (y_k - mean_y)^T and the centroids.
+inline RigidFit fit_rigid(const Eigen::Matrix3d& h, const Eigen::Vector3d& mean_x, const Eigen::Vector3d& mean_y) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) d(2, 2) = -1.0;
+  RigidFit fit;
+  fit.rotation = svd.matrixV() * d * svd.matrixU().transpose();
+  fit.translation = mean_y - fit.rotation * mean_x;
+  return fit;
+}
+
 /// `pair(k, x, y)` sets the k-th pair (k < count). Two passes over the pairs (centroids, then
 /// the covariance of the centred points), so no precision is lost to a large mean.
 template <class Pair>
 RigidFit fit_rigid(std::size_t count, Pair&& pair) {
-  RigidFit fit;
-  if (count == 0) return fit;
+  if (count == 0) return {};
   Eigen::Vector3d x, y, mean_x = Eigen::Vector3d::Zero(), mean_y = Eigen::Vector3d::Zero();
   for (std::size_t k = 0; k < count; ++k) {
     pair(k, x, y);
@@ -36,12 +46,7 @@ RigidFit fit_rigid(std::size_t count, Pair&& pair) {
     pair(k, x, y);
     h.noalias() += (x - mean_x) * (y - mean_y).transpose();
   }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) d(2, 2) = -1.0;
-  fit.rotation = svd.matrixV() * d * svd.matrixU().transpose();
-  fit.translation = mean_y - fit.rotation * mean_x;
-  return fit;
+  return fit_rigid(h, mean_x, mean_y);
 }
 
 }  // namespace pointsurf::detail
