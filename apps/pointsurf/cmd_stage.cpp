@@ -204,20 +204,15 @@ int run_pair(const StageSpec& s, const std::vector<std::string>& positionals, co
   if (!own && apply_file.empty())
     throw UsageError(fmt::format("nothing to write: give {} FILE, --apply OUT or both (see pointsurf {} --help)", dashed(s.writes_param), s.name));
   check_common_options(common);
-  std::vector<StepText> steps;
-  std::vector<std::string> inputs;
-  for (std::size_t i = 0; i < 2; ++i) {
-    StepText read{"read", s.consumes[i].name, {}, read_params};
-    read.params.emplace_back("filename", positionals[i]);
-    inputs.push_back(read.tag);
-    steps.push_back(std::move(read));
-  }
-  steps.push_back(StepText{s.name, s.name, inputs, stage_params});
-  if (!apply_file.empty()) {
-    StepText write{"write", "out", {}, write_params};
-    write.params.emplace_back("filename", apply_file);
-    steps.push_back(std::move(write));
-  }
+  auto file_step = [](const char* type, const std::string& tag, const KeyValues& params, const std::string& file) {
+    StepText step{type, tag, {}, params};
+    step.params.emplace_back("filename", file);
+    return step;
+  };
+  std::vector<StepText> steps = {file_step("read", s.consumes[0].name, read_params, positionals[0]),
+                                 file_step("read", s.consumes[1].name, read_params, positionals[1]),
+                                 StepText{s.name, s.name, {s.consumes[0].name, s.consumes[1].name}, stage_params}};
+  if (!apply_file.empty()) steps.push_back(file_step("write", "out", write_params, apply_file));
   run_steps(s, steps, common);
   return 0;
 }
