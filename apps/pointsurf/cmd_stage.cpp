@@ -51,6 +51,10 @@ std::string help_row(const std::string& left, const std::string& text) {
 // reference is a file, read like the input.
 bool takes_reference(const StageSpec& s) { return s.consumes.size() == 2 && s.consumes[1].name == "reference"; }
 
+// A stage of two inputs of equal standing (register: source, target): `STAGE A B [--out FILE]
+// [--apply OUT]`, its own file (T.json) under --out and its product written by --apply.
+bool takes_pair(const StageSpec& s) { return s.consumes.size() == 2 && !takes_reference(s) && !s.measures; }
+
 // One help line per parameter declaration.
 std::string param_line(const std::string& stage, const ParamSpec& p, bool show_methods) {
   std::string left = option_name(stage, p.name);
@@ -73,9 +77,16 @@ std::string param_line(const std::string& stage, const ParamSpec& p, bool show_m
 
 std::string stage_help(const StageSpec& s) {
   const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
-  const bool own_file = !s.writes_param.empty();
-  std::string out = own_file ? fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary) : s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
-                               : fmt::format("pointsurf {} {} OUT [options]\n{}\n", s.name, multi ? "IN1 IN2 [IN...]" : "IN", s.summary);
+  const bool own_file = !s.writes_param.empty() && !takes_pair(s);
+  auto upper = [](std::string t) {
+    for (char& c : t) c = char(std::toupper(static_cast<unsigned char>(c)));
+    return t;
+  };
+  std::string out = takes_pair(s) ? fmt::format("pointsurf {} {} {} [{} {}] [--apply OUT] [options]\n{}\n", s.name, upper(s.consumes[0].name),
+                                                upper(s.consumes[1].name), dashed(s.writes_param), s.find_param(s.writes_param)->meta, s.summary)
+                    : own_file ? fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary) : s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
+                    : multi ? fmt::format("pointsurf {0} IN1 IN2 [IN...] OUT [options]\n   or: pointsurf {0} IN1 IN2 [IN...] --out OUT [options]\n{1}\n", s.name, s.summary)
+                               : fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary);
   if (!s.description.empty()) out += s.description + "\n";
   if (!s.params.empty() || !s.methods.empty()) out += "\nOptions (pipeline keys are the same with _ for -):\n";
   if (!s.methods.empty()) {
@@ -90,13 +101,16 @@ std::string stage_help(const StageSpec& s) {
     else out += param_line(s.name, p, !s.methods.empty());
   }
   if (s.measures) out += help_row("--out FILE", "Write the result (evaluate: the reference with a field deviation)");
+  if (takes_pair(s)) out += help_row("--apply OUT", fmt::format("Write the {}'s product (the moved {})", s.name, s.consumes[0].name));
+  if (multi) out += help_row("--out OUT", "The output file, when every file name given is an input");
   out += "\nInput options:\n";
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") out += param_line("read", p, false);
   if (!own_file) out += "\nOutput options:\n";
   for (const ParamSpec& p : find_stage("write")->params)
     if (p.name != "filename" && !own_file) out += param_line("write", p, false);
-  out += "\n" + common_options_help();
+  out += "\n";
+  out += common_options_help();
   if (!s.examples.empty()) {
     out += "\nExamples:\n";
     for (const std::string& e : s.examples) out += "  " + e + "\n";
@@ -179,6 +193,30 @@ int run_measure(const StageSpec& s, const std::vector<std::string>& positionals,
   return 0;
 }
 
+// `pointsurf register SOURCE TARGET [--out T.json] [--apply MOVED]`: [read SOURCE, read TARGET,
+// STAGE (writing its own file), write --apply].
+int run_pair(const StageSpec& s, const std::vector<std::string>& positionals, const std::string& apply_file, const KeyValues& stage_params,
+             const KeyValues& read_params, const KeyValues& write_params, const CommonOptions& common) {
+  if (positionals.size() != 2)
+    throw UsageError(fmt::format("expected two input files {} {}, got {} file name{} (see pointsurf {} --help)", s.consumes[0].name, s.consumes[1].name,
+                                 positionals.size(), positionals.size() == 1 ? "" : "s", s.name));
+  const bool own = std::any_of(stage_params.begin(), stage_params.end(), [&](const auto& kv) { return kv.first == s.writes_param && !kv.second.empty(); });
+  if (!own && apply_file.empty())
+    throw UsageError(fmt::format("nothing to write: give {} FILE, --apply OUT or both (see pointsurf {} --help)", dashed(s.writes_param), s.name));
+  check_common_options(common);
+  auto file_step = [](const char* type, const std::string& tag, const KeyValues& params, const std::string& file) {
+    StepText step{type, tag, {}, params};
+    step.params.emplace_back("filename", file);
+    return step;
+  };
+  std::vector<StepText> steps = {file_step("read", s.consumes[0].name, read_params, positionals[0]),
+                                 file_step("read", s.consumes[1].name, read_params, positionals[1]),
+                                 StepText{s.name, s.name, {s.consumes[0].name, s.consumes[1].name}, stage_params}};
+  if (!apply_file.empty()) steps.push_back(file_step("write", "out", write_params, apply_file));
+  run_steps(s, steps, common);
+  return 0;
+}
+
 int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
   CommonOptions common;
   std::vector<OptionDef> options;
@@ -215,9 +253,25 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
       seen.insert("--reference");
     }
   }
-  const bool own_file = !s.writes_param.empty();
+  const bool own_file = !s.writes_param.empty() && !takes_pair(s);
+  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
   for (const ParamSpec& p : s.params)
-    if (p.name != s.writes_param) add(s.name, p, stage_params);
+    if (!own_file || p.name != s.writes_param) add(s.name, p, stage_params);
+  std::string apply_file, multi_out;
+  if (takes_pair(s)) {
+    options.push_back({"--apply", false, "OUT", [&](const std::string& v) {
+                         if (!apply_file.empty()) throw UsageError("--apply given twice");
+                         apply_file = v;
+                       }});
+    seen.insert("--apply");
+  }
+  if (multi && s.find_param("out") == nullptr) {
+    options.push_back({"--out", false, "OUT", [&](const std::string& v) {
+                         if (!multi_out.empty()) throw UsageError("--out given twice");
+                         multi_out = v;
+                       }});
+    seen.insert("--out");
+  }
   for (const ParamSpec& p : find_stage("read")->params)
     if (p.name != "filename") add("read", p, read_params);
   for (const ParamSpec& p : find_stage("write")->params)
@@ -234,8 +288,9 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
     fmt::print("{}", stage_help(s));
     return 0;
   }
-  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
   if (s.measures) return run_measure(s, positionals, reference_file, out_file, stage_params, read_params, write_params, common);
+  if (takes_pair(s)) return run_pair(s, positionals, apply_file, stage_params, read_params, write_params, common);
+  if (!multi_out.empty()) positionals.push_back(multi_out);
   if (positionals.size() < (multi ? 3u : 2u) || (!multi && positionals.size() > 2))
     throw UsageError(fmt::format("expected {} OUT, got {} file name{} (see pointsurf {} --help)", multi ? "IN1 IN2 [IN...]" : "IN",
                                  positionals.size(), positionals.size() == 1 ? "" : "s", s.name));

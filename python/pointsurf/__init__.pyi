@@ -86,10 +86,12 @@ def range(cloud: Data, /, *, field: str = ..., min: float = ..., max: float = ..
     max = inf: Largest value kept (included)
     """
 
-def transform(cloud: Data, /, *, matrix: Sequence[float] = ..., progress: Progress = None) -> Data:
+def transform(cloud: Data, /, *, matrix: Sequence[float] = ..., file: str = ..., invert: bool = ..., progress: Progress = None) -> Data:
     """Apply a rigid 4x4 transform (rotation and translation) to points and normals
 
     matrix = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]: 16 numbers, row by row: [R t; 0 0 0 1] with R a rotation (orthonormal, det +1)
+    file = '': Read the matrix from a T.json file (as `pointsurf register --out` writes it) instead of --matrix
+    invert = False: Apply the inverse transform (a T.json maps the source onto the target: this maps back)
     """
 
 def merge(clouds: Sequence[Data], /, *, progress: Progress = None) -> PointCloud:
@@ -193,6 +195,48 @@ def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., 
     min_cluster_points = 5: Fewest neighbours a cluster needs to give a plane, at most k ([3, inf))
     normals = 'robust': Normals to cluster by: robust (flattest shifted neighbourhood) or input (estimated when absent)
     truth_field = '': Field marking true feature points (non-zero): report precision and recall
+    """
+
+def register(source: Data, target: Data, /, *, descriptor: Literal['fpfh', 'pfh'] = ..., icp: Literal['point', 'plane'] = ..., voxel_in_spacings: float = ..., radius_in_spacings: float = ..., ransac_distance_in_spacings: float = ..., icp_distance_in_spacings: float = ..., max_normal_deg: float = ..., iterations: int = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., normal_neighbors: int = ..., min_fitness: float = ..., global_alignment: bool = ..., out: str = ..., progress: Progress = None) -> Data:
+    """Register a source cloud onto a target (descriptors, RANSAC, ICP): the moved source and T.json
+
+    descriptor = 'fpfh': Local descriptor matched for the global alignment (PFH: 125 bins, slower)
+    icp = 'plane': ICP error: point-to-point or point-to-plane
+    voxel_in_spacings = 2.0: Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) (mean spacings, [0, inf))
+    radius_in_spacings = 10.0: Descriptor radius, in spacings of the downsample (the voxel cell) (mean spacings, (0, inf))
+    ransac_distance_in_spacings = 1.5: A descriptor match is a RANSAC inlier within this distance (downsample spacings) (mean spacings, (0, inf))
+    icp_distance_in_spacings = 3.0: ICP pairs farther apart than this are rejected (spacings of every point) (mean spacings, (0, inf))
+    max_normal_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
+    iterations = 50: ICP iterations at most (coarse and fine each) ([1, inf))
+    ransac_iterations = 100000: RANSAC trials at most ([1, inf))
+    confidence = 0.999: RANSAC stops once a better model would have been found with this probability ((0, 1))
+    seed = 42: Random seed of RANSAC ([0, inf))
+    normal_neighbors = 30: k of the normals estimated for a cloud without any (points, [3, inf))
+    min_fitness = 0.1: Below this final fitness the clouds are taken as not overlapping (exit 3) ([0, 1])
+    global_alignment = True: Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)
+    out = '': Write the transform as a T.json file (empty: none; the record holds it too)
+    """
+
+def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] = ..., refine: bool = ..., min_overlap: float = ..., descriptor: Literal['fpfh', 'pfh'] = ..., icp: Literal['point', 'plane'] = ..., voxel_in_spacings: float = ..., radius_in_spacings: float = ..., ransac_distance_in_spacings: float = ..., icp_distance_in_spacings: float = ..., max_normal_deg: float = ..., iterations: int = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., normal_neighbors: int = ..., min_fitness: float = ..., global_alignment: bool = ..., progress: Progress = None) -> PointCloud:
+    """Register several scans into the first one's frame and merge them (field scan)
+
+    mode = 'chain': Register each scan to the first, or to the one before it
+    refine = True: Refine all poses together over every overlapping pair (pose graph)
+    min_overlap = 0.2: Share of a scan within the ICP distance of another for the pair to join the refinement ((0, 1])
+    descriptor = 'fpfh': Local descriptor matched for the global alignment (PFH: 125 bins, slower)
+    icp = 'plane': ICP error: point-to-point or point-to-plane
+    voxel_in_spacings = 2.0: Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) (mean spacings, [0, inf))
+    radius_in_spacings = 10.0: Descriptor radius, in spacings of the downsample (the voxel cell) (mean spacings, (0, inf))
+    ransac_distance_in_spacings = 1.5: A descriptor match is a RANSAC inlier within this distance (downsample spacings) (mean spacings, (0, inf))
+    icp_distance_in_spacings = 3.0: ICP pairs farther apart than this are rejected (spacings of every point) (mean spacings, (0, inf))
+    max_normal_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
+    iterations = 50: ICP iterations at most (coarse and fine each) ([1, inf))
+    ransac_iterations = 100000: RANSAC trials at most ([1, inf))
+    confidence = 0.999: RANSAC stops once a better model would have been found with this probability ((0, 1))
+    seed = 42: Random seed of RANSAC ([0, inf))
+    normal_neighbors = 30: k of the normals estimated for a cloud without any (points, [3, inf))
+    min_fitness = 0.1: Below this final fitness the clouds are taken as not overlapping (exit 3) ([0, 1])
+    global_alignment = True: Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)
     """
 
 def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float = ..., radius_in_spacings: float = ..., types: str = ..., epsilon: float = ..., epsilon_in_spacings: float = ..., cluster_epsilon: float = ..., cluster_in_spacings: float = ..., max_normal_deg: float = ..., probability: float = ..., band_in_epsilons: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:

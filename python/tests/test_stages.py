@@ -42,7 +42,7 @@ def _inputs(spec, tmp_path, cloud, mesh):
         path = tmp_path / "in.ply"
         pointsurf.write(cloud, path)
         args.append(path)
-    elif spec["name"] == "write" or spec["writes_param"]:
+    elif spec["name"] == "write" or spec["writes_param"] == "filename":  # register's T.json (out) is optional
         args.append(tmp_path / ("out.png" if spec["writes_param"] else "out.ply"))
     return args
 

@@ -21,6 +21,7 @@ namespace {
 
 using io::detail::display_name;
 using io::detail::lower;
+using io::detail::TemporaryOutput;
 
 std::string read_head(const std::filesystem::path& path, std::size_t bytes, std::uintmax_t& file_size) {
   std::error_code ec;
@@ -293,32 +294,6 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
 
 namespace {
 
-// A temporary file next to the target, renamed over it on commit(), removed otherwise.
-class TemporaryOutput {
-public:
-  explicit TemporaryOutput(const std::filesystem::path& target) : target_(target) {
-    const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
-    std::error_code ec;
-    if (!std::filesystem::is_directory(dir, ec))
-      throw Error(fmt::format("{}: cannot write: directory '{}' does not exist", display_name(target), dir.string()));
-    std::mt19937_64 rng(std::random_device{}() ^ static_cast<std::uint64_t>(::getpid()));
-    temp_ = dir / fmt::format(".{}.tmp-{:08x}", target.filename().string(), static_cast<std::uint32_t>(rng()));
-  }
-  ~TemporaryOutput() {
-    if (!committed_) { std::error_code ec; std::filesystem::remove(temp_, ec); }
-  }
-  const std::filesystem::path& path() const { return temp_; }
-  void commit() {
-    std::error_code ec;
-    std::filesystem::rename(temp_, target_, ec);
-    if (ec) throw Error(fmt::format("{}: cannot rename the finished output into place: {}", display_name(target_), ec.message()));
-    committed_ = true;
-  }
-
-private:
-  std::filesystem::path target_, temp_;
-  bool committed_ = false;
-};
 
 WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud, const std::vector<Triangle>& triangles,
                       const FieldSet& face_fields, const WriteOptions& options) {

@@ -19,7 +19,8 @@ const std::vector<StageSpec>& registered_stages() {
                                 detail::range_stage(),     detail::transform_stage(), detail::merge_stage(),
                                 detail::clean_stage(),     detail::simplify_stage(), detail::normals_stage(),
                                 detail::curvature_stage(), detail::features_stage(), detail::segment_stage(), detail::boundary_stage(), detail::reconstruct_stage(),
-                                detail::quality_stage(),   detail::evaluate_stage(),    detail::render_stage()};
+                                detail::quality_stage(),   detail::evaluate_stage(),    detail::render_stage(),
+                                detail::register_stage(),  detail::register_many_stage()};
     std::stable_sort(s.begin(), s.end(), [](const StageSpec& a, const StageSpec& b) { return a.order < b.order; });
     return s;
   }();

@@ -9,6 +9,8 @@
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/core/rigid_transform.h"
+#include "pointsurf/io/transform_file.h"
 #include "pointsurf/pipeline/context.h"
 
 namespace pointsurf::detail {
@@ -65,22 +67,27 @@ void run_range(StageRun& run) {
   keep_selected(run, kept, fmt::format("with {} in [{}, {}]", name, format_value(lo), format_value(hi)));
 }
 
-void run_transform(StageRun& run) {
-  const std::vector<double>& m = run.args.numbers("matrix");
+// The matrix given inline, or read from a T.json file (what `pointsurf register` writes).
+RigidTransform transform_of(const StageArgs& a) {
+  if (!a.text("file").empty()) return read_transform_file(a.text("file")).transform;
+  const std::vector<double>& m = a.numbers("matrix");
   Eigen::Matrix4d t;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) t(r, c) = m[std::size_t(4 * r + c)];
-  const Eigen::Matrix3d rotation = t.topLeftCorner<3, 3>();
-  const Vector3d shift = t.topRightCorner<3, 1>();
+  return RigidTransform::from_matrix(t);
+}
+
+void run_transform(StageRun& run) {
+  RigidTransform t = transform_of(run.args);
+  if (run.args.boolean("invert")) t = t.inverse();
   DataItem& item = run.context.item(run.output);
-  for (Vector3d& p : item.cloud.positions) p = rotation * p + shift;
-  for (Vector3d& n : item.cloud.normals) n = rotation * n;
+  t.apply(item.cloud);
+  const Vector3d shift = t.translation();
   run.record.count("points", as_count(item.cloud.size()));
   run.record.metric("translation", std::vector<double>{shift.x(), shift.y(), shift.z()});
-  const double angle = std::acos(std::clamp((rotation.trace() - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / M_PI;
-  run.record.metric("rotation_angle_deg", angle);
+  run.record.metric("rotation_angle_deg", t.angle_degrees());
   run.record.summary = fmt::format("transform: moved {} (rotation {:.3g} degrees, translation {:.4g})", plural(item.cloud.size(), "point"),
-                                   angle, shift.norm());
+                                   t.angle_degrees(), shift.norm());
 }
 
 void run_merge(StageRun& run) {
@@ -151,10 +158,15 @@ StageSpec transform_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = {P::numbers("matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1},
                          "16 numbers, row by row: [R t; 0 0 0 1] with R a rotation (orthonormal, det +1)")
-                  .meta("M11,...,M44")};
-  s.examples = {"pointsurf transform a.ply b.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1"};
+                  .meta("M11,...,M44"),
+              P::text("file", "", "Read the matrix from a T.json file (as `pointsurf register --out` writes it) instead of --matrix")
+                  .meta("T.json"),
+              P::boolean("invert", false, "Apply the inverse transform (a T.json maps the source onto the target: this maps back)")};
+  s.examples = {"pointsurf transform a.ply b.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1",
+                "pointsurf transform scan2.ply scan2_aligned.ply --file T.json"};
   s.run = run_transform;
   s.check = [](const StageArgs& a) {
+    if (a.given("matrix") && !a.text("file").empty()) throw UsageError("matrix, file: give one of them, not both");
     const auto& m = a.numbers("matrix");
     if (m.size() != 16) throw UsageError(fmt::format("matrix: expected 16 numbers (4x4, row by row), got {}", m.size()));
     Eigen::Matrix3d r;

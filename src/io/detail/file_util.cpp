@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "io/detail/formats.h"
 
@@ -193,6 +194,29 @@ void FileWriter::close() {
   const int rc = std::fclose(file_);
   file_ = nullptr;
   if (failed || rc != 0) throw Error(fmt::format("{}: write failed: {}", display_name(path_), std::strerror(errno)));
+}
+
+TemporaryOutput::TemporaryOutput(const std::filesystem::path& target) : target_(target) {
+  const std::filesystem::path dir = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw Error(fmt::format("{}: cannot write: directory '{}' does not exist", display_name(target), dir.string()));
+  std::mt19937_64 rng(std::random_device{}() ^ static_cast<std::uint64_t>(::getpid()));
+  temp_ = dir / fmt::format(".{}.tmp-{:08x}", target.filename().string(), static_cast<std::uint32_t>(rng()));
+}
+
+TemporaryOutput::~TemporaryOutput() {
+  if (!committed_) {
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+  }
+}
+
+void TemporaryOutput::commit() {
+  std::error_code ec;
+  std::filesystem::rename(temp_, target_, ec);
+  if (ec) throw Error(fmt::format("{}: cannot rename the finished output into place: {}", display_name(target_), ec.message()));
+  committed_ = true;
 }
 
 }  // namespace pointsurf::io::detail

@@ -149,4 +149,20 @@ private:
   std::size_t used_ = 0;
 };
 
+/// A temporary file next to the target, renamed over it on commit(), removed otherwise: an
+/// output is whole or absent. Throws Error when the directory does not exist.
+class TemporaryOutput {
+public:
+  explicit TemporaryOutput(const std::filesystem::path& target);
+  ~TemporaryOutput();
+  TemporaryOutput(const TemporaryOutput&) = delete;
+  TemporaryOutput& operator=(const TemporaryOutput&) = delete;
+  const std::filesystem::path& path() const { return temp_; }
+  void commit();
+
+private:
+  std::filesystem::path target_, temp_;
+  bool committed_ = false;
+};
+
 }  // namespace pointsurf::io::detail

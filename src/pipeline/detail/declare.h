@@ -84,6 +84,8 @@ StageSpec reconstruct_stage();
 StageSpec quality_stage();
 StageSpec evaluate_stage();
 StageSpec render_stage();
+StageSpec register_stage();
+StageSpec register_many_stage();
 
 }  // namespace pointsurf::detail
 

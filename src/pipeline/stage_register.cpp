@@ -1,0 +1,246 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The registration stages: `register` (a source cloud onto a target; pointsurf/register/
+// register_pair.h) and `register-many` (several scans into the first one's frame, merged;
+// pointsurf/register/multi.h).
+#include <Eigen/Core>
+
+#include "pipeline/detail/declare.h"
+#include "pipeline/detail/stage_util.h"
+#include "pointsurf/core/error.h"
+#include "pointsurf/io/transform_file.h"
+#include "pointsurf/pipeline/context.h"
+#include "pointsurf/register/multi.h"
+
+namespace pointsurf::detail {
+namespace {
+
+std::vector<double> matrix_list(const RigidTransform& t) {
+  const Eigen::Matrix4d m = t.matrix();
+  std::vector<double> out;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
+  return out;
+}
+
+// The parameters both stages share, declared once with the library's defaults.
+std::vector<ParamSpec> pair_param_specs() {
+  const PairParams pair;
+  const DescriptorParams& d = pair.features;
+  const AlignParams& a = pair.align;
+  const IcpParams& i = pair.icp;
+  return {
+      P::choice("descriptor", descriptor_type_name(d.type), {"fpfh", "pfh"}, "Local descriptor matched for the global alignment (PFH: 125 bins, slower)"),
+      P::choice("icp", icp_metric_name(i.metric), {"point", "plane"}, "ICP error: point-to-point or point-to-plane"),
+      P::number("voxel_in_spacings", pair.voxel_in_spacings, "Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point)")
+          .unit("mean spacings")
+          .non_negative(),
+      P::number("radius_in_spacings", d.radius_in_spacings, "Descriptor radius, in spacings of the downsample (the voxel cell)")
+          .unit("mean spacings")
+          .positive(),
+      P::number("ransac_distance_in_spacings", a.distance_in_spacings, "A descriptor match is a RANSAC inlier within this distance (downsample spacings)")
+          .unit("mean spacings")
+          .positive(),
+      P::number("icp_distance_in_spacings", i.distance_in_spacings, "ICP pairs farther apart than this are rejected (spacings of every point)")
+          .unit("mean spacings")
+          .positive(),
+      P::number("max_normal_deg", i.max_normal_deg, "ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP)")
+          .unit("degrees")
+          .range(0.0, 180.0),
+      P::integer("iterations", std::int64_t(i.max_iterations), "ICP iterations at most (coarse and fine each)").at_least(1),
+      P::integer("ransac_iterations", std::int64_t(a.max_iterations), "RANSAC trials at most").at_least(1),
+      P::number("confidence", a.confidence, "RANSAC stops once a better model would have been found with this probability").range(0.0, 1.0, true, true),
+      P::integer("seed", std::int64_t(a.seed), "Random seed of RANSAC").non_negative(),
+      P::integer("normal_neighbors", pair.normal_neighbors, "k of the normals estimated for a cloud without any").at_least(3).unit("points"),
+      P::number("min_fitness", pair.min_fitness, "Below this final fitness the clouds are taken as not overlapping (exit 3)").range(0.0, 1.0),
+      P::boolean("global_alignment", pair.global, "Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)"),
+  };
+}
+
+PairParams pair_params(const StageArgs& a) {
+  PairParams p;
+  p.features.type = a.text("descriptor") == "pfh" ? DescriptorType::Pfh : DescriptorType::Fpfh;
+  p.icp.metric = a.text("icp") == "point" ? IcpMetric::PointToPoint : IcpMetric::PointToPlane;
+  p.voxel_in_spacings = a.number("voxel_in_spacings");
+  p.features.radius_in_spacings = a.number("radius_in_spacings");
+  p.align.distance_in_spacings = a.number("ransac_distance_in_spacings");
+  p.icp.distance_in_spacings = a.number("icp_distance_in_spacings");
+  p.icp.max_normal_deg = a.number("max_normal_deg");
+  p.icp.max_iterations = std::size_t(a.integer("iterations"));
+  p.align.max_iterations = std::size_t(a.integer("ransac_iterations"));
+  p.align.confidence = a.number("confidence");
+  p.align.seed = std::uint64_t(a.integer("seed"));
+  p.normal_neighbors = a.int32("normal_neighbors");
+  p.min_fitness = a.number("min_fitness");
+  p.global = a.boolean("global_alignment");
+  return p;
+}
+
+void record_result(StageRecord& rec, const RegistrationResult& r, const std::string& prefix) {
+  rec.metric(prefix + "fitness", r.fitness);
+  rec.metric(prefix + "inlier_rmse", r.inlier_rmse);
+  rec.metric(prefix + "iterations", std::int64_t(r.iterations));
+  rec.metric(prefix + "converged", r.converged);
+}
+
+void run_register(StageRun& run) {
+  const PairParams params = pair_params(run.args);
+  const DataItem& source = run.context.item(run.inputs[0]);
+  const PointCloud& target = run.context.item(run.inputs[1]).cloud;
+  const PairResult r = register_pair(source.cloud, target, params, run.progress);
+  StageRecord& rec = run.record;
+  rec.count("source_points", as_count(source.cloud.size()));
+  rec.count("target_points", as_count(target.size()));
+  rec.count("source_samples", as_count(r.source_samples));
+  rec.count("target_samples", as_count(r.target_samples));
+  rec.metric("transform", matrix_list(r.result.transform));
+  rec.metric("rotation_angle_deg", r.result.transform.angle_degrees());
+  record_result(rec, r.result, "");
+  if (params.global) record_result(rec, r.global, "global_");
+  rec.metric("spacing", r.spacing);
+  rec.metric("voxel", r.voxel);
+  rec.metric("seconds_prepare", r.seconds_prepare);
+  rec.metric("seconds_descriptors", r.seconds_descriptors);
+  rec.metric("seconds_align", r.seconds_align);
+  rec.metric("seconds_icp", r.seconds_icp);
+  for (const auto& [estimated, name] : {std::pair{r.source_normals_estimated, "source"}, std::pair{r.target_normals_estimated, "target"}})
+    if (estimated)
+      rec.warnings.push_back(fmt::format("the {} has no normals; estimated (PCA, k = {}) and MST-oriented", name, params.normal_neighbors));
+  if (r.result.fitness < params.min_fitness)
+    throw ComputeError(fmt::format("{}; check that the clouds overlap, or lower min_fitness", r.result.message));
+  if (!r.result.converged) rec.warnings.push_back(fmt::format("ICP did not converge: {}", r.result.message));
+  rec.summary = fmt::format("register: {} onto {}: rotation {:.3g} degrees, translation {:.4g}, fitness {:.3f}, inlier RMSE {:.3g}",
+                            run.inputs[0], run.inputs[1], r.result.transform.angle_degrees(), r.result.transform.translation().norm(),
+                            r.result.fitness, r.result.inlier_rmse);
+
+  DataItem moved = source;  // a mesh keeps its faces: the motion is rigid
+  r.result.transform.apply(moved.cloud);
+  run.context.set(run.output, std::move(moved));
+
+  const std::string& out = run.args.text("out");
+  if (!out.empty()) {
+    TransformFile file;
+    file.transform = r.result.transform;
+    const double total = r.seconds_prepare + r.seconds_descriptors + r.seconds_align + r.seconds_icp;
+    file.members = {{"fitness", r.result.fitness},
+                    {"inlier_rmse", r.result.inlier_rmse},
+                    {"iterations", std::int64_t(r.result.iterations)},
+                    {"converged", r.result.converged},
+                    {"descriptor", std::string(params.global ? descriptor_type_name(params.features.type) : "none")},
+                    {"icp", std::string(icp_metric_name(params.icp.metric))},
+                    {"global_fitness", r.global.fitness},
+                    {"spacing", r.spacing},
+                    {"seconds", std::vector<double>{r.seconds_prepare, r.seconds_descriptors, r.seconds_align, r.seconds_icp, total}},
+                    {"seconds_steps", std::string("prepare, descriptors, align, icp, total")}};
+    write_transform_file(out, file);
+  }
+}
+
+MultiParams multi_params(const StageArgs& a) {
+  MultiParams params;
+  params.pair = pair_params(a);
+  params.mode = a.text("mode") == "first" ? MultiMode::First : MultiMode::Chain;
+  params.refine = a.boolean("refine");
+  params.min_overlap = a.number("min_overlap");
+  return params;
+}
+
+void run_register_many(StageRun& run) {
+  const MultiParams params = multi_params(run.args);
+  std::vector<PointCloud> scans;
+  std::size_t faces = 0;
+  for (const std::string& tag : run.inputs) {
+    const DataItem& item = run.context.item(tag);
+    faces += item.triangles.size();
+    scans.push_back(item.cloud);
+  }
+  const MultiResult r = register_scans(scans, params, run.progress);
+  StageRecord& rec = run.record;
+  if (faces > 0) rec.warnings.push_back(fmt::format("register-many works on points: {} dropped", plural(faces, "face")));
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    if (r.normals_estimated[i])
+      rec.warnings.push_back(fmt::format("scan {} ({}) has no normals; estimated (PCA, k = {}) and MST-oriented", i, run.inputs[i],
+                                         params.pair.normal_neighbors));
+    rec.count("points_" + run.inputs[i], as_count(scans[i].size()));
+    rec.metric(fmt::format("pose_{}", i), matrix_list(r.poses[i]));
+  }
+  std::size_t initial = 0, pruned = 0;
+  for (const ScanLink& l : r.links) {
+    initial += l.initial;
+    pruned += l.pruned;
+    rec.metric(fmt::format("link_{}_{}_fitness", l.source, l.target), l.result.fitness);
+    if (!l.result.converged) rec.warnings.push_back(fmt::format("ICP of scan {} onto scan {} did not converge: {}", l.source, l.target, l.result.message));
+  }
+  rec.count("links", as_count(r.links.size()));
+  rec.count("overlap_links", as_count(r.links.size() - initial));
+  rec.count("pruned_links", as_count(pruned));
+  if (params.refine) {
+    rec.metric("graph_cost_before", r.graph.initial_cost);
+    rec.metric("graph_cost", r.graph.cost);
+    rec.metric("graph_iterations", std::int64_t(r.graph.iterations));
+    rec.metric("graph_converged", r.graph.converged);
+  }
+  rec.metric("spacing", r.spacing);
+  rec.metric("seconds_prepare", r.seconds_prepare);
+  rec.metric("seconds_initial", r.seconds_initial);
+  rec.metric("seconds_overlaps", r.seconds_overlaps);
+  rec.metric("seconds_graph", r.seconds_graph);
+  PointCloud merged = merge_scans(scans, r.poses);
+  rec.count("points", as_count(merged.size()));
+  rec.summary = fmt::format("register-many: {} in one frame ({} of them, {} links, {} pruned), {}", plural(scans.size(), "scan"),
+                            multi_mode_name(params.mode), r.links.size(), pruned, plural(merged.size(), "point"));
+  run.context.set_cloud(run.output, std::move(merged), run.inputs.front());
+}
+
+}  // namespace
+
+StageSpec register_stage() {
+  StageSpec s;
+  s.name = "register";
+  s.summary = "Register a source cloud onto a target (descriptors, RANSAC, ICP): the moved source and T.json";
+  s.description =
+      "Finds the rigid transform taking SOURCE onto TARGET from their points alone: PFH or FPFH descriptors of a voxel downsample, "
+      "RANSAC over mutual descriptor matches, then ICP rejecting pairs by distance and by normal angle, first on the downsample and "
+      "then on every point. Every length is a multiple of the mean spacing. Missing normals are estimated (with a warning). Writes "
+      "the transform as T.json (--out: \"matrix\" 4x4 row by row, fitness, inlier_rmse, iterations, converged, timings) and the "
+      "moved source (--apply). Clouds that do not overlap end with exit code 3.";
+  s.order = 75;
+  s.consumes = {Slot{"source", DataKind::Any}, Slot{"target", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Any};
+  s.params = pair_param_specs();
+  s.params.push_back(P::text("out", "", "Write the transform as a T.json file (empty: none; the record holds it too)").meta("T.json"));
+  s.writes_param = "out";
+  s.examples = {"pointsurf register scan2.ply scan1.ply --out T.json",
+                "pointsurf register scan2.ply scan1.ply --out T.json --apply scan2_on_1.ply --descriptor pfh --icp point",
+                "pointsurf transform scan2.ply scan2_on_1.ply --file T.json"};
+  s.run = run_register;
+  s.check = [](const StageArgs& a) { pair_params(a).validate(); };
+  return s;
+}
+
+StageSpec register_many_stage() {
+  const MultiParams m;
+  StageSpec s;
+  s.name = "register-many";
+  s.summary = "Register several scans into the first one's frame and merge them (field scan)";
+  s.description =
+      "Registers each scan to the first (--mode first) or to the one before it (--mode chain) as `register` does, then registers "
+      "every further pair that overlaps under those poses and refines all poses together on a pose graph (least squares, the first "
+      "scan fixed; wrong loop closures dropped). The merged cloud holds a field \"scan\" (0 for the first input); the poses are in "
+      "the report.";
+  s.order = 76;
+  s.consumes = {Slot{"clouds", DataKind::Any}};
+  s.produces = Slot{"cloud", DataKind::Cloud};
+  s.params = {P::choice("mode", multi_mode_name(m.mode), {"first", "chain"}, "Register each scan to the first, or to the one before it"),
+              P::boolean("refine", m.refine, "Refine all poses together over every overlapping pair (pose graph)"),
+              P::number("min_overlap", m.min_overlap, "Share of a scan within the ICP distance of another for the pair to join the refinement")
+                  .range(0.0, 1.0, true, false)};
+  const std::vector<ParamSpec> pair = pair_param_specs();
+  s.params.insert(s.params.end(), pair.begin(), pair.end());
+  s.examples = {"pointsurf register-many scan1.ply scan2.ply scan3.ply --out merged.ply",
+                "pointsurf register-many a.ply b.ply c.ply d.ply merged.ply --mode first --icp point"};
+  s.run = run_register_many;
+  s.check = [](const StageArgs& a) { multi_params(a).validate(); };
+  return s;
+}
+
+}  // namespace pointsurf::detail
