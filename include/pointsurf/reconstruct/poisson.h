@@ -28,7 +28,7 @@ struct PoissonParams {
   int full_depth = 5;
   // Density estimate: the (fractional) depth at which a node holds this many samples is the
   // density reported per vertex (default 1.5, PoissonRecon's --samplesPerNode).
-  double samples_per_node = 1.5;
+  double samples_per_node = 1.0;
   // Screening weight alpha: how strongly the function is pulled to the iso-value at the samples
   // (default 4, PoissonRecon's: twice the B-spline degree); 0: plain Poisson.
   double point_weight = 4.0;
