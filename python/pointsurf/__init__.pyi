@@ -258,7 +258,7 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     max_mean_normal_angle_deg = 65.0: Largest angle between a triangle and its mean vertex normal (degrees, (0, 180])
     depth = 0: Finest octree level (2^depth cells across 1.1x the largest extent); 0: the level whose cell is nearest the mean spacing, 6..10 ([0, 16])
     full_depth = 5: Octree levels 1..full_depth are complete grids ([1, 16])
-    samples_per_node = 1.0: Density output: the depth at which a node holds this many samples (samples, (0, inf))
+    samples_per_node = 1.5: Density output: the depth at which a node holds this many samples (samples, (0, inf))
     point_weight = 4.0: Screening weight alpha: pull of the surface to the samples; 0: plain Poisson ([0, inf))
     boundary_condition = 'neumann': Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)
     confidence = False: Weight each point by its normal's length

@@ -27,11 +27,8 @@ struct PoissonParams {
   // only around the samples. Clamped to depth.
   int full_depth = 5;
   // Density estimate: the (fractional) depth at which a node holds this many samples is the
-  // density reported per vertex (not capped at depth), and each normal is splatted at that
-  // depth. Default 1: PoissonRecon's --samplesPerNode is 1.5, but at 1.5 our density scale
-  // stopped the samples a level short of PoissonRecon's (fandisk 100k, clean: Chamfer 1.25x
-  // Open3D's at depth 8, 0.75x at 1; docs/benchmarks.md).
-  double samples_per_node = 1.0;
+  // density reported per vertex (default 1.5, PoissonRecon's --samplesPerNode).
+  double samples_per_node = 1.5;
   // Screening weight alpha: how strongly the function is pulled to the iso-value at the samples
   // (default 4, PoissonRecon's: twice the B-spline degree); 0: plain Poisson.
   double point_weight = 4.0;

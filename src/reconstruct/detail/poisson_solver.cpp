@@ -936,7 +936,7 @@ double PoissonFunction::density_depth(const Eigen::Vector3d& world) const {
   bool complete = true;
   const double w = m.gather(L, m.density, p, 0, complete);
   if (!(w > 0.0)) return 0.0;
-  return std::max(m.depth_of(w), 0.0);
+  return std::clamp(m.depth_of(w), 0.0, double(m.params.depth));
 }
 
 }  // namespace pointsurf::detail

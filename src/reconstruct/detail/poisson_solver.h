@@ -36,7 +36,7 @@ struct PoissonSystemParams {
   int full_depth = 5;             // levels 1..full_depth complete
   int kernel_depth = 6;           // density estimate's level
   double point_weight = 4.0;      // alpha (PoissonRecon's --pointWeight)
-  double samples_per_node = 1.0;  // each normal goes to the level where a node holds this many
+  double samples_per_node = 1.5;  // each normal goes to the level where a node holds this many
   bool dirichlet = false;         // boundary: Neumann (default) or Dirichlet (zero)
   int max_iterations = 8;         // conjugate-gradient iterations per sparse level at most
   double tolerance = 1e-3;        // ... stop when the residual fell by this factor
@@ -72,8 +72,7 @@ class PoissonFunction final : public IsoFunction {
   /// The weighted mean of the function at the samples.
   double iso_value() const { return iso_value_; }
   /// The density at p in depth units: the (fractional) level at which a node around p holds
-  /// samples_per_node samples (PoissonRecon's --density), >= 0; above depth where the samples are
-  /// denser than the finest level needs (not capped: a cap would squeeze the gap to sparser pieces).
+  /// samples_per_node samples (PoissonRecon's --density), in [0, depth].
   double density_depth(const Eigen::Vector3d& p) const;
   const std::vector<PoissonLevelReport>& levels() const { return reports_; }
   /// Bytes held by the octree and its per-node and per-sample arrays at their largest.
