@@ -308,7 +308,7 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     confidence = False: Weight each point by its normal's length
     trim_depth = 0.0: Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off (depth, [0, 16])
     island_area_ratio = 0.001: After trimming, remove pieces smaller than this share of the largest's area (share of area, [0, 1])
-    unsupported_piece_gap = 2.0: Remove closed pieces whose densest vertex is this far below the main surface's median density (outlier bubbles); 0: keep all (depth, [0, 16])
+    unsupported_piece_gap = 2.0: Remove pieces whose samples per area are this far below the main surface's (outlier bubbles; each unit 4x fewer); 0: keep all (depth, [0, 16])
     max_iterations = 8: Conjugate-gradient iterations per sparse level at most ([1, inf))
     root_refinement_steps = 1: Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps ([0, 20])
     min_component_share = 0.001: Remove components with fewer faces than this share of all; 0: keep all (share of faces, [0, 1])

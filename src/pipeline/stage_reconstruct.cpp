@@ -351,7 +351,7 @@ StageSpec reconstruct_stage() {
           .range(0, 1)
           .only(poisson),
       P::number("unsupported_piece_gap", pp.unsupported_piece_gap,
-                "Remove closed pieces whose densest vertex is this far below the main surface's median density (outlier bubbles); 0: keep all")
+                "Remove pieces whose samples per area are this far below the main surface's (outlier bubbles; each unit 4x fewer); 0: keep all")
           .unit("depth")
           .range(0, 16)
           .only(poisson),

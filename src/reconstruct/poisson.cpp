@@ -36,10 +36,12 @@ ProgressCallback part(const ProgressCallback& progress, double from, double to) 
   return [progress, from, to](double f) { return progress(from + (to - from) * f); };
 }
 
-// Removes the pieces (vertex-connected components) whose densest vertex lies more than `gap`
-// depth units below the median density of the largest piece, and the vertices they leave
-// unused. Returns the pieces and triangles removed.
-std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh, const std::string& field, double gap) {
+// Removes the pieces (vertex-connected components) whose sample support per area lies more than
+// `gap` depth units (factors of 4) below the largest piece's, and the vertices they leave unused.
+// A piece's support: the samples whose nearest vertex is one of its own (`support[v]`: the
+// samples within reach that vertex is the nearest to); an outlier bubble holds only the few
+// outliers that raised it. Returns the pieces and triangles removed.
+std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh, const std::vector<std::uint32_t>& support, double gap) {
   const std::size_t nv = mesh.vertex_count(), nf = mesh.triangle_count();
   if (gap <= 0.0 || nf == 0) return {0, 0};
   std::vector<std::uint32_t> parent(nv);
@@ -54,21 +56,21 @@ std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh
       if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller index: same roots for any thread count
     }
   std::vector<std::size_t> faces(nv, 0);
-  for (const Triangle& t : mesh.triangles) ++faces[find(std::uint32_t(t[0]))];
-  const std::uint32_t largest = std::uint32_t(std::max_element(faces.begin(), faces.end()) - faces.begin());
-  const std::vector<double>& density = mesh.vertex_fields.find(field)->values;
-  std::vector<double> in_largest;
-  std::vector<double> densest(nv, -std::numeric_limits<double>::infinity());
-  for (std::uint32_t v = 0; v < nv; ++v) {
-    const std::uint32_t r = find(v);
-    densest[r] = std::max(densest[r], density[v]);
-    if (r == largest) in_largest.push_back(density[v]);
+  std::vector<double> area(nv, 0.0);
+  for (const Triangle& t : mesh.triangles) {
+    const std::uint32_t r = find(std::uint32_t(t[0]));
+    ++faces[r];
+    area[r] += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
   }
-  std::nth_element(in_largest.begin(), in_largest.begin() + std::ptrdiff_t(in_largest.size() / 2), in_largest.end());
-  const double floor = in_largest[in_largest.size() / 2] - gap;
-  std::size_t pieces = 0;
+  const std::uint32_t largest = std::uint32_t(std::max_element(faces.begin(), faces.end()) - faces.begin());
+  std::vector<double> samples(nv, 0.0);
+  for (std::uint32_t v = 0; v < nv; ++v) samples[find(v)] += support[v];
+  // per area, relative to the largest piece's: below 4^-gap the piece goes
+  const double floor = std::pow(4.0, -gap) * samples[largest] / std::max(area[largest], std::numeric_limits<double>::min());
+  std::vector<char> gone(nv, 0);
   for (std::uint32_t v = 0; v < nv; ++v)
-    if (parent[v] == v && faces[v] > 0 && densest[v] < floor) ++pieces;
+    gone[v] = parent[v] == v && faces[v] > 0 && v != largest && samples[v] < floor * area[v];
+  const std::size_t pieces = std::size_t(std::count(gone.begin(), gone.end(), 1));
   if (pieces == 0) return {0, 0};
   std::vector<Triangle> kept;
   std::vector<std::size_t> kept_faces;
@@ -76,7 +78,7 @@ std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh
   std::vector<std::size_t> vertices;
   for (std::size_t f = 0; f < nf; ++f) {
     Triangle t = mesh.triangles[f];
-    if (densest[find(std::uint32_t(t[0]))] < floor) continue;
+    if (gone[find(std::uint32_t(t[0]))]) continue;
     for (int k = 0; k < 3; ++k) {
       std::int64_t& m = remap[std::size_t(t[k])];
       if (m < 0) m = std::int64_t(vertices.size()), vertices.push_back(std::size_t(t[k]));
@@ -230,7 +232,23 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
     for (std::size_t v = 0; v < nv; ++v) out.values[v] = field.values[nearest[v]];
   }
 
-  std::tie(result.unsupported_pieces, result.unsupported_triangles) = remove_unsupported_pieces(mesh, "density", params.unsupported_piece_gap);
+  if (params.unsupported_piece_gap > 0.0 && nv > 0) {
+    // each sample supports its nearest vertex within two finest cells
+    const double reach = 2.0 * lattice.size / double(1 << lattice.depth);
+    const KdTree vertices(mesh.vertices);
+    std::vector<std::uint32_t> to(usable.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, usable.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+      std::vector<Neighbor> hit;
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        vertices.knn(cloud.positions[usable[k]], 1, hit);
+        to[k] = !hit.empty() && hit.front().squared_distance <= reach * reach ? hit.front().index : std::uint32_t(nv);
+      }
+    });
+    std::vector<std::uint32_t> support(nv, 0);
+    for (const std::uint32_t v : to)
+      if (v < nv) ++support[v];
+    std::tie(result.unsupported_pieces, result.unsupported_triangles) = remove_unsupported_pieces(mesh, support, params.unsupported_piece_gap);
+  }
 
   detail::TrimResult trim;
   if (params.trim_depth > 0.0) {

@@ -42,10 +42,11 @@ struct PoissonParams {
   // ... then remove the pieces whose area is below this share of the largest piece's (default
   // 0.001, SurfaceTrimmer's --aRatio). Used only when trimming.
   double island_area_ratio = 0.001;
-  // Remove the closed pieces whose every vertex has a density more than this many depth units
-  // below the median density of the largest piece (each unit: 4 times fewer samples per node):
-  // the bubbles that clusters of outliers raise away from the surface. A second object scanned
-  // like the first keeps its density and stays. Default 2; 0: keep every piece.
+  // Remove the pieces whose samples per area (the samples within two finest cells of the mesh,
+  // each counted at its nearest vertex) are more than this many depth units below the largest
+  // piece's (each unit: 4 times fewer): the bubbles that clusters of outliers raise away from the
+  // surface, which hold only those outliers. A second object scanned like the first keeps its
+  // density and stays. Independent of samples_per_node. Default 2; 0: keep every piece.
   double unsupported_piece_gap = 2.0;
   // Vertex placement on each edge crossing of the extracted surface: 0 linear in the corner
   // values; 1 (default) the quadratic through the edge's midpoint, exact for this function (along
