@@ -199,23 +199,46 @@ int planes_near(const KdTree& tree, const Eigen::Vector3d& p, std::span<const st
 
 }  // namespace
 
+const EnumNames<FeatureNormals>& feature_normals_names() {
+  static const EnumNames<FeatureNormals> names{{{FeatureNormals::Robust, "robust"}, {FeatureNormals::Input, "input"}}};
+  return names;
+}
+
+const FieldTable<FeatureParams>& FeatureParams::fields() {
+  static const FieldTable<FeatureParams> table = [] {
+    using P = FeatureParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point").at_least(6).unit("points");
+    t.number("variation_threshold", &P::variation_threshold,
+             "Candidate surface-variation threshold; 0: max(half a min_turn_deg crease's, 4 x median variation)")
+        .range(0.0, 1.0 / 3.0, false, true);
+    t.number("cluster_angle_deg", &P::cluster_angle_deg, "Normal-angle clustering threshold").unit("degrees").range(0.0, 90.0, true, true).was("dn_deg");
+    t.number("min_turn_deg", &P::min_turn_deg, "Smallest crease kept (angle between its two planes); sets the candidate floor")
+        .unit("degrees")
+        .range(0.0, 90.0, true, true);
+    t.length("plane_distance", &P::plane_distance, "Point-to-plane distance of a cluster's plane").positive().was("dd").was("dd_in_spacings");
+    t.integer("min_cluster_points", &P::min_cluster_points, "Fewest neighbours a cluster needs to give a plane, at most k").at_least(3);
+    t.choice("normals", &P::normals, feature_normals_names(),
+             "Normals to cluster by: robust (flattest shifted neighbourhood) or input (estimated when absent)");
+    return t;
+  }();
+  return table;
+}
+
 void FeatureParams::validate() const {
   const FeatureParams& params = *this;
   if (params.k < 6) throw UsageError(fmt::format("detect_feature_points: k must be >= 6, got {}", params.k));
   if (!(params.variation_threshold >= 0.0 && params.variation_threshold < 1.0 / 3.0))
     throw UsageError(fmt::format("detect_feature_points: variation_threshold must be in [0, 1/3) (0: derived), got {}",
                                  params.variation_threshold));
-  if (!(params.dn_deg > 0.0 && params.dn_deg < 90.0))
-    throw UsageError(fmt::format("detect_feature_points: dn_deg must be in (0, 90) degrees, got {}", params.dn_deg));
-  if (!(params.dd >= 0.0 && std::isfinite(params.dd)))
-    throw UsageError(fmt::format("detect_feature_points: dd must be >= 0 (0: dd_in_spacings * mean spacing), got {}", params.dd));
-  if (params.dd == 0.0 && !(params.dd_in_spacings > 0.0 && std::isfinite(params.dd_in_spacings)))
-    throw UsageError(fmt::format("detect_feature_points: dd_in_spacings must be > 0, got {}", params.dd_in_spacings));
+  if (!(params.cluster_angle_deg > 0.0 && params.cluster_angle_deg < 90.0))
+    throw UsageError(fmt::format("detect_feature_points: cluster_angle_deg must be in (0, 90) degrees, got {}", params.cluster_angle_deg));
   if (!(params.min_turn_deg > 0.0 && params.min_turn_deg < 90.0))
     throw UsageError(fmt::format("detect_feature_points: min_turn_deg must be in (0, 90) degrees, got {}", params.min_turn_deg));
   if (params.min_cluster_points < 3 || params.min_cluster_points > params.k)
     throw UsageError(fmt::format("detect_feature_points: min_cluster_points must be in [3, k = {}], got {}", params.k,
                                  params.min_cluster_points));
+  fields().validate(*this, "detect_feature_points");
 }
 
 FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& params, const KdTree* tree,
@@ -235,7 +258,7 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
   if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
   FeatureResult result;
   result.mean_spacing = mean_spacing(*tree);
-  result.dd_used = params.dd > 0.0 ? params.dd : params.dd_in_spacings * result.mean_spacing;
+  result.dd_used = params.plane_distance.resolve(result.mean_spacing);
 
   const std::span<const std::uint32_t> order = tree->spatial_order();
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -331,7 +354,7 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
 
   // Pass 4: screening of the candidates.
   std::vector<double> labels(n, 0.0);
-  const double cos_dn = std::cos(params.dn_deg * std::numbers::pi / 180.0);
+  const double cos_dn = std::cos(params.cluster_angle_deg * std::numbers::pi / 180.0);
   const double min_sin2 = std::pow(std::sin(params.min_turn_deg * std::numbers::pi / 180.0), 2);
   tbb::enumerable_thread_specific<ScreenBuffers> screen;
   tbb::enumerable_thread_specific<std::array<std::size_t, 2>> counts(std::array<std::size_t, 2>{0, 0});

@@ -45,7 +45,32 @@ constexpr std::size_t kProgressBatch = 1024;
 
 }  // namespace
 
-void NormalParams::validate() const { neighborhood_settings().validate("estimate_normals", 3); }
+const FieldTable<NormalParams>& NormalParams::fields() {
+  static const FieldTable<NormalParams> table = [] {
+    using P = NormalParams;
+    FieldTable<P> t;
+    t.choice("neighborhood", &P::neighborhood, neighborhood_kind_names(),
+             "Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius when only "
+             "radius is given, hybrid when k is given too");
+    t.integer("k", &P::k, "Neighbours per point (knn; hybrid: at most k within r)")
+        .at_least(3)
+        .unit("points")
+        .when([](const P& p) { return p.neighborhood != NeighborhoodKind::Radius; });
+    t.length("radius", &P::radius, "Neighbourhood radius (radius, hybrid)")
+        .positive()
+        .when([](const P& p) { return p.neighborhood != NeighborhoodKind::Knn; })
+        .was("radius_in_spacings");
+    t.boolean("keep_variation", &P::keep_variation, "Add the field variation = l0 / (l0 + l1 + l2)").internal();
+    t.boolean("keep_mean_distance", &P::keep_mean_distance, "Add the field mean_distance (mean distance to the neighbours)").internal();
+    return t;
+  }();
+  return table;
+}
+
+void NormalParams::validate() const {
+  fields().validate(*this, "estimate_normals");
+  neighborhood_settings().validate("estimate_normals", 3);
+}
 
 NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, const KdTree* tree,
                               const ProgressCallback& progress) {

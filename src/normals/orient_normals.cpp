@@ -446,12 +446,35 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
 
 }  // namespace
 
+const EnumNames<Orientation>& orientation_names() {
+  static const EnumNames<Orientation> names{
+      {{Orientation::Mst, "mst"}, {Orientation::Viewpoint, "viewpoint"}, {Orientation::Direction, "direction"}, {Orientation::None, "none"}}};
+  return names;
+}
+
+const FieldTable<OrientParams>& OrientParams::fields() {
+  static const FieldTable<OrientParams> table = [] {
+    using P = OrientParams;
+    FieldTable<P> t;
+    t.choice("orient", &P::method, orientation_names(),
+             "Orientation: mst (consistent, Hoppe 1992), viewpoint (towards the scanner), direction or none");
+    t.vector3("viewpoint", &P::viewpoint, "Scanner position (orient viewpoint)").unit("cloud units");
+    t.vector3("direction", &P::direction, "Direction normals should face (orient direction)");
+    t.integer("orient_k", &P::k, "Neighbours per point in the MST graph (orient mst)")
+        .at_least(1)
+        .unit("points")
+        .when([](const P& p) { return p.method == Orientation::Mst; });
+    return t;
+  }();
+  return table;
+}
+
 void OrientParams::validate() const {
+  fields().validate(*this, "orient_normals");
   if (method == Orientation::Viewpoint && !viewpoint.allFinite()) throw UsageError("orient_normals: the viewpoint must be finite");
   if (method == Orientation::Direction && (!direction.allFinite() || direction.squaredNorm() == 0.0))
     throw UsageError(fmt::format("orient_normals: the direction must be a finite non-zero vector, got ({}, {}, {})", direction.x(),
                                  direction.y(), direction.z()));
-  if (method == Orientation::Mst && k < 1) throw UsageError(fmt::format("orient_normals: k must be >= 1, got {}", k));
 }
 
 OrientResult orient_normals(PointCloud& cloud, const OrientParams& params, const KdTree* tree,

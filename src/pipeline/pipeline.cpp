@@ -83,6 +83,11 @@ ParamValue convert(const ParamSpec& spec, const RawValue& raw) {
         throw mismatch();
       }
       break;
+    case ParamType::Length:
+      if (raw.kind == RawValue::Kind::Int || raw.kind == RawValue::Kind::Double) value = Length::cloud(raw.d);
+      else if (raw.kind == RawValue::Kind::String) value = Length::parse(raw.s, spec.name);
+      else throw mismatch();
+      break;
     case ParamType::Vector3:
     case ParamType::DoubleList:
       if (raw.kind == RawValue::Kind::Numbers) value = raw.numbers;
@@ -192,8 +197,35 @@ public:
       }
       const std::vector<std::string> methods = spec->methods.empty() ? std::vector<std::string>{} : spec->method_list ? split_list(method)
                                                                                                                     : std::vector<std::string>{method};
-      for (const auto& [key, value] : r.params) {
-        if (key == "method" && !spec->methods.empty()) continue;
+      for (const auto& [written_key, written_value] : r.params) {
+        if (written_key == "method" && !spec->methods.empty()) continue;
+        std::string key = written_key;
+        RawValue value = written_value;
+        if (spec->params_named(key).empty() && !spec->params_formerly(key).empty()) {
+          // A key of the previous release: its parameter's new key, with a warning. A former
+          // "X_in_spacings" number is a length in spacings; a former cloud-units length of 0
+          // meant "the default in spacings".
+          const ParamSpec* now = spec->params_formerly(key).front();
+          const bool in_spacings = key.size() > 12 && key.compare(key.size() - 12, 12, "_in_spacings") == 0;
+          step.warnings.push_back(fmt::format("key \"{}\" is deprecated: use \"{}\"{} (the old key goes in the next release)", key,
+                                              now->name, in_spacings ? " with a value in spacings, e.g. \"3sp\"" : ""));
+          if (now->type == ParamType::Length && (value.kind == RawValue::Kind::Int || value.kind == RawValue::Kind::Double ||
+                                                 value.kind == RawValue::Kind::Text)) {
+            double d = value.d;
+            if (value.kind == RawValue::Kind::Text) {
+              try {
+                d = std::stod(value.s);
+              } catch (const std::exception&) {
+                throw UsageError(fmt::format("{}: {}: \"{}\" is not a number", where, key, value.s));
+              }
+            }
+            if (!in_spacings && d == 0.0) continue;
+            value = RawValue{};
+            value.kind = RawValue::Kind::String;
+            value.s = Length{d, in_spacings ? Length::Unit::Spacings : Length::Unit::Cloud}.text();
+          }
+          key = now->name;
+        }
         if (given.count(key)) throw UsageError(fmt::format("{}: key \"{}\" given twice", where, key));
         const std::vector<const ParamSpec*> candidates = spec->params_named(key);
         if (candidates.empty()) {
@@ -399,6 +431,7 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
       record.type = step.spec->name;
       record.tag = step.tag;
       record.inputs = step.inputs;
+      record.warnings = step.warnings;
       for (const auto& [key, value] : step.args.values()) {
         if (step.spec->method_list && key != "method") continue;
         record.parameters.emplace_back(key, value);

@@ -16,19 +16,7 @@
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kNeighborhoods = {"knn", "radius", "hybrid"};
-// "input" and "keep" are the stage's own: they need the normals the input came with.
-const std::vector<std::string> kOrientations = {"mst", "viewpoint", "direction", "none", "input", "keep"};
-
-const char* orientation_name(Orientation o) {
-  switch (o) {
-    case Orientation::Mst: return "mst";
-    case Orientation::Viewpoint: return "viewpoint";
-    case Orientation::Direction: return "direction";
-    case Orientation::None: return "none";
-  }
-  return "";
-}
+const char* orientation_name(Orientation o) { return orientation_names().name(o).c_str(); }
 
 // "neighborhood" given: that kind; not given: radius when only the radius is given, hybrid
 // when both k and radius are, else knn.
@@ -37,25 +25,14 @@ NeighborhoodKind neighborhood_kind(const StageArgs& a) {
     const std::string& n = a.text("neighborhood");
     return n == "knn" ? NeighborhoodKind::Knn : n == "radius" ? NeighborhoodKind::Radius : NeighborhoodKind::Hybrid;
   }
-  if (a.given("radius") || a.given("radius_in_spacings")) return a.given("k") ? NeighborhoodKind::Hybrid : NeighborhoodKind::Radius;
+  if (a.given("radius")) return a.given("k") ? NeighborhoodKind::Hybrid : NeighborhoodKind::Radius;
   return NeighborhoodKind::Knn;
 }
 
 void check_neighborhood(const StageArgs& a) {
   const NeighborhoodKind kind = neighborhood_kind(a);
-  if (kind == NeighborhoodKind::Knn && (a.given("radius") || a.given("radius_in_spacings")))
-    throw UsageError("radius: ignored with neighborhood knn (use radius or hybrid)");
+  if (kind == NeighborhoodKind::Knn && a.given("radius")) throw UsageError("radius: ignored with neighborhood knn (use radius or hybrid)");
   if (kind == NeighborhoodKind::Radius && a.given("k")) throw UsageError("k: ignored with neighborhood radius (use knn or hybrid)");
-  if (a.given("radius") && a.given("radius_in_spacings")) throw UsageError("radius and radius_in_spacings: give only one");
-}
-
-std::vector<ParamSpec> neighborhood_params(int k, double radius, double radius_in_spacings, const std::string& k_doc) {
-  return {P::choice("neighborhood", "knn", kNeighborhoods,
-                    "Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius "
-                    "when only radius is given, hybrid when k is given too"),
-          P::integer("k", k, k_doc),
-          P::number("radius", radius, "Neighbourhood radius; 0: radius_in_spacings x mean spacing").unit("cloud units").non_negative().meta("R"),
-          P::number("radius_in_spacings", radius_in_spacings, "Radius in mean spacings when radius is 0").unit("mean spacings").positive()};
 }
 
 // Below this share of agreement with the input's normals a new orientation is said to
@@ -82,53 +59,21 @@ NormalAgreement record_agreement(const std::vector<Vector3d>& reference, const s
 // The library's Params from a stage's arguments: the run and the check before any work build
 // them the same way, and the check calls their validate().
 NormalParams normal_params(const StageArgs& a) {
-  NormalParams params;
+  NormalParams params = read_params<NormalParams>(a);
   params.neighborhood = neighborhood_kind(a);
-  params.k = a.int32("k");
-  params.radius = a.number("radius");
-  params.radius_in_spacings = a.number("radius_in_spacings");
   return params;
 }
 
-OrientParams orient_params(const StageArgs& a) {
-  OrientParams orient;
-  const std::string& o = a.text("orient");
-  orient.method = o == "mst" ? Orientation::Mst : o == "viewpoint" ? Orientation::Viewpoint : o == "direction" ? Orientation::Direction : Orientation::None;
-  const auto& vp = a.numbers("viewpoint");
-  const auto& dir = a.numbers("direction");
-  orient.viewpoint = Vector3d(vp[0], vp[1], vp[2]);
-  orient.direction = Vector3d(dir[0], dir[1], dir[2]);
-  orient.k = a.int32("orient_k");
-  return orient;
-}
+// "orient" input and keep are the stage's own (the table's parse leaves the method at mst).
+OrientParams orient_params(const StageArgs& a) { return read_params<OrientParams>(a); }
 
 CurvatureParams curvature_params(const StageArgs& a) {
-  CurvatureParams params;
+  CurvatureParams params = read_params<CurvatureParams>(a);
   params.neighborhood = neighborhood_kind(a);
-  params.degree = a.int32("degree");
-  params.k = a.int32("k");
-  params.radius = a.number("radius");
-  params.radius_in_spacings = a.number("radius_in_spacings");
-  params.scale_in_noise = a.number("scale_in_noise");
-  params.max_k = a.int32("max_k");
-  params.zero_curvature = a.number("zero_curvature");
-  params.zero_in_noise = a.number("zero_in_noise");
-  params.update_normals = a.boolean("update_normals");
   return params;
 }
 
-FeatureParams feature_params(const StageArgs& a) {
-  FeatureParams params;
-  params.k = a.int32("k");
-  params.variation_threshold = a.number("variation_threshold");
-  params.dn_deg = a.number("dn_deg");
-  params.min_turn_deg = a.number("min_turn_deg");
-  params.dd = a.number("dd");
-  params.dd_in_spacings = a.number("dd_in_spacings");
-  params.min_cluster_points = a.int32("min_cluster_points");
-  params.normals = a.text("normals") == "input" ? FeatureNormals::Input : FeatureNormals::Robust;
-  return params;
-}
+FeatureParams feature_params(const StageArgs& a) { return read_params<FeatureParams>(a); }
 
 // The orientation a run uses: "orient" as given; not given, "input" when the input has
 // normals (they are the best evidence of each point's side), else the default.
@@ -173,7 +118,7 @@ void run_normals(StageRun& run) {
   StageRecord& rec = run.record;
   rec.set_used("orient", orientation);
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
-  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", estimated.radius_used);
+  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", estimated.radius_used);
   rec.count("points", as_count(cloud.size()));
   rec.count("degenerate", as_count(estimated.degenerate));
   rec.metric("mean_spacing", spacing);
@@ -182,7 +127,7 @@ void run_normals(StageRun& run) {
     if (by_radius)
       throw UsageError(fmt::format("radius: every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
                                    "neighbourhood (mean spacing {:.4g}): no normal; use a radius of a few mean spacings "
-                                   "(--radius-in-spacings 3 gives {:.4g}) or --k",
+                                   "(--radius 3sp gives {:.4g}) or --k",
                                    cloud.size(), estimated.radius_used, spacing, 3.0 * spacing));
     throw InputError(fmt::format("every one of the {} points has a degenerate neighbourhood (collinear or coincident points): no normal",
                                  cloud.size()));
@@ -264,7 +209,7 @@ void run_curvature(StageRun& run) {
   }
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
   if (params.neighborhood != NeighborhoodKind::Radius) rec.set_used("k", std::int64_t{r.k_used});
-  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius", r.radius_used);
+  if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", r.radius_used);
   rec.set_used("zero_curvature", r.zero_curvature);
   rec.count("points", as_count(cloud.size()));
   rec.count("degenerate", as_count(r.degenerate));
@@ -304,7 +249,7 @@ void run_features(StageRun& run) {
   const FeatureResult r = detect_feature_points(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
   StageRecord& rec = run.record;
   rec.set_used("variation_threshold", r.variation_threshold_used);
-  rec.set_used("dd", r.dd_used);
+  rec.set_used("plane_distance_used", r.dd_used);
   rec.count("points", as_count(cloud.size()));
   rec.count("candidates", as_count(r.candidates));
   rec.count("edges", as_count(r.edges));
@@ -353,8 +298,6 @@ std::size_t check_input_normals(StageRun& run, const std::string& skipped) {
 }
 
 StageSpec normals_stage() {
-  const NormalParams n;
-  const OrientParams o;
   StageSpec s;
   s.name = "normals";
   s.summary = "Estimate normals by PCA and orient them (MST propagation by default)";
@@ -365,15 +308,16 @@ StageSpec normals_stage() {
   s.order = 50;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
-  s.params = neighborhood_params(n.k, n.radius, n.radius_in_spacings, "Neighbours per point (knn; hybrid: at most k within r)");
-  s.params[1] = P::integer("k", n.k, "Neighbours per point (knn; hybrid: at most k within r)").at_least(3);
-  s.params.push_back(P::choice("orient", orientation_name(o.method), kOrientations,
-                               "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction, none, input (each new normal on "
-                               "the side of the input's) or keep (the input's normals, no estimation); default: input when the "
-                               "input has normals, else mst"));
-  s.params.push_back(P::vector3("viewpoint", as_list(o.viewpoint), "Scanner position (orient viewpoint)").unit("cloud units"));
-  s.params.push_back(P::vector3("direction", as_list(o.direction), "Direction normals should face (orient direction)"));
-  s.params.push_back(P::integer("orient_k", o.k, "Neighbours per point in the MST graph (orient mst)").at_least(1));
+  s.params = params_of(NormalParams::fields());
+  append(s.params, params_of(OrientParams::fields()));
+  // "input" and "keep" are the stage's own: they need the normals the input came with.
+  for (ParamSpec& p : s.params)
+    if (p.name == "orient") {
+      p.choices.insert(p.choices.end(), {"input", "keep"});
+      p.meta += "|input|keep";
+      p.doc = "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction, none, input (each new normal on the side of the "
+              "input's) or keep (the input's normals, no estimation); default: input when the input has normals, else mst";
+    }
   s.examples = {"pointsurf normals scan.xyz oriented.ply --k 30 --orient mst",
                 "pointsurf normals scan.las oriented.ply --orient viewpoint --viewpoint 0,0,1.8"};
   s.run = run_normals;
@@ -384,7 +328,7 @@ StageSpec normals_stage() {
     if (a.given("direction") && orient != "direction") throw UsageError("direction: ignored unless orient is direction");
     if (a.given("orient_k") && orient != "mst") throw UsageError("orient_k: ignored unless orient is mst");
     if (orient == "keep")
-      for (const char* name : {"neighborhood", "k", "radius", "radius_in_spacings"})
+      for (const char* name : {"neighborhood", "k", "radius"})
         if (a.given(name)) throw UsageError(fmt::format("{}: ignored with orient keep (no estimation)", name));
     if (orient == "viewpoint" && !a.given("viewpoint")) throw UsageError("orient viewpoint needs viewpoint X,Y,Z (the scanner position)");
     normal_params(a).validate();
@@ -394,7 +338,6 @@ StageSpec normals_stage() {
 }
 
 StageSpec curvature_stage() {
-  const CurvatureParams c;
   StageSpec s;
   s.name = "curvature";
   s.summary = "Principal curvatures, mean and Gaussian curvature, variation and HK surface type by jet fitting";
@@ -403,18 +346,7 @@ StageSpec curvature_stage() {
   s.order = 60;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
-  s.params = neighborhood_params(c.k, c.radius, c.radius_in_spacings, "");
-  s.params[1] = P::integer("k", c.k, "Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid)").at_least(0);
-  s.params.push_back(P::integer("degree", c.degree, "Jet degree, 2 or 3").range(2, 3));
-  s.params.push_back(P::number("scale_in_noise", c.scale_in_noise, "k = 0: the neighbourhood radius grows to this many times the noise (the jet's residual)").positive());
-  s.params.push_back(P::integer("max_k", c.max_k, "k = 0: the most neighbours the noise may call for").at_least(6));
-  s.params.push_back(P::number("zero_curvature", c.zero_curvature,
-                               "Curvature below which H or a principal curvature counts as zero; 0: derived from the fit residuals")
-                         .unit("1/cloud units")
-                         .non_negative()
-                         .meta("Z"));
-  s.params.push_back(P::number("zero_in_noise", c.zero_in_noise, "Derived zero threshold in standard errors of the fitted curvature").positive());
-  s.params.push_back(P::boolean("update_normals", c.update_normals, "Write the jet (Monge) normals instead of the input ones"));
+  s.params = params_of(CurvatureParams::fields());
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3));
   s.examples = {"pointsurf curvature part.ply part_curvature.ply --degree 3"};
   s.run = run_curvature;
@@ -429,7 +361,6 @@ StageSpec curvature_stage() {
 }
 
 StageSpec features_stage() {
-  const FeatureParams f;
   StageSpec s;
   s.name = "features";
   s.summary = "Sharp-feature points: field \"feature\" = 0 none, 1 edge, 2 corner";
@@ -438,18 +369,8 @@ StageSpec features_stage() {
   s.order = 70;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
-  s.params = {P::integer("k", f.k, "Neighbours per point").at_least(6),
-              P::number("variation_threshold", f.variation_threshold,
-                        "Candidate surface-variation threshold; 0: max(half a min_turn_deg crease's, 4 x median variation)")
-                  .range(0.0, 1.0 / 3.0, false, true),
-              P::number("dn_deg", f.dn_deg, "Normal-angle clustering threshold").unit("degrees").range(0.0, 90.0, true, true),
-              P::number("min_turn_deg", f.min_turn_deg, "Smallest crease kept (angle between its two planes); sets the candidate floor").unit("degrees").range(0.0, 90.0, true, true),
-              P::number("dd", f.dd, "Point-to-plane distance; 0: dd_in_spacings x mean spacing").unit("cloud units").non_negative(),
-              P::number("dd_in_spacings", f.dd_in_spacings, "Point-to-plane distance when dd is 0").unit("mean spacings").positive(),
-              P::integer("min_cluster_points", f.min_cluster_points, "Fewest neighbours a cluster needs to give a plane, at most k").at_least(3),
-              P::choice("normals", f.normals == FeatureNormals::Robust ? "robust" : "input", {"robust", "input"},
-                        "Normals to cluster by: robust (flattest shifted neighbourhood) or input (estimated when absent)"),
-              P::text("truth_field", "", "Field marking true feature points (non-zero): report precision and recall").meta("NAME")};
+  s.params = params_of(FeatureParams::fields());
+  s.params.push_back(P::text("truth_field", "", "Field marking true feature points (non-zero): report precision and recall").meta("NAME"));
   s.examples = {"pointsurf features part.ply part_features.ply --report features.json"};
   s.run = run_features;
   s.check = [](const StageArgs& a) {

@@ -195,6 +195,42 @@ SurfaceType classify_surface_type(double H, double K, double h_zero, double k_ze
   return h > 0 ? SurfaceType::SaddleRidge : (h < 0 ? SurfaceType::SaddleValley : SurfaceType::Minimal);
 }
 
+const FieldTable<CurvatureParams>& CurvatureParams::fields() {
+  static const FieldTable<CurvatureParams> table = [] {
+    using P = CurvatureParams;
+    FieldTable<P> t;
+    t.choice("neighborhood", &P::neighborhood, neighborhood_kind_names(),
+             "Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius when only "
+             "radius is given, hybrid when k is given too");
+    t.integer("k", &P::k, "Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid)")
+        .at_least(0)
+        .unit("points");
+    t.length("radius", &P::radius, "Neighbourhood radius (radius, hybrid)")
+        .positive()
+        .when([](const P& p) { return p.neighborhood != NeighborhoodKind::Knn; })
+        .was("radius_in_spacings");
+    t.integer("degree", &P::degree, "Jet degree, 2 or 3").range(2, 3);
+    t.number("scale_in_noise", &P::scale_in_noise, "k = 0: the neighbourhood radius grows to this many times the noise (the jet's residual)")
+        .positive()
+        .when([](const P& p) { return p.k == 0 && p.neighborhood == NeighborhoodKind::Knn; });
+    t.integer("max_k", &P::max_k, "k = 0: the most neighbours the noise may call for").at_least(6).unit("points");
+    t.number("cylinder", &P::cylinder, "Fit only the neighbours within this fraction of the radius of the normal axis; 0: all")
+        .range(0.0, 1.0)
+        .internal();
+    t.number("zero_curvature", &P::zero_curvature, "Curvature below which H or a principal curvature counts as zero; 0: derived from the fit residuals")
+        .unit("1/cloud units")
+        .non_negative()
+        .meta("Z");
+    t.number("zero_in_noise", &P::zero_in_noise, "Derived zero threshold in standard errors of the fitted curvature")
+        .positive()
+        .when([](const P& p) { return p.zero_curvature == 0.0; });
+    t.boolean("keep_directions", &P::keep_directions, "Fill the result's principal directions and Monge normals").internal();
+    t.boolean("update_normals", &P::update_normals, "Write the jet (Monge) normals instead of the input ones");
+    return t;
+  }();
+  return table;
+}
+
 void CurvatureParams::validate() const {
   const CurvatureParams& params = *this;
   if (params.degree != 2 && params.degree != 3)
@@ -219,6 +255,7 @@ void CurvatureParams::validate() const {
     throw UsageError(fmt::format("estimate_curvature: cylinder must be in (0, 1] (0: automatic), got {}", params.cylinder));
   if (params.zero_curvature == 0.0 && !(params.zero_in_noise > 0.0 && std::isfinite(params.zero_in_noise)))
     throw UsageError(fmt::format("estimate_curvature: zero_in_noise must be > 0, got {}", params.zero_in_noise));
+  fields().validate(*this, "estimate_curvature");
 }
 
 namespace {

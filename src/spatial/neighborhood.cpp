@@ -9,17 +9,20 @@
 
 namespace pointsurf {
 
+const EnumNames<NeighborhoodKind>& neighborhood_kind_names() {
+  static const EnumNames<NeighborhoodKind> names{{{NeighborhoodKind::Knn, "knn"}, {NeighborhoodKind::Radius, "radius"}, {NeighborhoodKind::Hybrid, "hybrid"}}};
+  return names;
+}
+
 void Neighborhood::validate(std::string_view function, int min_k) const {
   if (uses_k() && min_k > 0 && k < min_k) throw UsageError(fmt::format("{}: k must be >= {}, got {}", function, min_k, k));
-  if (uses_radius() && !(radius >= 0.0 && std::isfinite(radius)))
-    throw UsageError(fmt::format("{}: radius must be >= 0, got {}", function, radius));
-  if (uses_radius() && radius == 0.0 && !(radius_in_spacings > 0.0 && std::isfinite(radius_in_spacings)))
-    throw UsageError(fmt::format("{}: radius_in_spacings must be > 0, got {}", function, radius_in_spacings));
+  if (uses_radius() && !(radius.value > 0.0 && std::isfinite(radius.value)))
+    throw UsageError(fmt::format("{}: radius must be > 0, got {}", function, radius.text()));
 }
 
 double Neighborhood::resolve_radius(const KdTree& tree) const {
   if (!uses_radius()) return 0.0;
-  return radius > 0.0 ? radius : radius_in_spacings * mean_spacing(tree);
+  return radius.in_spacings() ? radius.value * mean_spacing(tree) : radius.value;
 }
 
 void Neighborhood::query(const KdTree& tree, const Eigen::Vector3d& p, std::size_t k_used, double radius_used,

@@ -161,14 +161,14 @@ TEST(DetectFeaturePoints, ExplicitParametersAreUsedAndTreeIsReused) {
   PointCloud cloud = test::sample_cube_features(8000).cloud;
   const KdTree tree(cloud.positions);
   PointCloud with_tree = cloud;
-  const FeatureResult a = detect_feature_points(with_tree, {.variation_threshold = 0.02, .dd = 0.01}, &tree);
+  const FeatureResult a = detect_feature_points(with_tree, {.variation_threshold = 0.02, .plane_distance = Length::cloud(0.01)}, &tree);
   EXPECT_EQ(a.variation_threshold_used, 0.02);
   EXPECT_EQ(a.dd_used, 0.01);
-  const FeatureResult b = detect_feature_points(cloud, {.variation_threshold = 0.02, .dd = 0.01});
+  const FeatureResult b = detect_feature_points(cloud, {.variation_threshold = 0.02, .plane_distance = Length::cloud(0.01)});
   EXPECT_EQ(a.edges, b.edges);
   EXPECT_EQ(labels_of(cloud), labels_of(with_tree));
-  // dd_in_spacings scales the derived distance.
-  const FeatureResult c = detect_feature_points(cloud, {.dd_in_spacings = 0.5}, &tree);
+  // A plane distance in spacings scales the derived distance.
+  const FeatureResult c = detect_feature_points(cloud, {.plane_distance = Length::spacings(0.5)}, &tree);
   EXPECT_DOUBLE_EQ(c.dd_used, 0.5 * c.mean_spacing);
 }
 
@@ -288,11 +288,11 @@ TEST(DetectFeaturePoints, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.variation_threshold = 0.4}); },
                            "variation_threshold must be in [0, 1/3) (0: derived), got 0.4");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.variation_threshold = -0.1}); }, "got -0.1");
-  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 0.0}); }, "dn_deg must be in (0, 90) degrees, got 0");
-  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dn_deg = 95.0}); }, "dn_deg must be in (0, 90) degrees, got 95");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.cluster_angle_deg = 0.0}); }, "cluster_angle_deg must be in (0, 90) degrees, got 0");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.cluster_angle_deg = 95.0}); }, "cluster_angle_deg must be in (0, 90) degrees, got 95");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.min_turn_deg = 90.0}); }, "min_turn_deg must be in (0, 90) degrees, got 90");
-  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd = -1.0}); }, "dd must be >= 0 (0: dd_in_spacings * mean spacing), got -1");
-  expect_error<UsageError>([&] { detect_feature_points(cloud, {.dd_in_spacings = 0.0}); }, "dd_in_spacings must be > 0, got 0");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.plane_distance = Length::cloud(-1.0)}); }, "plane_distance must be > 0, got -1");
+  expect_error<UsageError>([&] { detect_feature_points(cloud, {.plane_distance = Length::spacings(0.0)}); }, "plane_distance must be > 0, got 0sp");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.min_cluster_points = 2}); },
                            "min_cluster_points must be in [3, k = 30], got 2");
   expect_error<UsageError>([&] { detect_feature_points(cloud, {.k = 10, .min_cluster_points = 11}); },

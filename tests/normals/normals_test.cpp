@@ -110,7 +110,7 @@ TEST(EstimateNormals, RadiusAndHybridNeighbourhoods) {
   NormalResult r = estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Radius});
   EXPECT_NEAR(r.radius_used, 3.0 * spacing, 1e-12);
   EXPECT_LT(mean_unoriented_error_deg(s.cloud.normals, s.exact), 2.0);
-  r = estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .k = 20, .radius = 0.08});
+  r = estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .k = 20, .radius = Length::cloud(0.08)});
   EXPECT_EQ(r.radius_used, 0.08);
   EXPECT_EQ(r.degenerate, 0u);
   EXPECT_LT(mean_unoriented_error_deg(s.cloud.normals, s.exact), 1.0);
@@ -213,11 +213,11 @@ TEST(EstimateNormals, CollinearNeighbourhoodsAreDegenerate) {
 TEST(EstimateNormals, BadParametersThrowUsageError) {
   Shape s = make(test::sample_sphere(100));
   expect_usage_error([&] { estimate_normals(s.cloud, {.k = 2}); }, "estimate_normals: k must be >= 3, got 2");
-  expect_usage_error([&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Radius, .radius = -1.0}); },
-                     "estimate_normals: radius must be >= 0, got -1");
+  expect_usage_error([&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Radius, .radius = Length::cloud(-1.0)}); },
+                     "estimate_normals: radius must be > 0, got -1");
   expect_usage_error(
-      [&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .radius_in_spacings = 0.0}); },
-      "estimate_normals: radius_in_spacings must be > 0, got 0");
+      [&] { estimate_normals(s.cloud, {.neighborhood = NeighborhoodKind::Hybrid, .radius = Length::spacings(0.0)}); },
+      "estimate_normals: radius must be > 0, got 0sp");
   PointCloud two;
   two.positions = {Vector3d::Zero(), Vector3d::UnitX()};
   expect_usage_error([&] { estimate_normals(two); }, "estimate_normals: needs at least 3 points, got 2");
@@ -463,7 +463,7 @@ TEST(OrientNormals, BadParametersThrowUsageError) {
   Shape s = make(test::sample_sphere(100));
   expect_usage_error([&] { orient_normals(s.cloud); }, "orient_normals: the cloud has no normals (estimate them first)");
   s.cloud.normals = s.exact;
-  expect_usage_error([&] { orient_normals(s.cloud, {.k = 0}); }, "orient_normals: k must be >= 1, got 0");
+  expect_usage_error([&] { orient_normals(s.cloud, {.k = 0}); }, "orient_normals: orient_k must be >= 1, got 0");
   expect_usage_error([&] { orient_normals(s.cloud, {.method = Orientation::Direction, .direction = Vector3d::Zero()}); },
                      "orient_normals: the direction must be a finite non-zero vector, got (0, 0, 0)");
   s.cloud.normals.pop_back();

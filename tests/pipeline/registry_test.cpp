@@ -75,9 +75,6 @@ struct Expected {
 
 std::vector<Expected> library_defaults() {
   const NormalParams n;
-  const OrientParams o;
-  const CurvatureParams c;
-  const FeatureParams f;
   const LocalOutlierParams loc;
   const StatisticalOutlierParams sor;
   const RadiusOutlierParams rad;
@@ -109,20 +106,7 @@ std::vector<Expected> library_defaults() {
       {"evaluate", "", "sign", std::string(distance_sign_name(md.sign))},
       {"evaluate", "", "samples", I(sd.samples)},
       {"evaluate", "", "seed", I(sd.seed)},
-      {"normals", "", "k", I{n.k}},
-      {"normals", "", "radius", n.radius},
-      {"normals", "", "radius_in_spacings", n.radius_in_spacings},
-      {"normals", "", "orient_k", I{o.k}},
-      {"normals", "", "direction", std::vector<double>{o.direction.x(), o.direction.y(), o.direction.z()}},
-      {"curvature", "", "k", I{c.k}},
-      {"curvature", "", "degree", I{c.degree}},
-      {"curvature", "", "radius_in_spacings", c.radius_in_spacings},
-      {"curvature", "", "zero_in_noise", c.zero_in_noise},
       {"curvature", "", "normals_k", I{n.k}},
-      {"features", "", "k", I{f.k}},
-      {"features", "", "dn_deg", f.dn_deg},
-      {"features", "", "dd_in_spacings", f.dd_in_spacings},
-      {"features", "", "min_cluster_points", I{f.min_cluster_points}},
       {"clean", "local", "k", I{loc.k}},
       {"clean", "local", "min_ratio", loc.min_ratio},
       {"clean", "local", "mad_sigmas", loc.mad_sigmas},

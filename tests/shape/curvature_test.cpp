@@ -312,7 +312,7 @@ TEST(EstimateCurvature, RadiusAndHybridNeighbourhoods) {
   EXPECT_NEAR(r.radius_used, 6.0 * spacing, 1e-12);
   EXPECT_EQ(r.k_used, 0);
   EXPECT_LT(quantile_error(field(cloud, "mean"), 1.0, 1.0, 0.95), 0.02);
-  r = estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Hybrid, .degree = 3, .k = 30, .radius = 0.1}, &tree);
+  r = estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Hybrid, .degree = 3, .k = 30, .radius = Length::cloud(0.1)}, &tree);
   EXPECT_EQ(r.radius_used, 0.1);
   EXPECT_EQ(r.k_used, 30);
   EXPECT_EQ(r.degenerate, 0u);
@@ -325,7 +325,7 @@ TEST(EstimateCurvature, DegeneratePointsAreCountedAndUndefined) {
   // A far point whose radius neighbourhood holds only itself.
   cloud.positions.emplace_back(50.0, 0.0, 0.0);
   cloud.normals.emplace_back(1.0, 0.0, 0.0);
-  const CurvatureResult r = estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Radius, .radius = 0.2});
+  const CurvatureResult r = estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Radius, .radius = Length::cloud(0.2)});
   EXPECT_EQ(r.degenerate, 2u);
   EXPECT_EQ(r.type_counts[0], 2u);
   EXPECT_EQ(field(cloud, "surface_type")[7], 0.0);
@@ -374,9 +374,9 @@ TEST(EstimateCurvature, BadParametersAreUsageErrors) {
   expect({.k = 5}, "estimate_curvature: k must be 0 (default) or >= 6 for degree 2, got 5");
   expect({.degree = 3, .k = 9}, "estimate_curvature: k must be 0 (default) or >= 10 for degree 3, got 9");
   expect({.k = -1}, "k must be 0 (default) or >= 6 for degree 2, got -1");
-  expect({.neighborhood = NeighborhoodKind::Radius, .radius = -1.0}, "estimate_curvature: radius must be >= 0, got -1");
-  expect({.neighborhood = NeighborhoodKind::Hybrid, .radius_in_spacings = 0.0},
-         "estimate_curvature: radius_in_spacings must be > 0, got 0");
+  expect({.neighborhood = NeighborhoodKind::Radius, .radius = Length::cloud(-1.0)}, "estimate_curvature: radius must be > 0, got -1");
+  expect({.neighborhood = NeighborhoodKind::Hybrid, .radius = Length::spacings(0.0)},
+         "estimate_curvature: radius must be > 0, got 0sp");
   expect({.zero_curvature = -0.5}, "estimate_curvature: zero_curvature must be >= 0 (1/cloud units), got -0.5");
   expect({.zero_in_noise = 0.0}, "estimate_curvature: zero_in_noise must be > 0, got 0");
   expect({.scale_in_noise = 0.0}, "estimate_curvature: scale_in_noise must be > 0, got 0");
@@ -384,7 +384,7 @@ TEST(EstimateCurvature, BadParametersAreUsageErrors) {
   expect({.cylinder = 1.5}, "estimate_curvature: cylinder must be in (0, 1] (0: automatic), got 1.5");
   // k is not used by radius neighbourhoods, nor the radius by kNN.
   EXPECT_NO_THROW(estimate_curvature(cloud, {.neighborhood = NeighborhoodKind::Radius, .k = 1}));
-  EXPECT_NO_THROW(estimate_curvature(cloud, {.radius = -1.0}));
+  EXPECT_NO_THROW(estimate_curvature(cloud, {.radius = Length::cloud(-1.0)}));
 
   PointCloud bare = cloud;
   bare.normals.clear();

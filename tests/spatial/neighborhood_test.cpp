@@ -16,11 +16,11 @@ namespace {
 TEST(Neighborhood, ChecksOnlyWhatItsKindUses) {
   test::expect_error<UsageError>([] { Neighborhood{.k = 2}.validate("f", 3); }, "f: k must be >= 3, got 2");
   EXPECT_NO_THROW((Neighborhood{.kind = NeighborhoodKind::Radius, .k = 2}.validate("f", 3)));
-  EXPECT_NO_THROW((Neighborhood{.radius = -1.0}.validate("f", 3)));  // knn uses no radius
-  test::expect_error<UsageError>([] { Neighborhood{.kind = NeighborhoodKind::Hybrid, .radius = -1.0}.validate("f", 3); },
-                                 "f: radius must be >= 0, got -1");
-  test::expect_error<UsageError>([] { Neighborhood{.kind = NeighborhoodKind::Radius, .radius_in_spacings = 0.0}.validate("f", 3); },
-                                 "f: radius_in_spacings must be > 0, got 0");
+  EXPECT_NO_THROW((Neighborhood{.radius = Length::cloud(-1.0)}.validate("f", 3)));  // knn uses no radius
+  test::expect_error<UsageError>([] { Neighborhood{.kind = NeighborhoodKind::Hybrid, .radius = Length::cloud(-1.0)}.validate("f", 3); },
+                                 "f: radius must be > 0, got -1");
+  test::expect_error<UsageError>([] { Neighborhood{.kind = NeighborhoodKind::Radius, .radius = Length::spacings(0.0)}.validate("f", 3); },
+                                 "f: radius must be > 0, got 0sp");
 }
 
 TEST(Neighborhood, QueriesAsTheTreeDoesAndResolvesTheRadiusFromTheSpacing) {
@@ -33,7 +33,7 @@ TEST(Neighborhood, QueriesAsTheTreeDoesAndResolvesTheRadiusFromTheSpacing) {
   tree.knn(sphere.positions[5], 12, b);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].index, b[i].index);
-  const Neighborhood hybrid{.kind = NeighborhoodKind::Hybrid, .k = 8, .radius_in_spacings = 2.0};
+  const Neighborhood hybrid{.kind = NeighborhoodKind::Hybrid, .k = 8, .radius = Length::spacings(2.0)};
   EXPECT_DOUBLE_EQ(hybrid.resolve_radius(tree), 2.0 * spacing);
   EXPECT_EQ(knn.resolve_radius(tree), 0.0);
   hybrid.query(tree, sphere.positions[5], 8, 2.0 * spacing, a);
@@ -43,7 +43,7 @@ TEST(Neighborhood, QueriesAsTheTreeDoesAndResolvesTheRadiusFromTheSpacing) {
   EXPECT_EQ(NormalParams{}.neighborhood_settings().k, NormalParams{}.k);
   EXPECT_EQ(CurvatureParams{}.neighborhood_settings().k, 24);                   // k = 0: the degree's default
   EXPECT_EQ(CurvatureParams{.degree = 3}.neighborhood_settings().k, 40);
-  EXPECT_EQ(CurvatureParams{}.neighborhood_settings().radius_in_spacings, CurvatureParams{}.radius_in_spacings);
+  EXPECT_EQ(CurvatureParams{}.neighborhood_settings().radius, CurvatureParams{}.radius);
 }
 
 }  // namespace

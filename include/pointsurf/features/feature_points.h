@@ -4,6 +4,7 @@
 // clusters of a candidate's neighbours grouped by normal angle.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -29,13 +30,14 @@ struct FeatureParams {
   int k = 30;                        // neighbours per point (variation, normals, screening), >= 6
   double variation_threshold = 0.0;  // candidates: surface variation l0/(l0+l1+l2) above this,
                                      // in (0, 1/3); 0: derived from the data (see below)
-  double dn_deg = 20.0;              // normal-angle clustering threshold, degrees, in (0, 90)
+  double cluster_angle_deg = 20.0;   // normal-angle clustering threshold, degrees, in (0, 90)
   double min_turn_deg = 28.0;        // smallest crease kept: two planes must turn by this, degrees,
                                      // in (0, 90); also sets the candidate floor (below)
-  double dd = 0.0;                   // point-to-plane distance, cloud units; 0: dd_in_spacings * spacing
-  double dd_in_spacings = 1.0;       // used when dd == 0, > 0
+  Length plane_distance = Length::spacings(1.0);  // point-to-plane distance of a cluster's plane, > 0
   int min_cluster_points = 5;        // fewest neighbours a cluster needs to give a plane, in [3, k]
   FeatureNormals normals = FeatureNormals::Robust;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<FeatureParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -16,17 +17,18 @@ namespace pointsurf {
 struct NormalParams {
   NeighborhoodKind neighborhood = NeighborhoodKind::Knn;
   int k = 30;                       // neighbours per point (Knn, Hybrid), >= 3
-  double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
-  double radius_in_spacings = 3.0;  // used when radius == 0
+  Length radius = Length::spacings(3.0);  // (Radius, Hybrid) cloud units or mean spacings, > 0
   bool keep_variation = true;       // add field "variation" = l0 / (l0 + l1 + l2), in [0, 1/3]
   bool keep_mean_distance = false;  // add field "mean_distance" (Float64, cloud units): mean
                                     // distance from the point to its neighbours, itself included,
                                     // the statistic of statistical outlier removal (see
                                     // statistical_outliers_from_distances): one kNN pass for both
   /// The neighbourhood fields as the one Neighborhood type (spatial/neighborhood.h).
-  Neighborhood neighborhood_settings() const noexcept { return {neighborhood, k, radius, radius_in_spacings}; }
-  /// Throws UsageError naming the first value out of range (k < 3 where k is used, a negative
-  /// radius, radius_in_spacings <= 0 where used). The one place these values are checked.
+  Neighborhood neighborhood_settings() const noexcept { return {neighborhood, k, radius}; }
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<NormalParams>& fields();
+  /// Throws UsageError naming the first value out of range (k < 3 where k is used, a radius
+  /// not > 0 where used). The one place these values are checked.
   void validate() const;
 };
 
@@ -53,12 +55,16 @@ enum class Orientation {
   Direction,   // each normal has a positive dot product with `direction`
   Mst,         // consistent propagation over a minimum spanning tree (Hoppe 1992)
 };
+/// "mst", "viewpoint", "direction", "none".
+const EnumNames<Orientation>& orientation_names();
 
 struct OrientParams {
   Orientation method = Orientation::Mst;
   Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // cloud units (Viewpoint)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ(); // any length > 0 (Direction)
   int k = 10;                                           // kNN graph degree (Mst), >= 1
+  /// Key, unit, range and doc of each field (core/fields.h): orient, viewpoint, direction, orient_k.
+  static const FieldTable<OrientParams>& fields();
   /// Throws UsageError for a non-finite viewpoint (Viewpoint), a zero or non-finite direction
   /// (Direction) or k < 1 (Mst).
   void validate() const;

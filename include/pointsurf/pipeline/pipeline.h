@@ -28,6 +28,7 @@ struct PipelineStep {
   std::vector<std::string> inputs;
   StageArgs args;
   std::vector<StageArgs> per_method;  // a method list (clean): each method's own; else {args}
+  std::vector<std::string> warnings;  // found while checking (a deprecated key), added to the record
 };
 
 struct Pipeline {

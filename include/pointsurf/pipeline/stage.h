@@ -14,45 +14,12 @@
 #include <variant>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/progress.h"
 
 namespace pointsurf {
 
 class Context;
-
-/// Parameter types. Vector3 and DoubleList hold their numbers in a std::vector<double>.
-enum class ParamType { Bool, Int, Double, String, Choice, ChoiceList, Vector3, DoubleList };
-
-/// Name of a type as the messages and --help spell it ("integer", "number", ...).
-const char* param_type_name(ParamType type) noexcept;
-
-/// One parameter value: bool, integer, number, text (String, Choice, ChoiceList as "a,b") or
-/// numbers (Vector3, DoubleList).
-using ParamValue = std::variant<bool, std::int64_t, double, std::string, std::vector<double>>;
-
-/// A value as text, the way --help, the summary lines and --set write it (numbers in the
-/// shortest form that reads back exactly, lists comma separated).
-std::string format_value(const ParamValue& value);
-
-struct ParamSpec {
-  std::string name;                  // key in pipelines, reports and Python; the CLI writes
-                                     // it --name-with-dashes
-  ParamType type = ParamType::Double;
-  ParamValue default_value;          // taken from a default-constructed Params struct
-  std::string unit;                  // "cloud units", "degrees", "mean spacings", "" (none)
-  double min = -std::numeric_limits<double>::infinity();  // numeric range (Int, Double, lists)
-  double max = std::numeric_limits<double>::infinity();
-  bool min_open = false, max_open = false;  // (min or [min; max) or max]
-  std::vector<std::string> choices;  // Choice, ChoiceList
-  std::string doc;                   // one line
-  std::vector<std::string> methods;  // methods it belongs to; empty: every method
-  std::string meta;                  // placeholder in --help ("N", "R", "X,Y,Z")
-
-  bool has_range() const noexcept;
-  /// "[3, inf)", "(0, 90]", "" when unbounded.
-  std::string range_text() const;
-  bool applies_to(const std::string& method) const;
-};
 
 /// What a stage reads or writes.
 enum class DataKind { Cloud, Mesh, Any };
@@ -101,6 +68,9 @@ public:
   double number(const std::string& name) const;
   const std::string& text(const std::string& name) const;
   const std::vector<double>& numbers(const std::string& name) const;
+  const Length& length(const std::string& name) const;
+  /// The value of `name` whatever its type.
+  const ParamValue& value(const std::string& name) const { return at(name); }
   const std::string& method() const noexcept { return method_; }
   const std::map<std::string, ParamValue>& values() const noexcept { return values_; }
 
@@ -153,6 +123,8 @@ struct StageSpec {
 
   const ParamSpec* find_param(const std::string& name) const;          // any method
   std::vector<const ParamSpec*> params_named(const std::string& name) const;
+  /// The parameters that name `old_key` among their former keys.
+  std::vector<const ParamSpec*> params_formerly(const std::string& old_key) const;
 };
 
 }  // namespace pointsurf

@@ -48,8 +48,7 @@ struct CurvatureParams {
   int k = 0;                        // neighbours per point (Knn, Hybrid), at least 6 (degree 2) or 10
                                     // (degree 3); 0: Knn chooses it from the noise (choose_curvature_scale),
                                     // starting at 24 for degree 2, 40 for degree 3; Hybrid takes 24 / 40
-  double radius = 0.0;              // cloud units (Radius, Hybrid); 0: radius_in_spacings * mean spacing
-  double radius_in_spacings = 6.0;  // used when radius == 0
+  Length radius = Length::spacings(6.0);  // (Radius, Hybrid) cloud units or mean spacings, > 0
   double scale_in_noise = 8.0;      // k = 0 (Knn): the neighbourhood radius must reach this many times
                                     // the noise (the jet fit's residual), > 0
   int max_k = 1536;                 // k = 0 (Knn): the most neighbours the choice may reach, >= the start
@@ -66,8 +65,10 @@ struct CurvatureParams {
   /// The neighbourhood fields as the one Neighborhood type (spatial/neighborhood.h), k resolved
   /// (0: 24 for degree 2, 40 for degree 3).
   Neighborhood neighborhood_settings() const noexcept {
-    return {neighborhood, k == 0 ? (degree == 2 ? 24 : 40) : k, radius, radius_in_spacings};
+    return {neighborhood, k == 0 ? (degree == 2 ? 24 : 40) : k, radius};
   }
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<CurvatureParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;

@@ -66,6 +66,30 @@ private:
 
 inline std::vector<double> as_list(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
+/// A stage's parameters from a library field table (core/fields.h): the exposed fields, their
+/// defaults read from `defaults`, restricted to `methods` when given.
+template <class Params>
+std::vector<ParamSpec> params_of(const FieldTable<Params>& table, const std::vector<std::string>& methods = {},
+                                 const Params& defaults = Params{}) {
+  std::vector<ParamSpec> specs = table.specs(defaults);
+  for (ParamSpec& s : specs) s.methods = methods;
+  return specs;
+}
+
+/// The library's Params from a stage's resolved arguments: every exposed field the stage
+/// declares (given or default) is set; the others keep `p`'s values.
+template <class Params>
+Params read_params(const StageArgs& args, Params p = Params{}, const FieldTable<Params>& table = Params::fields()) {
+  for (const Field<Params>& f : table)
+    if (f.exposed && args.has(f.spec.name)) f.set(p, args.value(f.spec.name));
+  return p;
+}
+
+/// Appends `more` to `specs`.
+inline void append(std::vector<ParamSpec>& specs, std::vector<ParamSpec> more) {
+  for (ParamSpec& s : more) specs.push_back(std::move(s));
+}
+
 // The stage declarations, one function per stage (src/pipeline/stage_*.cpp).
 StageSpec read_stage();
 StageSpec write_stage();

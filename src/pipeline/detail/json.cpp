@@ -108,7 +108,14 @@ std::vector<RawStep> parse_raw_pipeline(const std::string& text, const std::stri
 namespace {
 
 nlohmann::json to_json(const ParamValue& v) {
-  return std::visit([](const auto& x) { return nlohmann::json(x); }, v);
+  return std::visit(
+      [](const auto& x) -> nlohmann::json {
+        using T = std::decay_t<decltype(x)>;
+        // A length in cloud units is a number, one in spacings the text "3sp" (as written).
+        if constexpr (std::is_same_v<T, Length>) return x.in_spacings() ? nlohmann::json(x.text()) : nlohmann::json(x.value);
+        else return nlohmann::json(x);
+      },
+      v);
 }
 
 nlohmann::json to_json(const ResultValue& v) {

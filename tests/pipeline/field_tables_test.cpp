@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Every Params struct a stage reads has a field table naming every one of its members, so a
+// member added to a struct without its key, unit, range and doc fails here.
+#include <gtest/gtest.h>
+
+#include "pointsurf/core/fields.h"
+#include "pointsurf/features/feature_points.h"
+#include "pointsurf/normals/normals.h"
+#include "pointsurf/pipeline/registry.h"
+#include "pointsurf/shape/curvature.h"
+
+namespace pointsurf {
+namespace {
+
+template <class P>
+void expect_complete(const char* name) {
+  const FieldTable<P>& table = P::fields();
+  EXPECT_EQ(members_named(table), detail::aggregate_member_count<P>()) << name << ": a member has no field in its table";
+  for (const Field<P>& f : table) {
+    EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
+    EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
+    // The default passes the field's own range (the struct's default is valid).
+    if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
+  }
+  EXPECT_NO_THROW(P{}.validate()) << name;
+}
+
+TEST(FieldTables, EveryMemberOfEveryStageParamsIsDeclared) {
+  expect_complete<NormalParams>("NormalParams");
+  expect_complete<OrientParams>("OrientParams");
+  expect_complete<CurvatureParams>("CurvatureParams");
+  expect_complete<FeatureParams>("FeatureParams");
+}
+
+// A stage parameter generated from a table shows the table's default, range and doc.
+TEST(FieldTables, StageParametersComeFromTheTables) {
+  const StageSpec& normals = *find_stage("normals");
+  for (const Field<NormalParams>& f : NormalParams::fields()) {
+    if (!f.exposed) {
+      EXPECT_EQ(normals.find_param(f.spec.name), nullptr) << f.spec.name;
+      continue;
+    }
+    const ParamSpec* p = normals.find_param(f.spec.name);
+    ASSERT_NE(p, nullptr) << f.spec.name;
+    EXPECT_EQ(format_value(p->default_value), format_value(f.get(NormalParams{})));
+    EXPECT_EQ(p->range_text(), f.spec.range_text());
+    EXPECT_EQ(p->doc, f.spec.doc);
+  }
+}
+
+}  // namespace
+}  // namespace pointsurf
