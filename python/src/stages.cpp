@@ -49,7 +49,13 @@ py::dict param_dict(const ParamSpec& p) {
   d["name"] = p.name;
   d["type"] = param_type_name(p.type);
   d["kind"] = static_cast<int>(p.type);
-  d["default"] = p.default_value;
+  // A length's default is its text ("3sp"); the other types map to Python values as they are.
+  d["default"] = std::visit(
+      [](const auto& v) -> py::object {
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, Length>) return py::str(v.text());
+        else return py::cast(v);
+      },
+      p.default_value);
   d["unit"] = p.unit;
   d["min"] = p.min;
   d["max"] = p.max;
