@@ -231,6 +231,13 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
                            if (kv.first == key) throw UsageError(fmt::format("{} given twice", name));
                          target.emplace_back(key, v);
                        }});
+    // Former keys (one release): passed on as written; the pipeline maps them and warns.
+    for (const std::string& old : p.old_names) {
+      const std::string old_name = option_name(owner, old);
+      if (!seen.insert(old_name).second) continue;
+      options.push_back({old_name, p.type == ParamType::Bool, p.meta,
+                         [&target, old](const std::string& v) { target.emplace_back(old, v); }});
+    }
   };
   if (!s.methods.empty())
     options.push_back({"--method", false, "METHOD", [&](const std::string& v) {

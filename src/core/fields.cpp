@@ -159,7 +159,9 @@ std::string choices_text(const std::vector<std::string>& choices) {
 }
 
 void check_number(const ParamSpec& spec, double v, const std::string& shown) {
-  const bool ok = (spec.min_open ? v > spec.min : v >= spec.min) && (spec.max_open ? v < spec.max : v <= spec.max);
+  // A declared range is finite: inf and NaN are refused as the library's checks always did.
+  const bool ok = (!spec.has_range() || std::isfinite(v)) && (spec.min_open ? v > spec.min : v >= spec.min) &&
+                  (spec.max_open ? v < spec.max : v <= spec.max);
   if (!ok) throw UsageError(fmt::format("{}: {} is out of range {}", spec.name, shown, spec.range_text()));
 }
 

@@ -112,3 +112,13 @@ TEST(FieldTable, CountsTheMembersOfAnAggregate) {
 
 }  // namespace
 }  // namespace pointsurf
+
+namespace pointsurf {
+namespace {
+TEST(FieldTable, RangesRefuseInfinityAndNaN) {
+  const FieldTable<ToyParams>& t = ToyParams::fields();
+  test::expect_error<UsageError>([&] { t.validate(ToyParams{.ratio = std::nan("")}, "toy"); }, "toy: ratio must be in (0, 1], got nan");
+  test::expect_error<UsageError>([&] { t.validate(ToyParams{.radius = Length::cloud(HUGE_VAL)}, "toy"); }, "toy: radius must be > 0, got inf");
+}
+}  // namespace
+}  // namespace pointsurf

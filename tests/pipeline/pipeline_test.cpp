@@ -98,7 +98,7 @@ TEST_F(PipelineRun, FiveStageChainBuildsOneTreePerCloud) {
 TEST_F(PipelineRun, ReportHoldsTheValuesUsedNotPlaceholders) {
   write_point_cloud(path("sphere.ply"), test::sample_sphere(3000));
   const Pipeline p = parse_pipeline("[\"" + path("sphere.ply") +
-                                        "\", {\"type\": \"normals\", \"radius_in_spacings\": 3}, {\"type\": \"features\"},"
+                                        "\", {\"type\": \"normals\", \"radius\": \"3sp\"}, {\"type\": \"features\"},"
                                         " {\"type\": \"reconstruct\", \"method\": \"ball-pivot\"}, \"" + path("m.ply") + "\"]",
                                     "p.json");
   Context ctx;
@@ -106,12 +106,38 @@ TEST_F(PipelineRun, ReportHoldsTheValuesUsedNotPlaceholders) {
   run_pipeline(p, ctx, report);
   const StageRecord& normals = record(report, "normals2");
   EXPECT_EQ(std::get<std::string>(parameter(normals, "neighborhood")), "radius");  // inferred from the radius given
-  EXPECT_GT(std::get<double>(parameter(normals, "radius")), 0.0);                   // the radius used, not 0
+  EXPECT_EQ(std::get<Length>(parameter(normals, "radius")), Length::spacings(3));   // as given
+  EXPECT_GT(std::get<double>(parameter(normals, "radius_used")), 0.0);                // the radius used, cloud units
   EXPECT_GT(std::get<double>(parameter(record(report, "features3"), "variation_threshold")), 0.0);
-  EXPECT_GT(std::get<double>(parameter(record(report, "features3"), "dd")), 0.0);
+  EXPECT_GT(std::get<double>(parameter(record(report, "features3"), "plane_distance_used")), 0.0);
   const auto radii = std::get<std::vector<double>>(parameter(record(report, "reconstruct4"), "radii"));
   EXPECT_EQ(radii.size(), 3u);
   EXPECT_GT(radii.front(), 0.0);
+}
+
+// A key of the previous release still works for one release, with a warning, and gives the
+// same result as the key that replaced it; a length in a pipeline is a number (cloud units) or
+// a text in spacings.
+TEST_F(PipelineRun, FormerKeysWorkWithAWarning) {
+  write_point_cloud(path("sphere.ply"), test::sample_sphere(2000));
+  auto run = [&](const std::string& normals, const std::string& out) {
+    const Pipeline p = parse_pipeline("[\"" + path("sphere.ply") + "\", {\"type\": \"normals\", " + normals + "}, \"" + path(out) + "\"]", "p.json");
+    Context ctx;
+    RunReport report;
+    run_pipeline(p, ctx, report);
+    return report;
+  };
+  const RunReport old_key = run("\"radius_in_spacings\": 4", "old.ply");
+  const RunReport new_key = run("\"radius\": \"4sp\"", "new.ply");
+  ASSERT_EQ(old_key.warnings.size(), 1u);
+  EXPECT_NE(old_key.warnings[0].find("key \"radius_in_spacings\" is deprecated: use \"radius\""), std::string::npos) << old_key.warnings[0];
+  EXPECT_TRUE(new_key.warnings.empty());
+  EXPECT_EQ(std::get<Length>(parameter(record(old_key, "normals2"), "radius")), Length::spacings(4));
+  EXPECT_EQ(read_point_cloud(path("old.ply")).cloud.normals, read_point_cloud(path("new.ply")).cloud.normals);
+  const RunReport cloud_units = run("\"radius\": 0.2", "cloud.ply");
+  EXPECT_EQ(std::get<Length>(parameter(record(cloud_units, "normals2"), "radius")), Length::cloud(0.2));
+  EXPECT_DOUBLE_EQ(std::get<double>(parameter(record(cloud_units, "normals2"), "radius_used")), 0.2);
+  test::expect_error<UsageError>([&] { run("\"radius\": \"4cm\"", "x.ply"); }, "radius: \"4cm\" is not a length");
 }
 
 TEST_F(PipelineRun, SetOverridesByTypeOrTagAndChecksTypes) {
