@@ -156,7 +156,7 @@ int run_stage(const std::string& stage, const std::string& path) {
     const KdTree tree(cloud.positions);
     RadiusOutlierParams params;
     params.min_neighbours = 4;
-    params.radius_in_spacings = 4.0;
+    params.radius = Length::spacings(4.0);
     std::size_t kept = 0;
     if (stage == "radius_outliers") {
       kept = remove_radius_outliers(cloud, params, &tree).kept.size();

@@ -324,7 +324,7 @@ int main(int argc, char** argv) {
       const double tree_seconds = seconds_since(start);
       const OutlierResult r = a[0] == "sor"
                                   ? remove_statistical_outliers(cloud, {.k = std::stoi(a[2]), .std_ratio = std::stod(a[3])}, &tree)
-                                  : remove_radius_outliers(cloud, {.min_neighbours = std::stoi(a[2]), .radius = std::stod(a[3])}, &tree);
+                                  : remove_radius_outliers(cloud, {.min_neighbours = std::stoi(a[2]), .radius = Length::cloud(std::stod(a[3]))}, &tree);
       const double total = seconds_since(start);
       write_indices(a[4], r.kept);
       fmt::print("{}\n", nlohmann::json{{"tool", "pointsurf"}, {"stage", a[0]}, {"points", cloud.size()}, {"seconds", total},

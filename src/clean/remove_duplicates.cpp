@@ -16,13 +16,21 @@
 
 namespace pointsurf {
 
-void DuplicateParams::validate() const {
-  constexpr std::string_view fn = "find_duplicates";
-  if (!exact) {
-    detail::check_length(fn, "distance", distance, false);
-    if (distance == 0.0) detail::check_positive(fn, "distance_in_spacings", distance_in_spacings);
-  }
+const FieldTable<DuplicateParams>& DuplicateParams::fields() {
+  static const FieldTable<DuplicateParams> table = [] {
+    using P = DuplicateParams;
+    FieldTable<P> t;
+    t.boolean("exact", &P::exact, "Merge only points with identical coordinates");
+    t.length("distance", &P::distance, "Merge distance")
+        .positive()
+        .when([](const P& p) { return !p.exact; })
+        .was("distance_in_spacings");
+    return t;
+  }();
+  return table;
 }
+
+void DuplicateParams::validate() const { fields().validate(*this, "find_duplicates"); }
 
 DuplicateResult find_duplicates(const PointCloud& cloud, const DuplicateParams& params, const KdTree* tree,
                                 const ProgressCallback& progress) {
@@ -34,7 +42,7 @@ DuplicateResult find_duplicates(const PointCloud& cloud, const DuplicateParams& 
   const std::size_t n = cloud.size();
 
   DuplicateResult result;
-  if (!params.exact) result.distance_used = n < 2 ? params.distance : detail::resolve_length(params.distance, params.distance_in_spacings, t);
+  if (!params.exact) result.distance_used = n < 2 ? params.distance.resolve(0.0) : detail::resolve_length(params.distance, t);
   detail::ProgressReporter reporter(progress, 0.0, 1.0, 2);
   // Radius 0 finds the points with identical coordinates: the tree subtracts the same centre
   // from equal coordinates, so their squared distance is exactly 0.

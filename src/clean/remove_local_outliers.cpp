@@ -32,13 +32,23 @@ double median_of(std::span<double> values) {
 
 }  // namespace
 
-void LocalOutlierParams::validate() const {
-  constexpr std::string_view fn = "remove_local_outliers";
-  if (k < 2) throw UsageError(fmt::format("{}: k must be >= 2, got {}", fn, k));
-  if (!(std::isfinite(min_ratio) && min_ratio > 1.0)) throw UsageError(fmt::format("{}: min_ratio must be > 1, got {}", fn, min_ratio));
-  detail::check_positive(fn, "mad_sigmas", mad_sigmas);
-  if (!(std::isfinite(far_ratio) && far_ratio > 1.0)) throw UsageError(fmt::format("{}: far_ratio must be > 1, got {}", fn, far_ratio));
+const FieldTable<LocalOutlierParams>& LocalOutlierParams::fields() {
+  static const FieldTable<LocalOutlierParams> table = [] {
+    using P = LocalOutlierParams;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point, the point excluded").at_least(2).unit("points");
+    t.number("min_ratio", &P::min_ratio, "Drop only points whose mean neighbour distance is above this many times their neighbours'")
+        .range(1.0, inf, true, false);
+    t.number("mad_sigmas", &P::mad_sigmas, "... and above the median ratio by this many robust standard deviations").positive();
+    t.number("far_ratio", &P::far_ratio, "Also drop points whose mean neighbour distance is above this many times the cloud's median")
+        .range(1.0, inf, true, false);
+    return t;
+  }();
+  return table;
 }
+
+void LocalOutlierParams::validate() const { fields().validate(*this, "remove_local_outliers"); }
 
 OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierParams& params, const KdTree* tree,
                                     const ProgressCallback& progress) {

@@ -136,30 +136,54 @@ bool fits_local_plane(std::span<const Eigen::Vector3d> q, double distance, const
 
 }  // namespace
 
-void StatisticalOutlierParams::validate() const {
-  constexpr std::string_view fn = "remove_statistical_outliers";
-  if (k < 1) throw UsageError(fmt::format("{}: k must be >= 1, got {}", fn, k));
-  detail::check_positive(fn, "std_ratio", std_ratio);
+const FieldTable<StatisticalOutlierParams>& StatisticalOutlierParams::fields() {
+  static const FieldTable<StatisticalOutlierParams> table = [] {
+    using P = StatisticalOutlierParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point, the point included").at_least(1).unit("points");
+    t.number("std_ratio", &P::std_ratio, "Drop points whose mean kNN distance >= mean + std_ratio x std").positive();
+    return t;
+  }();
+  return table;
 }
 
-void RadiusOutlierParams::validate() const {
-  constexpr std::string_view fn = "remove_radius_outliers";
-  if (min_neighbours < 1) throw UsageError(fmt::format("{}: min_neighbours must be >= 1, got {}", fn, min_neighbours));
-  detail::check_length(fn, "radius", radius, false);
-  if (radius == 0.0) detail::check_positive(fn, "radius_in_spacings", radius_in_spacings);
+void StatisticalOutlierParams::validate() const { fields().validate(*this, "remove_statistical_outliers"); }
+
+const FieldTable<RadiusOutlierParams>& RadiusOutlierParams::fields() {
+  static const FieldTable<RadiusOutlierParams> table = [] {
+    using P = RadiusOutlierParams;
+    FieldTable<P> t;
+    t.integer("min_neighbours", &P::min_neighbours, "Keep points with at least this many others within the radius").at_least(1).unit("points");
+    t.length("radius", &P::radius, "Search radius").positive().was("radius_in_spacings");
+    return t;
+  }();
+  return table;
 }
 
-void RansacOutlierParams::validate() const {
-  constexpr std::string_view fn = "remove_ransac_outliers";
-  if (k < 4) throw UsageError(fmt::format("{}: k must be >= 4, got {}", fn, k));
-  if (iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, iterations));
-  if (!(min_support > 0.0 && min_support <= 1.0)) throw UsageError(fmt::format("{}: min_support must be in (0, 1], got {}", fn, min_support));
-  if (!(min_relative_support >= 0.0 && min_relative_support <= 1.0))
-    throw UsageError(fmt::format("{}: min_relative_support must be in [0, 1], got {}", fn, min_relative_support));
-  detail::check_length(fn, "distance", distance, false);
-  if (distance == 0.0) detail::check_positive(fn, "distance_in_spacings", distance_in_spacings);
-  detail::check_positive(fn, "primitive_band", primitive_band);
+void RadiusOutlierParams::validate() const { fields().validate(*this, "remove_radius_outliers"); }
+
+const FieldTable<RansacOutlierParams>& RansacOutlierParams::fields() {
+  static const FieldTable<RansacOutlierParams> table = [] {
+    using P = RansacOutlierParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbourhood size, the point included").at_least(4).unit("points");
+    t.length("distance", &P::distance, "Plane distance").positive().was("distance_in_spacings");
+    t.integer("iterations", &P::iterations, "Random planes tried per point").at_least(1);
+    t.number("min_support", &P::min_support, "Fraction of the neighbourhood a plane needs").range(0.0, 1.0, true, false);
+    t.number("min_relative_support", &P::min_relative_support,
+             "A plane through the point holding (or scoring) this fraction of the neighbours (of the dominant plane) keeps it")
+        .range(0.0, 1.0);
+    t.integer("seed", &P::seed, "Random seed");
+    t.boolean("primitives", &P::primitives, "Judge points explained by planes, spheres, cylinders, cones (efficient RANSAC) by those");
+    t.number("primitive_band", &P::primitive_band, "A point amid a primitive's inliers farther than this from it is an outlier")
+        .unit("plane distances")
+        .positive();
+    return t;
+  }();
+  return table;
 }
+
+void RansacOutlierParams::validate() const { fields().validate(*this, "remove_ransac_outliers"); }
 
 OutlierResult remove_statistical_outliers(const PointCloud& cloud, const StatisticalOutlierParams& params, const KdTree* tree,
                                           const ProgressCallback& progress) {
@@ -209,7 +233,7 @@ OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlie
   detail::check_cloud(fn, cloud, 2, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
-  const double radius = detail::resolve_length(params.radius, params.radius_in_spacings, t);
+  const double radius = detail::resolve_length(params.radius, t);
   // The point itself is among the results; counting stops once it has min_neighbours others.
   const std::size_t wanted = static_cast<std::size_t>(params.min_neighbours) + 1;
 
@@ -240,7 +264,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   detail::check_cloud(fn, cloud, 4, tree);
   std::optional<KdTree> own;
   const KdTree& t = detail::tree_for(cloud, tree, own);
-  const double distance = detail::resolve_length(params.distance, params.distance_in_spacings, t);
+  const double distance = detail::resolve_length(params.distance, t);
   const std::size_t k = static_cast<std::size_t>(params.k);
 
   // Primitives first (the detector needs normals: estimated on a copy when there are none).

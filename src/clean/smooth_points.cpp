@@ -116,9 +116,9 @@ void fill_displacements(const std::vector<Vector3d>& before, const std::vector<V
 
 // Radius and height sigma in cloud units: explicit values, or multiples of the mean spacing.
 void resolve_lengths(Resolved& r, const BilateralParams& params, const KdTree& tree) {
-  const double spacing = params.radius > 0.0 && params.height_sigma > 0.0 ? 0.0 : mean_spacing(tree);
-  r.radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * spacing;
-  r.height_sigma = params.height_sigma > 0.0 ? params.height_sigma : params.height_sigma_in_spacings * spacing;
+  const double spacing = params.radius.in_spacings() || params.height_sigma.in_spacings() ? mean_spacing(tree) : 0.0;
+  r.radius = params.radius.resolve(spacing);
+  r.height_sigma = params.height_sigma.resolve(spacing);
   r.max_neighbours = static_cast<std::size_t>(params.max_neighbours);
 }
 
@@ -147,23 +147,39 @@ SmoothResult smooth_bilateral(PointCloud& cloud, const BilateralParams& params, 
   return result;
 }
 
-void BilateralParams::validate() const {
-  constexpr std::string_view fn = "smooth_bilateral";
-  detail::check_length(fn, "radius", radius, false);
-  if (radius == 0.0) detail::check_positive(fn, "radius_in_spacings", radius_in_spacings);
-  detail::check_length(fn, "height_sigma", height_sigma, false);
-  if (height_sigma == 0.0) detail::check_positive(fn, "height_sigma_in_spacings", height_sigma_in_spacings);
-  if (max_neighbours < 3) throw UsageError(fmt::format("{}: max_neighbours must be >= 3, got {}", fn, max_neighbours));
-  if (iterations < 1) throw UsageError(fmt::format("{}: iterations must be >= 1, got {}", fn, iterations));
+const FieldTable<BilateralParams>& BilateralParams::fields() {
+  static const FieldTable<BilateralParams> table = [] {
+    using P = BilateralParams;
+    FieldTable<P> t;
+    t.length("radius", &P::radius, "Neighbourhood radius").positive().was("radius_in_spacings");
+    t.integer("max_neighbours", &P::max_neighbours, "At most this many nearest points within the radius").at_least(3).unit("points");
+    t.length("height_sigma", &P::height_sigma, "Range sigma along the normal").positive().was("height_sigma_in_spacings");
+    t.integer("iterations", &P::iterations, "Position passes").at_least(1);
+    return t;
+  }();
+  return table;
+}
+
+void BilateralParams::validate() const { fields().validate(*this, "smooth_bilateral"); }
+
+const FieldTable<TrilateralParams>& TrilateralParams::fields() {
+  static const FieldTable<TrilateralParams> table = [] {
+    using P = TrilateralParams;
+    FieldTable<P> t;
+    t.nested(&P::position, BilateralParams::fields());
+    t.number("sharpness_angle_deg", &P::sharpness_angle_deg, "Sigma of the angle between normals").unit("degrees").range(0.0, 90.0, true, false);
+    t.integer("normal_iterations", &P::normal_iterations, "Passes of the normal filter").at_least(1);
+    t.number("height_sigma_scale", &P::height_sigma_scale, "Range sigma of the position pass, times the height sigma").positive();
+    t.boolean("use_feature_field", &P::use_feature_field, "Feature points (field \"feature\") do not lend their normals");
+    return t;
+  }();
+  return table;
 }
 
 void TrilateralParams::validate() const {
-  constexpr std::string_view fn = "smooth_trilateral";
   if (!(sharpness_angle_deg > 0.0 && sharpness_angle_deg <= 90.0))
-    throw UsageError(fmt::format("{}: sharpness_angle_deg must be in (0, 90] degrees, got {}", fn, sharpness_angle_deg));
-  if (normal_iterations < 1) throw UsageError(fmt::format("{}: normal_iterations must be >= 1, got {}", fn, normal_iterations));
-  detail::check_positive(fn, "height_sigma_scale", height_sigma_scale);
-  position.validate();
+    throw UsageError(fmt::format("smooth_trilateral: sharpness_angle_deg must be in (0, 90] degrees, got {}", sharpness_angle_deg));
+  fields().validate(*this, "smooth_trilateral");
 }
 
 SmoothResult smooth_trilateral(PointCloud& cloud, const TrilateralParams& params, const KdTree* tree, const ProgressCallback& progress) {

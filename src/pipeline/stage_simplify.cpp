@@ -2,7 +2,8 @@
 // The simplify stage: six methods, one target (ratio, count or cell).
 #include <algorithm>
 #include <cmath>
-#include <limits>
+#include <string>
+#include <vector>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -13,54 +14,24 @@
 namespace pointsurf::detail {
 namespace {
 
-SimplifyTarget target_of(const StageArgs& a) {
-  SimplifyTarget t;
-  t.ratio = a.number("ratio");
-  t.count = static_cast<std::size_t>(a.integer("count"));
-  if (a.has("cell")) t.cell = a.number("cell");
-  return t;
-}
+// The library's Params of each method from its arguments: the run and the check before any
+// work build them the same way, and the check calls their validate().
+SimplifyTarget target_of(const StageArgs& a) { return read_params<SimplifyTarget>(a); }
+GridParams grid_params(const StageArgs& a) { return read_params<GridParams>(a); }
+RandomParams random_params(const StageArgs& a) { return read_params<RandomParams>(a); }
+CurvatureSimplifyParams curvature_simplify_params(const StageArgs& a) { return read_params<CurvatureSimplifyParams>(a); }
+RegionalParams regional_params(const StageArgs& a) { return read_params<RegionalParams>(a); }
+CurvatureDistanceParams curvature_distance_params(const StageArgs& a) { return read_params<CurvatureDistanceParams>(a); }
+LfsParams lfs_params(const StageArgs& a) { return read_params<LfsParams>(a); }
 
-CurvatureSimplifyParams curvature_simplify_params(const StageArgs& a) {
-  CurvatureSimplifyParams p;
-  p.target = target_of(a);
-  p.k = a.int32("k");
-  p.flat_weight = a.number("flat_weight");
-  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
-  return p;
-}
-
-RegionalParams regional_params(const StageArgs& a) {
-  RegionalParams p;
-  p.target = target_of(a);
-  p.k = a.int32("k");
-  p.region_in_spacings = a.number("region_in_spacings");
-  p.region_angle_deg = a.number("region_angle_deg");
-  p.variation_weight = a.number("variation_weight");
-  p.normal_weight = a.number("normal_weight");
-  p.distance_weight = a.number("distance_weight");
-  p.feature_threshold = a.number("feature_threshold");
-  p.max_feature_share = a.number("max_feature_share");
-  p.keep_boundary = a.boolean("keep_boundary");
-  return p;
-}
-
-CurvatureDistanceParams curvature_distance_params(const StageArgs& a) {
-  CurvatureDistanceParams p;
-  p.target = target_of(a);
-  p.k = a.int32("k");
-  p.split_quantile = a.number("split_quantile");
-  p.high_to_low_distance = a.number("high_to_low_distance");
-  return p;
-}
-
-LfsParams lfs_params(const StageArgs& a) {
-  LfsParams p;
-  p.target = target_of(a);
-  p.k = a.int32("k");
-  p.adaptivity = a.number("adaptivity");
-  p.fill_neighbours = a.int32("fill_neighbours");
-  return p;
+// A method's own parameters: its table less the target (ratio, count, cell), declared once
+// for every method.
+template <class Params>
+std::vector<ParamSpec> method_params(const std::string& method) {
+  std::vector<ParamSpec> out;
+  for (ParamSpec& p : params_of(Params::fields(), {method}))
+    if (SimplifyTarget::fields().find(p.name) == nullptr) out.push_back(std::move(p));
+  return out;
 }
 
 void run_simplify(StageRun& run) {
@@ -70,15 +41,14 @@ void run_simplify(StageRun& run) {
   const PointCloud& cloud = item.cloud;
   const bool surface = method != "grid" && method != "random";
   if (surface && cloud.size() < 3) throw InputError(fmt::format("{}; method {} needs at least 3", plural(cloud.size(), "point"), method));
-  const SimplifyTarget target = target_of(a);
   const KdTree* tree = cloud.size() >= 2 ? &run.context.tree(run.output) : nullptr;
   const double spacing = cloud.size() >= 2 ? run.context.mean_spacing(run.output) : 0.0;
   const ProgressCallback progress = sub_progress(run.progress, 0.0, 0.9);
   SimplifyResult r;
   if (method == "grid") {
-    r = simplify_grid(cloud, {target, a.text("mode") == "nearest" ? GridMode::Nearest : GridMode::Centroid}, progress);
+    r = simplify_grid(cloud, grid_params(a), progress);
   } else if (method == "random") {
-    r = simplify_random(cloud, {target, static_cast<std::uint64_t>(a.integer("seed"))});
+    r = simplify_random(cloud, random_params(a));
   } else if (method == "curvature") {
     const CurvatureSimplifyParams p = curvature_simplify_params(a);
     r = simplify_curvature(cloud, p, tree, progress);
@@ -141,13 +111,6 @@ void run_simplify(StageRun& run) {
 }  // namespace
 
 StageSpec simplify_stage() {
-  const SimplifyTarget t;
-  const GridParams grid;
-  const RandomParams random;
-  const CurvatureSimplifyParams curv;
-  const RegionalParams reg;
-  const CurvatureDistanceParams cd;
-  const LfsParams lfs;
   StageSpec s;
   s.name = "simplify";
   s.summary = "Fewer points that keep the surface: grid, random, curvature, regional, curvature-distance or lfs";
@@ -158,45 +121,15 @@ StageSpec simplify_stage() {
   s.methods = {"grid", "random", "curvature", "regional", "curvature-distance", "lfs"};
   s.default_method = "grid";
   const std::vector<std::string> with_cell = {"grid", "regional", "curvature-distance", "lfs"};
-  s.params = {
-      P::number("ratio", t.ratio, "Kept fraction of the points").range(0.0, 1.0, true, false).meta("F"),
-      P::integer("count", static_cast<std::int64_t>(t.count), "Number of output points instead of ratio; 0: use ratio").at_least(0),
-      P::number("cell", t.cell,
-                "Length instead of a count: grid cell; Poisson-disk distance of flat points (regional, curvature-distance); "
-                "spacing at the median feature size (lfs)")
-          .unit("cloud units")
-          .non_negative()
-          .meta("S")
-          .only(with_cell),
-      P::choice("mode", grid.mode == GridMode::Centroid ? "centroid" : "nearest", {"centroid", "nearest"},
-                "centroid (average each cell) or nearest (keep the sample nearest to it)")
-          .only({"grid"}),
-      P::integer("seed", static_cast<std::int64_t>(random.seed), "Random seed").at_least(0).only({"random"}),
-      P::integer("seed", static_cast<std::int64_t>(curv.seed), "Random seed").at_least(0).only({"curvature"}),
-      P::integer("k", curv.k, "Neighbours for normals and variation when the input has none").at_least(3).only({"curvature"}),
-      P::number("flat_weight", curv.flat_weight, "Weight of a flat point relative to the mean variation").non_negative().only({"curvature"}),
-      P::integer("k", reg.k, "Neighbours for normals and variation when the input has none").at_least(3).only({"regional"}),
-      P::number("region_in_spacings", reg.region_in_spacings, "Cluster cell size").unit("mean spacings").positive().only({"regional"}),
-      P::number("region_angle_deg", reg.region_angle_deg, "Normal angle joining a cluster").unit("degrees").range(0.0, 90.0, true, false).only(
-          {"regional"}),
-      P::number("variation_weight", reg.variation_weight, "Weight of the surface variation in the feature factor").non_negative().only({"regional"}),
-      P::number("normal_weight", reg.normal_weight, "Weight of the normal deviation in the feature factor").non_negative().only({"regional"}),
-      P::number("distance_weight", reg.distance_weight, "Weight of the plane distance in the feature factor").non_negative().only({"regional"}),
-      P::number("feature_threshold", reg.feature_threshold, "Feature factor above which a point is a candidate, [0, 1]; < 0: derived")
-          .range(-std::numeric_limits<double>::infinity(), 1.0)
-          .only({"regional"}),
-      P::number("max_feature_share", reg.max_feature_share, "At most this share of the output are feature points").range(0.0, 1.0, true, false).only(
-          {"regional"}),
-      P::boolean("keep_boundary", reg.keep_boundary, "Thin the rims of open surfaces (angular-gap test) on a grid of half the cell").only({"regional"}),
-      P::integer("k", cd.k, "Neighbours for variation when the input has none").at_least(3).only({"curvature-distance"}),
-      P::number("split_quantile", cd.split_quantile, "Variation quantile splitting high from low").range(0.0, 1.0, true, true).only(
-          {"curvature-distance"}),
-      P::number("high_to_low_distance", cd.high_to_low_distance, "High-part distance / low-part distance").range(0.0, 1.0, true, false).only(
-          {"curvature-distance"}),
-      P::integer("k", lfs.k, "Neighbours for normals, variation and feature size").at_least(3).only({"lfs"}),
-      P::number("adaptivity", lfs.adaptivity, "Feature size clamped to [median/a, median*a]").at_least(1.0).only({"lfs"}),
-      P::integer("fill_neighbours", lfs.fill_neighbours, "kNN edges tested for gaps when filling").at_least(1).only({"lfs"}),
-  };
+  s.params = params_of(SimplifyTarget::fields());
+  for (ParamSpec& p : s.params)
+    if (p.name == "cell") p.methods = with_cell;  // random and curvature take no cell
+  append(s.params, method_params<GridParams>("grid"));
+  append(s.params, method_params<RandomParams>("random"));
+  append(s.params, method_params<CurvatureSimplifyParams>("curvature"));
+  append(s.params, method_params<RegionalParams>("regional"));
+  append(s.params, method_params<CurvatureDistanceParams>("curvature-distance"));
+  append(s.params, method_params<LfsParams>("lfs"));
   s.examples = {"pointsurf simplify scan.ply small.ply --method grid --cell 0.05",
                 "pointsurf simplify part.ply part_small.ply --method regional --ratio 0.25"};
   s.run = run_simplify;
@@ -204,7 +137,9 @@ StageSpec simplify_stage() {
     const int given = int(a.given("ratio")) + int(a.given("count")) + int(a.has("cell") && a.given("cell"));
     if (given > 1) throw UsageError("ratio, count and cell: give only one of them");
     const std::string& m = a.method();
-    if (m == "curvature") curvature_simplify_params(a).validate();
+    if (m == "grid") grid_params(a).validate();
+    else if (m == "random") random_params(a).validate();
+    else if (m == "curvature") curvature_simplify_params(a).validate();
     else if (m == "regional") regional_params(a).validate();
     else if (m == "curvature-distance") curvature_distance_params(a).validate();
     else if (m == "lfs") lfs_params(a).validate();

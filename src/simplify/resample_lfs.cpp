@@ -134,14 +134,20 @@ std::vector<double> local_feature_size(const PointCloud& cloud, const KdTree* tr
   return lfs;
 }
 
-void LfsParams::validate() const {
-  const LfsParams& p = *this;
-  constexpr std::string_view f = "resample_lfs";
-  detail::check_k(f, p.k);
-  if (!(p.adaptivity >= 1.0) || !std::isfinite(p.adaptivity))
-    throw UsageError(fmt::format("{}: adaptivity must be >= 1, got {}", f, p.adaptivity));
-  if (p.fill_neighbours < 1) throw UsageError(fmt::format("{}: fill_neighbours must be >= 1, got {}", f, p.fill_neighbours));
+const FieldTable<LfsParams>& LfsParams::fields() {
+  static const FieldTable<LfsParams> table = [] {
+    using P = LfsParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.integer("k", &P::k, "Neighbours for normals, variation and feature size").at_least(3).unit("points");
+    t.number("adaptivity", &P::adaptivity, "Feature size clamped to [median/a, median*a]").at_least(1.0);
+    t.integer("fill_neighbours", &P::fill_neighbours, "kNN edges tested for gaps when filling").at_least(1);
+    return t;
+  }();
+  return table;
 }
+
+void LfsParams::validate() const { fields().validate(*this, "resample_lfs"); }
 
 SimplifyResult resample_lfs(const PointCloud& cloud, const LfsParams& params, const KdTree* tree, const ProgressCallback& progress) {
   constexpr std::string_view f = "resample_lfs";

@@ -26,11 +26,20 @@ std::uint64_t splitmix64(std::uint64_t x) {
 
 }  // namespace
 
-void CurvatureSimplifyParams::validate() const {
-  detail::check_k("simplify_curvature", k);
-  if (!(flat_weight >= 0.0) || !std::isfinite(flat_weight))
-    throw UsageError(fmt::format("simplify_curvature: flat_weight must be >= 0, got {}", flat_weight));
+const FieldTable<CurvatureSimplifyParams>& CurvatureSimplifyParams::fields() {
+  static const FieldTable<CurvatureSimplifyParams> table = [] {
+    using P = CurvatureSimplifyParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.integer("k", &P::k, "Neighbours for normals and variation when the input has none").at_least(3).unit("points");
+    t.number("flat_weight", &P::flat_weight, "Weight of a flat point relative to the mean variation").non_negative();
+    t.integer("seed", &P::seed, "Random seed");
+    return t;
+  }();
+  return table;
 }
+
+void CurvatureSimplifyParams::validate() const { fields().validate(*this, "simplify_curvature"); }
 
 SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimplifyParams& params, const KdTree* tree,
                                   const ProgressCallback& progress) {

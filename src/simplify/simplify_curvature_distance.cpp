@@ -11,14 +11,20 @@
 
 namespace pointsurf {
 
-void CurvatureDistanceParams::validate() const {
-  constexpr std::string_view f = "simplify_curvature_distance";
-  detail::check_k(f, k);
-  if (!(split_quantile > 0.0 && split_quantile < 1.0))
-    throw UsageError(fmt::format("{}: split_quantile must be in (0, 1), got {}", f, split_quantile));
-  if (!(high_to_low_distance > 0.0 && high_to_low_distance <= 1.0))
-    throw UsageError(fmt::format("{}: high_to_low_distance must be in (0, 1], got {}", f, high_to_low_distance));
+const FieldTable<CurvatureDistanceParams>& CurvatureDistanceParams::fields() {
+  static const FieldTable<CurvatureDistanceParams> table = [] {
+    using P = CurvatureDistanceParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.integer("k", &P::k, "Neighbours for variation when the input has none").at_least(3).unit("points");
+    t.number("split_quantile", &P::split_quantile, "Variation quantile splitting high from low").range(0.0, 1.0, true, true);
+    t.number("high_to_low_distance", &P::high_to_low_distance, "High-part distance / low-part distance").range(0.0, 1.0, true, false);
+    return t;
+  }();
+  return table;
 }
+
+void CurvatureDistanceParams::validate() const { fields().validate(*this, "simplify_curvature_distance"); }
 
 SimplifyResult simplify_curvature_distance(const PointCloud& cloud, const CurvatureDistanceParams& params, const KdTree* tree,
                                            const ProgressCallback& progress) {

@@ -14,8 +14,27 @@
 
 namespace pointsurf {
 
+const EnumNames<GridMode>& grid_mode_names() {
+  static const EnumNames<GridMode> names{{{GridMode::Centroid, "centroid"}, {GridMode::Nearest, "nearest"}}};
+  return names;
+}
+
+const FieldTable<GridParams>& GridParams::fields() {
+  static const FieldTable<GridParams> table = [] {
+    using P = GridParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.choice("mode", &P::mode, grid_mode_names(), "centroid (average each cell) or nearest (keep the sample nearest to it)");
+    return t;
+  }();
+  return table;
+}
+
+void GridParams::validate() const { fields().validate(*this, "simplify_grid"); }
+
 SimplifyResult simplify_grid(const PointCloud& cloud, const GridParams& params, const ProgressCallback& progress) {
   detail::check_simplify_input("simplify_grid", cloud, params.target, true);
+  params.validate();
   const std::size_t n = cloud.size();
   const BoundingBox box = bounding_box(cloud.positions);
   detail::ProgressReporter reporter(progress, 0.0, 1.0, n);

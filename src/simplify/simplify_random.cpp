@@ -8,8 +8,22 @@
 
 namespace pointsurf {
 
+const FieldTable<RandomParams>& RandomParams::fields() {
+  static const FieldTable<RandomParams> table = [] {
+    using P = RandomParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.integer("seed", &P::seed, "Random seed");
+    return t;
+  }();
+  return table;
+}
+
+void RandomParams::validate() const { fields().validate(*this, "simplify_random"); }
+
 SimplifyResult simplify_random(const PointCloud& cloud, const RandomParams& params) {
   detail::check_simplify_input("simplify_random", cloud, params.target, false);
+  params.validate();
   const std::size_t n = cloud.size();
   const std::size_t m = detail::target_count(params.target, n);
   std::vector<std::size_t> index(n);

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <tuple>
@@ -109,26 +110,40 @@ void compute_statistics(CellScratch& s, const std::vector<Vector3d>& positions, 
 
 }  // namespace
 
+const FieldTable<RegionalParams>& RegionalParams::fields() {
+  static const FieldTable<RegionalParams> table = [] {
+    using P = RegionalParams;
+    FieldTable<P> t;
+    t.nested(&P::target, SimplifyTarget::fields());
+    t.integer("k", &P::k, "Neighbours for normals and variation when the input has none").at_least(3).unit("points");
+    t.length("region_size", &P::region_size, "Cluster cell size").positive().was("region_in_spacings");
+    t.number("region_angle_deg", &P::region_angle_deg, "Normal angle joining a cluster").unit("degrees").range(0.0, 90.0, true, false);
+    t.number("variation_weight", &P::variation_weight, "Weight of the surface variation in the feature factor").non_negative();
+    t.number("normal_weight", &P::normal_weight, "Weight of the normal deviation in the feature factor").non_negative();
+    t.number("distance_weight", &P::distance_weight, "Weight of the plane distance in the feature factor").non_negative();
+    t.number("feature_threshold", &P::feature_threshold, "Feature factor above which a point is a candidate, [0, 1]; < 0: derived")
+        .range(-std::numeric_limits<double>::infinity(), 1.0);
+    t.number("max_feature_share", &P::max_feature_share, "At most this share of the output are feature points").range(0.0, 1.0, true, false);
+    t.boolean("keep_boundary", &P::keep_boundary, "Thin the rims of open surfaces (angular-gap test) on a grid of half the cell");
+    t.number("spacing", &P::spacing, "The cloud's mean spacing; 0: measured").unit("cloud units").non_negative().internal();
+    return t;
+  }();
+  return table;
+}
+
 void RegionalParams::validate() const {
   const RegionalParams& p = *this;
   constexpr std::string_view f = "simplify_regional";
-  detail::check_k(f, p.k);
-  if (!(p.region_in_spacings > 0.0) || !std::isfinite(p.region_in_spacings))
-    throw UsageError(fmt::format("{}: region_in_spacings must be > 0, got {}", f, p.region_in_spacings));
   if (!(p.region_angle_deg > 0.0 && p.region_angle_deg <= 90.0))
     throw UsageError(fmt::format("{}: region_angle_deg must be in (0, 90] degrees, got {}", f, p.region_angle_deg));
-  for (auto [name, w] : {std::pair{"variation_weight", p.variation_weight}, std::pair{"normal_weight", p.normal_weight},
-                         std::pair{"distance_weight", p.distance_weight}})
-    if (!(w >= 0.0) || !std::isfinite(w)) throw UsageError(fmt::format("{}: {} must be >= 0, got {}", f, name, w));
-  if (!(p.variation_weight + p.normal_weight + p.distance_weight > 0.0))
-    throw UsageError(fmt::format("{}: variation_weight, normal_weight and distance_weight are all 0; at least one must be > 0", f));
   if (!(p.feature_threshold <= 1.0) || std::isnan(p.feature_threshold))
     throw UsageError(fmt::format("{}: feature_threshold must be in [0, 1] (or < 0 for the derived default), got {}", f,
                                  p.feature_threshold));
   if (!(p.spacing >= 0.0) || !std::isfinite(p.spacing))
     throw UsageError(fmt::format("{}: spacing must be >= 0 (cloud units; 0: measured), got {}", f, p.spacing));
-  if (!(p.max_feature_share > 0.0 && p.max_feature_share <= 1.0))
-    throw UsageError(fmt::format("{}: max_feature_share must be in (0, 1], got {}", f, p.max_feature_share));
+  fields().validate(*this, f);
+  if (!(p.variation_weight + p.normal_weight + p.distance_weight > 0.0))
+    throw UsageError(fmt::format("{}: variation_weight, normal_weight and distance_weight are all 0; at least one must be > 0", f));
 }
 
 SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& params, const KdTree* tree,
@@ -166,7 +181,7 @@ SimplifyResult simplify_regional(const PointCloud& cloud, const RegionalParams& 
   // Clusters by position (grid cells) and normal (greedy grouping inside each cell), and the
   // feature factor of every point.
   const detail::Grid region_grid =
-      detail::make_grid("simplify_regional", box, std::max(params.region_in_spacings * spacing, box.extent().maxCoeff() * 1e-6));
+      detail::make_grid("simplify_regional", box, std::max(params.region_size.resolve(spacing), box.extent().maxCoeff() * 1e-6));
   const detail::GridCells regions = detail::sort_into_cells(cloud.positions, {}, true, region_grid);
   const double cos_join = std::cos(params.region_angle_deg * std::numbers::pi / 180.0);
   const double crease_scale = kCreaseInSpacings * spacing;

@@ -76,7 +76,7 @@ TEST(Duplicates, NearCopiesWithinTheDefaultDistance) {
 TEST(Duplicates, KeepsTheFirstOfAChainByIndex) {
   PointCloud cloud;
   cloud.positions = {Vector3d(0, 0, 0), Vector3d(0.9, 0, 0), Vector3d(1.8, 0, 0), Vector3d(5, 0, 0)};
-  const DuplicateResult found = find_duplicates(cloud, {.distance = 1.0});
+  const DuplicateResult found = find_duplicates(cloud, {.distance = Length::cloud(1.0)});
   // 1 merges into 0; 2 is 1.8 from 0 (the only earlier kept point), so it is kept.
   EXPECT_EQ(found.kept, (std::vector<std::uint32_t>{0, 2, 3}));
   EXPECT_EQ(found.representative, (std::vector<std::uint32_t>{0, 0, 2, 3}));
@@ -90,17 +90,17 @@ TEST(Duplicates, ExactCountInvariantUnderPermutationAndAFarShift) {
   std::iota(perm.begin(), perm.end(), std::size_t(0));
   std::shuffle(perm.begin(), perm.end(), std::mt19937_64(3));
   EXPECT_EQ(find_duplicates(cloud.select(perm), {.exact = true}).removed, removed);
-  const std::size_t near = find_duplicates(cloud, {.distance = 2e-3}).removed;
+  const std::size_t near = find_duplicates(cloud, {.distance = Length::cloud(2e-3)}).removed;
   EXPECT_GE(near, 100u);
   for (Vector3d& p : cloud.positions) p += Vector3d(2e6, 5e6, 100.0);
   EXPECT_EQ(find_duplicates(cloud, {.exact = true}).removed, removed);
-  EXPECT_EQ(find_duplicates(cloud, {.distance = 2e-3}).removed, near);
+  EXPECT_EQ(find_duplicates(cloud, {.distance = Length::cloud(2e-3)}).removed, near);
 }
 
 TEST(Duplicates, BadParametersAreUsageErrors) {
   PointCloud cloud = test::sample_plane(20);
-  expect_error<UsageError>([&] { find_duplicates(cloud, {.distance = -1.0}); }, "find_duplicates: distance must be >= 0 (cloud units), got -1");
-  expect_error<UsageError>([&] { find_duplicates(cloud, {.distance_in_spacings = -2.0}); }, "distance_in_spacings must be > 0, got -2");
+  expect_error<UsageError>([&] { find_duplicates(cloud, {.distance = Length::cloud(-1.0)}); }, "find_duplicates: distance must be > 0, got -1");
+  expect_error<UsageError>([&] { find_duplicates(cloud, {.distance = Length::spacings(-2.0)}); }, "distance must be > 0, got -2sp");
   expect_error<UsageError>([&] { find_duplicates(PointCloud{}); }, "find_duplicates: needs at least 1 points, got 0");
   DuplicateResult found = find_duplicates(cloud);
   found.representative.pop_back();

@@ -207,16 +207,16 @@ TEST(RadiusOutliers, CountsOtherPointsWithinTheRadiusInclusive) {
   PointCloud cloud;
   // A point with exactly 2 others at distance 1, and one with 1 other.
   cloud.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(-1, 0, 0), Vector3d(10, 0, 0), Vector3d(10, 1, 0)};
-  const OutlierResult two = remove_radius_outliers(cloud, {.min_neighbours = 2, .radius = 1.0});
+  const OutlierResult two = remove_radius_outliers(cloud, {.min_neighbours = 2, .radius = Length::cloud(1.0)});
   EXPECT_EQ(two.kept, (std::vector<std::uint32_t>{0}));
-  const OutlierResult one = remove_radius_outliers(cloud, {.min_neighbours = 1, .radius = 1.0});
+  const OutlierResult one = remove_radius_outliers(cloud, {.min_neighbours = 1, .radius = Length::cloud(1.0)});
   EXPECT_EQ(one.kept.size(), 5u);
   EXPECT_EQ(one.removed, 0u);
 }
 
 TEST(RadiusOutliers, InvariantUnderPermutationAndAFarShift) {
   Noisy s = noisy_sphere(5000);
-  const RadiusOutlierParams params{.min_neighbours = 4, .radius = 4.0 * s.spacing};
+  const RadiusOutlierParams params{.min_neighbours = 4, .radius = Length::cloud(4.0 * s.spacing)};
   const OutlierResult base = remove_radius_outliers(s.cloud, params);
   const std::vector<std::size_t> perm = permutation(s.cloud.size(), 10);
   EXPECT_EQ(unpermute(remove_radius_outliers(s.cloud.select(perm), params).kept, perm), base.kept);
@@ -469,11 +469,11 @@ TEST(Outliers, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { remove_statistical_outliers(cloud, {.k = 5, .std_ratio = 0.0}); }, "std_ratio must be > 0, got 0");
   expect_error<UsageError>([&] { remove_statistical_outliers(cloud, {.k = 5, .std_ratio = NAN}); }, "std_ratio must be > 0");
   expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.min_neighbours = 0}); }, "min_neighbours must be >= 1, got 0");
-  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius = -1.0}); }, "remove_radius_outliers: radius must be >= 0 (cloud units), got -1");
-  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius_in_spacings = 0.0}); }, "radius_in_spacings must be > 0, got 0");
+  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius = Length::cloud(-1.0)}); }, "remove_radius_outliers: radius must be > 0, got -1");
+  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius = Length::spacings(0.0)}); }, "radius must be > 0, got 0sp");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.k = 3}); }, "remove_ransac_outliers: k must be >= 4, got 3");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.iterations = 0}); }, "iterations must be >= 1, got 0");
-  expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.distance = -0.5}); }, "distance must be >= 0 (cloud units), got -0.5");
+  expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.distance = Length::cloud(-0.5)}); }, "distance must be > 0, got -0.5");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_support = 0.0}); }, "min_support must be in (0, 1], got 0");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_support = 1.5}); }, "min_support must be in (0, 1], got 1.5");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.min_relative_support = -0.1}); },

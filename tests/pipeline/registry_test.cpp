@@ -75,19 +75,6 @@ struct Expected {
 
 std::vector<Expected> library_defaults() {
   const NormalParams n;
-  const LocalOutlierParams loc;
-  const StatisticalOutlierParams sor;
-  const RadiusOutlierParams rad;
-  const RansacOutlierParams ran;
-  const DuplicateParams dup;
-  const BilateralParams bil;
-  const TrilateralParams tri;
-  const SimplifyTarget target;
-  const CurvatureSimplifyParams cs;
-  const RegionalParams reg;
-  const CurvatureDistanceParams cd;
-  const LfsParams lfs;
-  const RandomParams rnd;
   const TriangulateParams tp;
   const CoconeParams cp;
   const BallPivotParams bp;
@@ -107,40 +94,6 @@ std::vector<Expected> library_defaults() {
       {"evaluate", "", "samples", I(sd.samples)},
       {"evaluate", "", "seed", I(sd.seed)},
       {"curvature", "", "normals_k", I{n.k}},
-      {"clean", "local", "k", I{loc.k}},
-      {"clean", "local", "min_ratio", loc.min_ratio},
-      {"clean", "local", "mad_sigmas", loc.mad_sigmas},
-      {"clean", "local", "far_ratio", loc.far_ratio},
-      {"clean", "sor", "k", I{sor.k}},
-      {"clean", "sor", "std_ratio", sor.std_ratio},
-      {"clean", "radius", "min_neighbours", I{rad.min_neighbours}},
-      {"clean", "radius", "radius_in_spacings", rad.radius_in_spacings},
-      {"clean", "ransac", "k", I{ran.k}},
-      {"clean", "ransac", "iterations", I{ran.iterations}},
-      {"clean", "ransac", "min_support", ran.min_support},
-      {"clean", "ransac", "min_relative_support", ran.min_relative_support},
-      {"clean", "ransac", "seed", static_cast<I>(ran.seed)},
-      {"clean", "ransac", "distance_in_spacings", ran.distance_in_spacings},
-      {"clean", "ransac", "primitives", ran.primitives},
-      {"clean", "ransac", "primitive_band", ran.primitive_band},
-      {"clean", "duplicates", "distance_in_spacings", dup.distance_in_spacings},
-      {"clean", "bilateral", "iterations", I{bil.iterations}},
-      {"clean", "bilateral", "max_neighbours", I{bil.max_neighbours}},
-      {"clean", "trilateral", "sharpness_angle_deg", tri.sharpness_angle_deg},
-      {"clean", "trilateral", "normal_iterations", I{tri.normal_iterations}},
-      {"simplify", "grid", "ratio", target.ratio},
-      {"simplify", "random", "seed", static_cast<I>(rnd.seed)},
-      {"simplify", "curvature", "k", I{cs.k}},
-      {"simplify", "curvature", "flat_weight", cs.flat_weight},
-      {"simplify", "regional", "k", I{reg.k}},
-      {"simplify", "regional", "region_in_spacings", reg.region_in_spacings},
-      {"simplify", "regional", "region_angle_deg", reg.region_angle_deg},
-      {"simplify", "regional", "feature_threshold", reg.feature_threshold},
-      {"simplify", "regional", "max_feature_share", reg.max_feature_share},
-      {"simplify", "curvature-distance", "split_quantile", cd.split_quantile},
-      {"simplify", "curvature-distance", "high_to_low_distance", cd.high_to_low_distance},
-      {"simplify", "lfs", "adaptivity", lfs.adaptivity},
-      {"simplify", "lfs", "fill_neighbours", I{lfs.fill_neighbours}},
       {"reconstruct", "triangulate", "k", I{tp.k}},
       {"reconstruct", "triangulate", "max_normal_angle_deg", tp.max_normal_angle_deg},
       {"reconstruct", "triangulate", "min_angle_deg", tp.min_angle_deg},

@@ -297,6 +297,8 @@ TEST(SimplifyRegional, GivenNormalsVariationAndSpacingGiveTheSameResult) {
   params.spacing = mean_spacing(tree);
   const SimplifyResult given = simplify_regional(cube, params);
   EXPECT_EQ(given.source_index, measured.source_index);
+  params.region_size = Length::cloud(10.0 * params.spacing);  // the default 10 spacings, in cloud units
+  EXPECT_EQ(simplify_regional(cube, params).source_index, measured.source_index);
   params.spacing = -1.0;
   test::expect_error<UsageError>([&] { simplify_regional(cube, params); }, "spacing");
 }
@@ -626,8 +628,10 @@ TEST(Simplify, BadParametersAreUsageErrors) {
   regional.variation_weight = regional.normal_weight = regional.distance_weight = 0.0;
   expect_error<UsageError>([&] { simplify_regional(sphere, regional); }, "at least one must be > 0");
   regional = {};
-  regional.region_in_spacings = -2;
-  expect_error<UsageError>([&] { simplify_regional(sphere, regional); }, "region_in_spacings must be > 0, got -2");
+  regional.region_size = Length::spacings(-2);
+  expect_error<UsageError>([&] { simplify_regional(sphere, regional); }, "simplify_regional: region_size must be > 0, got -2sp");
+  regional.region_size = Length::cloud(0.0);
+  expect_error<UsageError>([&] { simplify_regional(sphere, regional); }, "simplify_regional: region_size must be > 0, got 0");
   const KdTree small_tree(std::vector<Vector3d>{Vector3d::Zero(), Vector3d::UnitX()});
   expect_error<UsageError>([&] { simplify_regional(sphere, {}, &small_tree); }, "the kd-tree holds 2 points but the cloud has 200");
   CurvatureDistanceParams cd;

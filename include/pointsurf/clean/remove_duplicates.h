@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -14,8 +15,9 @@ namespace pointsurf {
 struct DuplicateParams {
   bool exact = false;                 // true: only points with identical coordinates are
                                       // duplicates (distance 0); `distance` is then ignored
-  double distance = 0.0;              // cloud units, >= 0; 0: distance_in_spacings * mean spacing
-  double distance_in_spacings = 0.1;  // used when distance == 0 and not exact, > 0
+  Length distance = Length::spacings(0.1);  // cloud units or mean spacings, > 0 (not exact)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<DuplicateParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -36,8 +38,8 @@ struct DuplicateResult {
 /// point of a group by index survives, no two kept points are closer than `distance`, and for
 /// exact duplicates the result does not depend on point order beyond which copy survives.
 /// Neighbour search in parallel (oneTBB), then one serial O(N + pairs) pass. `tree`
-/// (optional) must be built over `cloud.positions`. Throws UsageError for a negative distance,
-/// distance_in_spacings <= 0, an empty cloud; CancelledError on cancel.
+/// (optional) must be built over `cloud.positions`. Throws UsageError for a distance not > 0
+/// (unless exact), an empty cloud; CancelledError on cancel.
 DuplicateResult find_duplicates(const PointCloud& cloud, const DuplicateParams& params = {}, const KdTree* tree = nullptr,
                                 const ProgressCallback& progress = {});
 

@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -27,6 +28,8 @@ struct StatisticalOutlierParams {
   int k = 20;              // neighbours per point, the point itself included (Open3D's
                            // nb_neighbors), >= 1
   double std_ratio = 2.0;  // drop a point whose mean distance is >= mean + std_ratio * std, > 0
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<StatisticalOutlierParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -65,6 +68,8 @@ struct LocalOutlierParams {
   double far_ratio = 12.0;   // also dropped: a point whose mean neighbour distance is above this
                              // many times the median over the cloud (groups of far outliers that
                              // are each other's neighbours), > 1
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<LocalOutlierParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -91,8 +96,9 @@ OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierP
 struct RadiusOutlierParams {
   int min_neighbours = 4;           // keep a point with at least this many other points
                                     // within the radius, >= 1
-  double radius = 0.0;              // cloud units, >= 0; 0: radius_in_spacings * mean spacing
-  double radius_in_spacings = 4.0;  // used when radius == 0, > 0
+  Length radius = Length::spacings(4.0);  // cloud units or mean spacings, > 0
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<RadiusOutlierParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -103,15 +109,14 @@ struct RadiusOutlierParams {
 /// Open3D's remove_radius_outlier(nb_points = min_neighbours, radius) (which counts the point
 /// itself and keeps count > nb_points). On an evenly sampled surface a disc of radius 4
 /// spacings holds about 12 points, so the default keeps sparse borders. Parallel (oneTBB);
-/// stops counting at min_neighbours + 1. Throws UsageError for min_neighbours < 1, a negative
-/// or non-finite radius, radius_in_spacings <= 0, fewer than 2 points; CancelledError on cancel.
+/// stops counting at min_neighbours + 1. Throws UsageError for min_neighbours < 1, a radius
+/// not > 0, fewer than 2 points; CancelledError on cancel.
 OutlierResult remove_radius_outliers(const PointCloud& cloud, const RadiusOutlierParams& params = {},
                                      const KdTree* tree = nullptr, const ProgressCallback& progress = {});
 
 struct RansacOutlierParams {
   int k = 24;                         // neighbourhood size (point included), >= 4
-  double distance = 0.0;              // plane distance, cloud units, >= 0; 0: distance_in_spacings * mean spacing
-  double distance_in_spacings = 1.0;  // used when distance == 0, > 0
+  Length distance = Length::spacings(1.0);  // plane distance, cloud units or mean spacings, > 0
   int iterations = 50;                // random planes tried per point, >= 1
   double min_support = 0.3;           // a plane counts when at least this fraction of the
                                       // neighbourhood lies within `distance` of it, in (0, 1]
@@ -125,6 +130,8 @@ struct RansacOutlierParams {
                                       // points they explain by them (see below)
   double primitive_band = 2.0;        // a point amid a primitive's inliers farther than this
                                       // many `distance` from it is an outlier, > 0
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<RansacOutlierParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -168,7 +175,7 @@ struct RansacOutlierParams {
 /// Per-point random streams are seeded from `seed` and the point's coordinates, so the result is
 /// reproducible and independent of point order and thread count. Parallel (oneTBB),
 /// O(N k iterations), no allocation per point. `threshold` in the result is `distance`.
-/// Throws UsageError for k < 4, iterations < 1, a negative distance, min_support outside (0, 1],
+/// Throws UsageError for k < 4, iterations < 1, a distance not > 0, min_support outside (0, 1],
 /// min_relative_support outside [0, 1], primitive_band <= 0, fewer than 4 points;
 /// CancelledError on cancel.
 OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlierParams& params = {},

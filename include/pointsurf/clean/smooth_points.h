@@ -4,6 +4,7 @@
 // trilateral filtering with normal correction, which keeps sharp creases.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -11,14 +12,13 @@
 namespace pointsurf {
 
 struct BilateralParams {
-  double radius = 0.0;                  // neighbourhood radius, cloud units, >= 0;
-                                        // 0: radius_in_spacings * mean spacing
-  double radius_in_spacings = 3.0;      // used when radius == 0, > 0
+  Length radius = Length::spacings(3.0);  // neighbourhood radius, cloud units or mean spacings, > 0
   int max_neighbours = 48;              // at most this many nearest points within the radius, >= 3
-  double height_sigma = 0.0;            // sigma of the range weight on the offset along the
-                                        // normal, cloud units, >= 0; 0: height_sigma_in_spacings * spacing
-  double height_sigma_in_spacings = 1.0;// used when height_sigma == 0, > 0
+  Length height_sigma = Length::spacings(1.0);  // sigma of the range weight on the offset along
+                                                // the normal, cloud units or mean spacings, > 0
   int iterations = 2;                   // passes, >= 1
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<BilateralParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;
@@ -37,6 +37,8 @@ struct TrilateralParams {
   bool use_feature_field = true;        // when the cloud has a field "feature" (1 edge, 2
                                         // corner), feature points do not lend their normals
                                         // to others (their PCA normals mix two faces)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<TrilateralParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;

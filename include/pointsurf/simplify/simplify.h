@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -34,6 +35,11 @@ struct SimplifyTarget {
   double ratio = 0.1;      // kept fraction of the input, in (0, 1]
   std::size_t count = 0;   // points wanted; 0: use ratio (or cell)
   double cell = 0.0;       // cloud units, >= 0; 0: use count or ratio
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<SimplifyTarget>& fields();
+  /// Throws UsageError for a value out of its range (ratio where used, cell); the methods check
+  /// the target against the cloud (and whether they take a cell).
+  void validate() const;
 };
 
 /// The simplified cloud and where each of its points came from.
@@ -62,10 +68,16 @@ enum class GridMode {
              // taken from the sample nearest to the mean): Open3D's voxel_down_sample
   Nearest,   // the input sample nearest to its cell's centroid, unchanged
 };
+/// "centroid", "nearest".
+const EnumNames<GridMode>& grid_mode_names();
 
 struct GridParams {
   SimplifyTarget target;
   GridMode mode = GridMode::Centroid;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<GridParams>& fields();
+  /// Throws UsageError naming the first value out of range.
+  void validate() const;
 };
 
 /// Uniform grid simplification. Cells are cubes of side `cell` anchored at the bounding box
@@ -81,6 +93,10 @@ SimplifyResult simplify_grid(const PointCloud& cloud, const GridParams& params =
 struct RandomParams {
   SimplifyTarget target;       // ratio or count (cell is rejected)
   std::uint64_t seed = 42;     // same seed, same input order: same output
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<RandomParams>& fields();
+  /// Throws UsageError naming the first value out of range.
+  void validate() const;
 };
 
 /// A uniformly random subset of exactly the target count, kept in input order (seeded
@@ -94,6 +110,8 @@ struct CurvatureSimplifyParams {
   double flat_weight = 0.1;    // weight of a flat point relative to the mean variation, >= 0:
                                // w_i = variation_i + flat_weight × mean(variation)
   std::uint64_t seed = 42;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<CurvatureSimplifyParams>& fields();
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;
@@ -112,7 +130,7 @@ SimplifyResult simplify_curvature(const PointCloud& cloud, const CurvatureSimpli
 struct RegionalParams {
   SimplifyTarget target;
   int k = 16;                          // neighbours for normals/variation when missing (>= 3)
-  double region_in_spacings = 10.0;    // cluster cell size, in mean spacings (> 0)
+  Length region_size = Length::spacings(10.0);  // cluster cell size, cloud units or mean spacings, > 0
   double region_angle_deg = 30.0;      // a point joins a cluster of its cell when its normal
                                        // is within this angle of the cluster's mean, (0, 90]
   double variation_weight = 1.0;       // weights of the three feature-factor ingredients, >= 0,
@@ -129,6 +147,8 @@ struct RegionalParams {
   double spacing = 0.0;                // the cloud's mean spacing, cloud units, >= 0; 0: measured
                                        // (normals and the field "variation" are likewise taken
                                        // from the cloud when it has them)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<RegionalParams>& fields();
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;
@@ -136,7 +156,7 @@ struct RegionalParams {
 
 /// Regional simplification: cluster by position and normal, decide per point by a feature
 /// factor, keep feature (edge) points, thin flat areas.
-/// Clusters: the cloud is cut into cubes of region_in_spacings mean spacings; inside each cube
+/// Clusters: the cloud is cut into cubes of side region_size (in mean spacings by default); inside each cube
 /// points are grouped greedily (in spatial order) with the first group whose running mean
 /// normal is within region_angle_deg (unoriented); clusters with less than 20 % of their cell's
 /// points (transitions such as the points along an edge) then join the large cluster nearest in
@@ -177,6 +197,8 @@ struct CurvatureDistanceParams {
   double split_quantile = 0.9;          // points with variation above this quantile form the
                                         // high part, (0, 1)
   double high_to_low_distance = 0.4;    // d_high = this × d_low, (0, 1]
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<CurvatureDistanceParams>& fields();
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;
@@ -196,6 +218,8 @@ struct LfsParams {
   int k = 16;                           // neighbours for normals (>= 3)
   double adaptivity = 4.0;              // LFS clamped to [median / a, median × a], a >= 1
   int fill_neighbours = 6;              // kNN edges tested for gaps when filling (>= 1)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<LfsParams>& fields();
   /// Throws UsageError naming the first value out of range (the target is checked against
   /// the cloud by the algorithm): the one place these values are checked.
   void validate() const;

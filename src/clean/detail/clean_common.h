@@ -16,6 +16,7 @@
 #include "core/detail/progress_reporter.h"
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/core/length.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -32,20 +33,15 @@ inline void check_cloud(std::string_view function, const PointCloud& cloud, std:
     throw UsageError(fmt::format("{}: the kd-tree holds {} points but the cloud has {}", function, tree->size(), cloud.size()));
 }
 
-/// Throws UsageError unless `value` is finite and >= 0 (`positive`: > 0).
-inline void check_length(std::string_view function, std::string_view name, double value, bool positive) {
-  if (!std::isfinite(value) || value < 0.0 || (positive && value == 0.0))
-    throw UsageError(fmt::format("{}: {} must be {} (cloud units), got {}", function, name, positive ? "> 0" : ">= 0", value));
-}
-
 /// Throws UsageError unless `value` is finite and > 0.
 inline void check_positive(std::string_view function, std::string_view name, double value) {
   if (!(std::isfinite(value) && value > 0.0)) throw UsageError(fmt::format("{}: {} must be > 0, got {}", function, name, value));
 }
 
-/// `length` when > 0, else `in_spacings` times the tree's mean spacing.
-inline double resolve_length(double length, double in_spacings, const KdTree& tree) {
-  return length > 0.0 ? length : in_spacings * mean_spacing(tree);
+/// `length` in cloud units: a length in spacings times the tree's mean spacing (measured only
+/// then).
+inline double resolve_length(const Length& length, const KdTree& tree) {
+  return length.in_spacings() ? length.resolve(mean_spacing(tree)) : length.value;
 }
 
 /// The caller's tree, or one built into `own` over `cloud`.

@@ -111,10 +111,6 @@ void check_simplify_input(std::string_view function, const PointCloud& cloud, co
     throw UsageError(fmt::format("{}: target.count {} exceeds the {} input points", function, target.count, cloud.size()));
 }
 
-void check_k(std::string_view function, int k) {
-  if (k < 3) throw UsageError(fmt::format("{}: k must be >= 3, got {}", function, k));
-}
-
 const KdTree& tree_or_own(std::string_view function, const PointCloud& cloud, const KdTree* tree, std::optional<KdTree>& own) {
   if (tree == nullptr) return own.emplace(cloud.positions);
   if (tree->size() != cloud.size())
@@ -306,3 +302,29 @@ std::uint32_t nearest_to_centroid(std::span<const Vector3d> points, std::span<co
 }
 
 }  // namespace pointsurf::detail
+
+namespace pointsurf {
+
+const FieldTable<SimplifyTarget>& SimplifyTarget::fields() {
+  static const FieldTable<SimplifyTarget> table = [] {
+    using P = SimplifyTarget;
+    FieldTable<P> t;
+    t.number("ratio", &P::ratio, "Kept fraction of the points")
+        .range(0.0, 1.0, true, false)
+        .meta("F")
+        .when([](const P& p) { return p.count == 0 && p.cell == 0.0; });
+    t.integer("count", &P::count, "Number of output points instead of ratio; 0: use ratio").unit("points");
+    t.number("cell", &P::cell,
+             "Length instead of a count: grid cell; Poisson-disk distance of flat points (regional, curvature-distance); "
+             "spacing at the median feature size (lfs)")
+        .unit("cloud units")
+        .non_negative()
+        .meta("S");
+    return t;
+  }();
+  return table;
+}
+
+void SimplifyTarget::validate() const { fields().validate(*this, "simplify"); }
+
+}  // namespace pointsurf

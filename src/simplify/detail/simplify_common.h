@@ -17,7 +17,6 @@ namespace pointsurf::detail {
 /// method accepts a cell length; `allow_growth`: whether a count above N is allowed.
 void check_simplify_input(std::string_view function, const PointCloud& cloud, const SimplifyTarget& target, bool allow_cell,
                           bool allow_growth = false);
-void check_k(std::string_view function, int k);
 /// The tree to use: `tree` (checked against the cloud size) or a new one built in `own`.
 const KdTree& tree_or_own(std::string_view function, const PointCloud& cloud, const KdTree* tree, std::optional<KdTree>& own);
 
