@@ -100,7 +100,7 @@ int time_mode(char** argv) {
     p.sign = mode == "winding" ? DistanceSign::WindingNumber : DistanceSign::Auto;
     MeshDistanceResult r = mesh_distances(points, mesh, p, &bvh);
     d = std::move(r.distances);
-    sign = distance_sign_name(r.sign_used);
+    sign = distance_sign_names().name(r.sign_used);
   } else {
     fmt::print(stderr, "unknown mode {}\n", mode);
     return 1;

@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   const std::string kind = argv[1];
   const std::size_t n = std::stoul(argv[2]);
   RenderParams p;
-  if (argc > 3) std::sscanf(argv[3], "%dx%d", &p.width, &p.height);
+  if (argc > 3) std::sscanf(argv[3], "%dx%d", &p.size.width, &p.size.height);
   if (argc > 4) p.supersample = std::stoi(argv[4]);
   const int repeats = argc > 5 ? std::stoi(argv[5]) : 3;
   const bool with_field = argc > 6;
@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
   std::sort(png_s.begin(), png_s.end());
   std::printf("{\"kind\": \"%s\", \"points\": %zu, \"triangles\": %zu, \"size\": \"%dx%d\", \"supersample\": %d, \"field\": %s, "
               "\"render_s\": %.4f, \"png_s\": %.4f, \"cpu_s\": %.4f, \"png_bytes\": %zu, \"peak_rss_mb\": %.1f}\n",
-              kind.c_str(), cloud.size(), triangles.size(), p.width, p.height, p.supersample, with_field ? "true" : "false",
+              kind.c_str(), cloud.size(), triangles.size(), p.size.width, p.size.height, p.supersample, with_field ? "true" : "false",
               render_s[render_s.size() / 2], png_s[png_s.size() / 2], cpu, png_bytes, bench::peak_rss_mb());
   return 0;
 }

@@ -48,16 +48,22 @@ PointCloud mesh_target(const TriangleMesh& mesh, std::size_t samples, std::uint6
 
 }  // namespace
 
-void MeshAlignParams::validate() const {
-  if (!(max_distance >= 0.0) || !std::isfinite(max_distance))
-    throw UsageError(fmt::format("align_to_mesh: max_distance must be finite and >= 0 (0: from the spacing), got {}", max_distance));
-  if (!(distance_in_spacings > 0.0) || !std::isfinite(distance_in_spacings))
-    throw UsageError(fmt::format("align_to_mesh: distance_in_spacings must be finite and > 0, got {}", distance_in_spacings));
-  IcpParams icp;
-  icp.max_iterations = max_iterations;
-  icp.relative_rmse = relative_rmse;
-  icp.validate();
+const FieldTable<MeshAlignParams>& MeshAlignParams::fields() {
+  static const FieldTable<MeshAlignParams> table = [] {
+    using P = MeshAlignParams;
+    FieldTable<P> t;
+    // Keyed as the evaluate stage offers them; samples and seed there are the stage's own.
+    t.integer("align_samples", &P::samples, "Points sampled on the mesh as ICP's target; 0: the mesh's vertices").unit("points").internal();
+    t.integer("align_seed", &P::seed, "Seed of the sampling").internal();
+    t.length("align_max_distance", &P::max_distance, "Pairs farther apart are ignored while aligning").positive();
+    t.integer("align_iterations", &P::max_iterations, "ICP iterations at most while aligning").range(1, 100000);
+    t.number("align_relative_rmse", &P::relative_rmse, "Converged when the RMSE changes by less than this relative amount").non_negative().internal();
+    return t;
+  }();
+  return table;
 }
+
+void MeshAlignParams::validate() const { fields().validate(*this, "align_to_mesh"); }
 
 RegistrationResult align_to_mesh(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshAlignParams& params,
                                  const ProgressCallback& progress) {
@@ -76,8 +82,20 @@ RegistrationResult align_to_mesh(std::span<const Vector3d> points, const Triangl
   icp_params.max_normal_deg = 180.0;
   icp_params.max_iterations = params.max_iterations;
   icp_params.relative_rmse = params.relative_rmse;
-  icp_params.max_distance = params.max_distance;
-  icp_params.distance_in_spacings = params.distance_in_spacings;
+  // The distance in cloud units, resolved as ICP resolves one (the points' mean spacing), so
+  // ICP gets a number whichever form IcpParams takes a distance in. Below 6 points ICP answers
+  // before it needs one.
+  double max_distance = params.max_distance.value;
+  if (params.max_distance.in_spacings() && scan.size() >= 6) {
+    scan.validate();  // as ICP would first: finite positions
+    max_distance = params.max_distance.resolve(mean_spacing(scan.positions));
+    if (!(max_distance > 0.0)) {
+      RegistrationResult r;
+      r.message = "the source's points all coincide: no spacing to scale the max distance by";
+      return r;
+    }
+  }
+  icp_params.max_distance = decltype(icp_params.max_distance){max_distance};
   const KdTree tree(target.positions);
   return icp(scan, target, tree, RigidTransform(), icp_params, progress);
 }

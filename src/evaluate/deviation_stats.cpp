@@ -58,12 +58,31 @@ ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, 
   return d;
 }
 
+const FieldTable<DeviationParams>& DeviationParams::fields() {
+  static const FieldTable<DeviationParams> table = [] {
+    using P = DeviationParams;
+    FieldTable<P> t;
+    t.number("tolerance", &P::tolerance, "Share within +-tolerance is reported; 0: not reported").unit("cloud units").non_negative().meta("T");
+    t.integer("bins", &P::bins, "Histogram bins; 0: from the data").range(0, 10000);
+    t.number("histogram_min", &P::histogram_min, "Histogram's lower edge; both 0: the data's range").unit("cloud units").internal();
+    t.number("histogram_max", &P::histogram_max, "Histogram's upper edge; both 0: the data's range").unit("cloud units").internal();
+    t.numbers("percentiles", &P::percentiles, "Percentiles of the signed deviation")
+        .unit("percent")
+        .range(0, 100)
+        .when([](const P& p) { return !p.percentiles.empty(); });
+    return t;
+  }();
+  return table;
+}
+
+void DeviationParams::validate() const {
+  if (histogram_max < histogram_min)
+    throw UsageError(fmt::format("summarize_deviation: histogram_max {} is below histogram_min {}", histogram_max, histogram_min));
+  fields().validate(*this, "summarize_deviation");
+}
+
 DeviationStats summarize_deviation(std::span<const double> deviations, const DeviationParams& params) {
-  if (!(params.tolerance >= 0.0)) throw UsageError(fmt::format("tolerance: {} must be >= 0", params.tolerance));
-  if (params.histogram_max < params.histogram_min)
-    throw UsageError(fmt::format("histogram_max {} is below histogram_min {}", params.histogram_max, params.histogram_min));
-  for (double p : params.percentiles)
-    if (!(p >= 0.0 && p <= 100.0)) throw UsageError(fmt::format("percentiles: {} is outside [0, 100]", p));
+  params.validate();
   DeviationStats s;
   s.tolerance = params.tolerance;
   std::vector<double> values;

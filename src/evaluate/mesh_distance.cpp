@@ -21,15 +21,32 @@
 
 namespace pointsurf {
 
-const char* distance_sign_name(DistanceSign sign) noexcept {
-  switch (sign) {
-    case DistanceSign::Auto: return "auto";
-    case DistanceSign::PseudoNormal: return "pseudo-normal";
-    case DistanceSign::WindingNumber: return "winding-number";
-    case DistanceSign::Unsigned: return "unsigned";
-  }
-  return "unsigned";
+const EnumNames<DistanceSign>& distance_sign_names() {
+  static const EnumNames<DistanceSign> names{{{DistanceSign::Auto, "auto"},
+                                              {DistanceSign::PseudoNormal, "pseudo-normal"},
+                                              {DistanceSign::WindingNumber, "winding-number"},
+                                              {DistanceSign::Unsigned, "unsigned"}}};
+  return names;
 }
+
+const FieldTable<MeshDistanceParams>& MeshDistanceParams::fields() {
+  static const FieldTable<MeshDistanceParams> table = [] {
+    using P = MeshDistanceParams;
+    FieldTable<P> t;
+    t.choice("sign", &P::sign, distance_sign_names(), "How the side is decided: auto picks pseudo-normals, the winding number, or unsigned");
+    t.number("max_distance", &P::max_distance, "Points farther are left out of the statistics; 0: no limit").unit("cloud units").non_negative();
+    t.number("max_crack_share", &P::max_crack_share, "Auto: the winding number is used when at most this share of the edges are boundary edges")
+        .range(0.0, 1.0)
+        .internal();
+    t.integer("known_self_intersections", &P::known_self_intersections, "Auto: the mesh's self-intersection count when known; -1: counted")
+        .at_least(-1)
+        .internal();
+    return t;
+  }();
+  return table;
+}
+
+void MeshDistanceParams::validate() const { fields().validate(*this, "mesh_distances"); }
 
 void check_measurable_mesh(const TriangleMesh& mesh, const std::string& what) {
   if (mesh.triangles.empty())
@@ -88,7 +105,7 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
 MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshDistanceParams& params,
                                   const TriangleBvh* bvh, const ProgressCallback& progress) {
   check_measurable_mesh(mesh, "mesh");
-  if (!(params.max_distance >= 0.0)) throw UsageError(fmt::format("max_distance: {} must be >= 0", params.max_distance));
+  params.validate();
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!points[i].allFinite()) throw InputError(fmt::format("point {} is not finite", i));
   std::optional<TriangleBvh> own;

@@ -105,7 +105,24 @@ OneSidedDistance one_sided(const std::vector<double>& d) {
 
 }  // namespace
 
+const FieldTable<SurfaceDistanceParams>& SurfaceDistanceParams::fields() {
+  static const FieldTable<SurfaceDistanceParams> table = [] {
+    using P = SurfaceDistanceParams;
+    FieldTable<P> t;
+    t.boolean("exact", &P::exact, "Distances to a mesh are point-to-triangle; false: to its samples").internal();
+    t.integer("samples", &P::samples, "Points sampled area-uniformly on a mesh that distances are measured from; 0: its vertices")
+        .range(0, 1e9)
+        .unit("points");
+    t.integer("seed", &P::seed, "Seed of the sampling");
+    return t;
+  }();
+  return table;
+}
+
+void SurfaceDistanceParams::validate() const { fields().validate(*this, "surface_distance"); }
+
 SurfaceDistanceResult surface_distance(const SurfaceView& a, const SurfaceView& b, const SurfaceDistanceParams& params) {
+  params.validate();
   if (a.points.empty() || b.points.empty()) throw InputError(fmt::format("surface {} has no points", a.points.empty() ? "a" : "b"));
   for (const SurfaceView* s : {&a, &b})
     for (std::size_t i = 0; i < s->points.size(); ++i)

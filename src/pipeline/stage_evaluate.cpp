@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <stdexcept>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -20,13 +21,6 @@
 
 namespace pointsurf::detail {
 namespace {
-
-DistanceSign sign_from(const std::string& name) {
-  if (name == "pseudo-normal") return DistanceSign::PseudoNormal;
-  if (name == "winding-number") return DistanceSign::WindingNumber;
-  if (name == "unsigned") return DistanceSign::Unsigned;
-  return DistanceSign::Auto;
-}
 
 // "p50", "p99_9": a percentile's key in the report.
 std::string percentile_key(double rank) {
@@ -149,15 +143,12 @@ double box_gap(const BoundingBox& a, const BoundingBox& b) {
 RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const std::string& ref_tag) {
   const StageArgs& a = run.args;
   StageRecord& rec = run.record;
-  MeshAlignParams p;
-  p.samples = static_cast<std::size_t>(a.integer("samples"));
-  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
-  p.max_iterations = static_cast<std::size_t>(a.integer("align_iterations"));
-  p.max_distance = a.number("align_max_distance");
-  if (p.max_distance == 0.0) {
-    p.max_distance = p.distance_in_spacings * run.context.mean_spacing(ref_tag);
-    rec.set_used("align_max_distance", p.max_distance);
-  }
+  MeshAlignParams p = read_params<MeshAlignParams>(a);
+  const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);  // the stage's samples and seed serve both
+  p.samples = sd.samples;
+  p.seed = sd.seed;
+  p.max_distance = Length::cloud(p.max_distance.resolve(p.max_distance.in_spacings() ? run.context.mean_spacing(ref_tag) : 0.0));
+  rec.set_used("align_max_distance_used", p.max_distance.value);
   const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud.positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
   const Eigen::Matrix4d m = r.transform.matrix();
   std::vector<double> matrix;
@@ -215,27 +206,22 @@ void run_evaluate(StageRun& run) {
 
   const TriangleBvh bvh(mesh);
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
-  MeshDistanceParams dp;
-  dp.sign = sign_from(a.text("sign"));
-  dp.max_distance = a.number("max_distance");
+  MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
   const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, fit ? 0.3 : 0.0, 0.7));
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
-  DeviationParams sp;
-  sp.tolerance = a.number("tolerance");
+  DeviationParams sp = read_params<DeviationParams>(a);
   if (sp.tolerance == 0.0) {
     sp.tolerance = run.context.mean_spacing(ref_tag);
     rec.set_used("tolerance", sp.tolerance);
   }
-  sp.bins = static_cast<std::size_t>(a.integer("bins"));
-  sp.percentiles = a.numbers("percentiles");
   const DeviationStats stats = summarize_deviation(dist.distances, sp);
   rec.count("reference_points", as_count(ref.cloud.size()));
   rec.count("mesh_triangles", as_count(mesh.triangles.size()));
   rec.metric("reference", ref_tag);
   rec.set_used("reference", ref_tag);
-  rec.metric("sign", std::string(distance_sign_name(dist.sign_used)));
+  rec.metric("sign", distance_sign_names().name(dist.sign_used));
   record_deviation(rec, "deviation/", stats);
 
   // The points that did not become vertices of the mesh (removed by cleaning or
@@ -271,8 +257,8 @@ void run_evaluate(StageRun& run) {
   }
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
-  const std::size_t samples = static_cast<std::size_t>(a.integer("samples"));
-  const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, samples, static_cast<std::uint64_t>(a.integer("seed")));
+  const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
+  const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
   const SurfaceView ref_view{measured, ref.triangles};
   const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);
   double back_sum = 0.0, back_max = 0.0;
@@ -296,7 +282,7 @@ void run_evaluate(StageRun& run) {
   rec.summary = fmt::format("evaluate: {}{} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
                             "Hausdorff {:.4g}; mesh {}",
                             plural(ref.cloud.size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
-                            distance_sign_name(dist.sign_used), stats.max_positive,
+                            distance_sign_names().name(dist.sign_used), stats.max_positive,
                             stats.max_negative, stats.mean_positive, stats.mean_negative, stats.rms, 100.0 * stats.within_tolerance,
                             stats.tolerance, std::max(forward_max, back_max), quality_line(q));
 
@@ -309,13 +295,16 @@ void run_evaluate(StageRun& run) {
   if (fit) fit->apply(out.cloud);
 }
 
+// The parameter `name` of `params` (declared there).
+ParamSpec& param(std::vector<ParamSpec>& params, const std::string& name) {
+  for (ParamSpec& p : params)
+    if (p.name == name) return p;
+  throw std::logic_error("evaluate: no parameter " + name);
+}
+
 }  // namespace
 
 StageSpec evaluate_stage() {
-  const MeshDistanceParams mp;
-  const DeviationParams dp;
-  const SurfaceDistanceParams sd;
-  const MeshAlignParams ap;
   StageSpec s;
   s.name = "evaluate";
   s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
@@ -327,24 +316,22 @@ StageSpec evaluate_stage() {
   s.consumes = {Slot{"mesh", DataKind::Mesh}, Slot{"reference", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
   s.measures = true;
-  s.params = {
-      P::text("reference", "", "Tag of the cloud to measure (pipeline); the command line takes a file. Default: the cloud as read").meta("TAG"),
-      P::number("tolerance", dp.tolerance, "Share within +-tolerance is reported; 0: the reference's mean spacing").unit("cloud units").non_negative().meta("T"),
-      P::choice("sign", distance_sign_name(mp.sign), {"auto", "pseudo-normal", "winding-number", "unsigned"},
-                "How the side is decided: auto picks pseudo-normals, the winding number, or unsigned"),
-      P::number("max_distance", mp.max_distance, "Points farther are left out of the statistics; 0: no limit").unit("cloud units").non_negative(),
-      P::integer("bins", static_cast<std::int64_t>(dp.bins), "Histogram bins; 0: from the data").range(0, 10000),
-      P::numbers("percentiles", dp.percentiles, "Percentiles of the signed deviation").unit("percent").range(0, 100),
-      P::integer("samples", static_cast<std::int64_t>(sd.samples), "Points sampled area-uniformly on the mesh for the mesh-to-reference distance").range(1, 1e9),
-      P::integer("seed", static_cast<std::int64_t>(sd.seed), "Seed of the sampling").non_negative(),
-      P::text("region_field", "", "Field with region labels for a per-region breakdown; default segment or region when present").meta("NAME"),
-      P::boolean("allow_far", false, "Measure even when the reference lies farther from the mesh than their size"),
-      P::boolean("align", false, "Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported"),
-      P::number("align_max_distance", ap.max_distance,
-                fmt::format("Pairs farther apart are ignored while aligning; 0: {:g} x the reference's mean spacing", ap.distance_in_spacings))
-          .unit("cloud units").non_negative(),
-      P::integer("align_iterations", static_cast<std::int64_t>(ap.max_iterations), "ICP iterations at most while aligning").range(1, 100000),
-  };
+  s.params = {P::text("reference", "", "Tag of the cloud to measure (pipeline); the command line takes a file. Default: the cloud as read").meta("TAG")};
+  append(s.params, params_of(DeviationParams::fields()));
+  append(s.params, params_of(MeshDistanceParams::fields()));
+  append(s.params, params_of(SurfaceDistanceParams::fields()));
+  // The stage's own meanings: tolerance 0 is the reference's mean spacing; the mesh-to-reference
+  // distance needs at least one sample.
+  param(s.params, "tolerance").doc = "Share within +-tolerance is reported; 0: the reference's mean spacing";
+  ParamSpec& samples = param(s.params, "samples");
+  samples.min = 1;
+  samples.doc = "Points sampled area-uniformly on the mesh for the mesh-to-reference distance";
+  s.params.push_back(
+      P::text("region_field", "", "Field with region labels for a per-region breakdown; default segment or region when present").meta("NAME"));
+  s.params.push_back(P::boolean("allow_far", false, "Measure even when the reference lies farther from the mesh than their size"));
+  s.params.push_back(P::boolean(
+      "align", false, "Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported"));
+  append(s.params, params_of(MeshAlignParams::fields()));
   s.examples = {"pointsurf evaluate mesh.ply --reference scan.ply --tolerance 0.5 --out deviation.ply",
                 "pointsurf evaluate part.stl --reference scan.ply --align --report fit.json"};
   s.run = run_evaluate;

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -16,33 +15,10 @@
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kViews = {"front", "side", "top", "iso"};
-
-std::pair<int, int> parse_size(const std::string& text) {
-  static const std::regex form(R"(^(\d{1,5})x(\d{1,5})$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, form)) throw UsageError(fmt::format("size: \"{}\" is not WIDTHxHEIGHT (e.g. 1024x768)", text));
-  const int w = std::stoi(m[1].str()), h = std::stoi(m[2].str());
-  if (w < 8 || h < 8 || w > 16384 || h > 16384) throw UsageError(fmt::format("size: {} is outside 8x8 .. 16384x16384", text));
-  return {w, h};
-}
-
-std::string size_text(int w, int h) { return fmt::format("{}x{}", w, h); }
-
 void run_render(StageRun& run) {
   const StageArgs& a = run.args;
   const DataItem& item = run.context.item(run.inputs.front());
-  RenderParams p;
-  std::tie(p.width, p.height) = parse_size(a.text("size"));
-  p.view = view_from_name(a.text("view"));
-  p.field = a.text("field");
-  p.supersample = a.int32("supersample");
-  p.flat_shading = a.boolean("flat");
-  p.wireframe = a.boolean("wireframe");
-  p.point_size_px = a.number("point_size");
-  p.eye_dome = a.boolean("eye_dome");
-  p.title = a.text("title");
-  p.legend = a.boolean("legend");
+  RenderParams p = read_params<RenderParams>(a);
   const std::vector<double>& eye = a.numbers("eye");
   if (eye.size() == 3) {
     Camera c;
@@ -91,13 +67,12 @@ void run_render(StageRun& run) {
   run.record.metric("image", file);
   run.record.summary = fmt::format("render: {} view of {} to {} ({}x{})", p.camera ? "camera" : a.text("view"),
                                    item.triangles.empty() ? plural(item.cloud.size(), "point") : plural(item.triangles.size(), "triangle"),
-                                   file, p.width, p.height);
+                                   file, p.size.width, p.size.height);
 }
 
 }  // namespace
 
 StageSpec render_stage() {
-  const RenderParams d;
   const Camera c;
   StageSpec s;
   s.name = "render";
@@ -108,27 +83,19 @@ StageSpec render_stage() {
   s.order = 140;
   s.consumes = {Slot{"data", DataKind::Any}};
   s.writes_param = "filename";
-  s.params = {
-      P::text("filename", "", "PNG file to write").meta("FILE"),
-      P::text("size", size_text(d.width, d.height), "Picture size in pixels").meta("WxH"),
-      P::choice("view", view_name(d.view), kViews, "Auto-framed orthographic view (z up): front, side, top or iso"),
-      P::text("field", d.field, "Colour by this field (or x, y, z); default RGB when present, else plain").meta("NAME"),
-      P::boolean("diverging", false, "Use the diverging (blue-white-red) map for any field"),
-      P::numbers("range", {}, "Colour map range MIN,MAX (default from the data)").meta("MIN,MAX"),
-      P::number("tolerance", ColorScale{}.tolerance, "Diverging map: values within +-tolerance are green (0: no band)").unit("field units").non_negative(),
-      P::text("unit", "", "Unit shown on the legend").meta("UNIT"),
-      P::boolean("legend", d.legend, "Draw the colour bar with its values"),
-      P::text("title", d.title, "Text at the top left").meta("TEXT"),
-      P::boolean("flat", d.flat_shading, "Meshes: flat shading (one normal per face)"),
-      P::boolean("wireframe", d.wireframe, "Meshes: draw the edges"),
-      P::number("point_size", d.point_size_px, "Splat diameter; 0: from the projected density").unit("pixels").non_negative(),
-      P::boolean("eye_dome", d.eye_dome, "Shade splats by eye-dome lighting"),
-      P::integer("supersample", d.supersample, "Samples per pixel along each axis (anti-aliasing)").range(1, 4),
-      P::vector3("eye", {}, "Camera position: a perspective view instead of the auto-framed one").unit("cloud units"),
-      P::vector3("target", {}, "Point the camera looks at (default the data's centre)").unit("cloud units"),
-      P::vector3("up", as_list(c.up), "Camera up direction"),
-      P::number("fov_deg", c.fov_deg, "Vertical field of view of the camera; 0: orthographic, as high as the eye is far from the target").unit("degrees").range(0, 179, false, true),
-  };
+  s.params = {P::text("filename", "", "PNG file to write").meta("FILE")};
+  append(s.params, params_of(RenderParams::fields()));
+  s.params.push_back(P::boolean("diverging", false, "Use the diverging (blue-white-red) map for any field"));
+  s.params.push_back(P::numbers("range", {}, "Colour map range MIN,MAX (default from the data)").meta("MIN,MAX"));
+  s.params.push_back(
+      P::number("tolerance", ColorScale{}.tolerance, "Diverging map: values within +-tolerance are green (0: no band)").unit("field units").non_negative());
+  s.params.push_back(P::text("unit", "", "Unit shown on the legend").meta("UNIT"));
+  s.params.push_back(P::vector3("eye", {}, "Camera position: a perspective view instead of the auto-framed one").unit("cloud units"));
+  s.params.push_back(P::vector3("target", {}, "Point the camera looks at (default the data's centre)").unit("cloud units"));
+  s.params.push_back(P::vector3("up", as_list(c.up), "Camera up direction"));
+  s.params.push_back(P::number("fov_deg", c.fov_deg, "Vertical field of view of the camera; 0: orthographic, as high as the eye is far from the target")
+                         .unit("degrees")
+                         .range(0, 179, false, true));
   s.examples = {"pointsurf render mesh.ply mesh.png --view front --size 1600x1200",
                 "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.5 --unit mm"};
   s.run = run_render;
@@ -138,7 +105,7 @@ StageSpec render_stage() {
     std::string ext = std::filesystem::path(file).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext != ".png") throw UsageError(fmt::format("filename: {}: expected a .png file name", file));
-    parse_size(a.text("size"));
+    parse_picture_size(a.text("size"));
     if (a.numbers("range").size() != 0 && a.numbers("range").size() != 2)
       throw UsageError(fmt::format("range: expected MIN,MAX, got {} numbers", a.numbers("range").size()));
     if (a.numbers("range").size() == 2 && !(a.numbers("range")[0] < a.numbers("range")[1]))

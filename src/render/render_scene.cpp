@@ -17,6 +17,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <regex>
+#include <string>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -28,20 +31,68 @@
 
 namespace pointsurf {
 
-const char* view_name(View view) noexcept {
-  switch (view) {
-    case View::Front: return "front";
-    case View::Side: return "side";
-    case View::Top: return "top";
-    case View::Iso: return "iso";
-  }
-  return "iso";
+const EnumNames<View>& view_names() {
+  static const EnumNames<View> names{{{View::Front, "front"}, {View::Side, "side"}, {View::Top, "top"}, {View::Iso, "iso"}}};
+  return names;
 }
 
-View view_from_name(const std::string& name) {
-  for (View v : {View::Front, View::Side, View::Top, View::Iso})
-    if (name == view_name(v)) return v;
-  throw UsageError(fmt::format("view: \"{}\" is not one of front, side, top or iso", name));
+std::string picture_size_text(const PictureSize& size) { return fmt::format("{}x{}", size.width, size.height); }
+
+PictureSize parse_picture_size(std::string_view text) {
+  static const std::regex form(R"(^(\d{1,5})x(\d{1,5})$)");
+  const std::string t(text);
+  std::smatch m;
+  if (!std::regex_match(t, m, form)) throw UsageError(fmt::format("size: \"{}\" is not WIDTHxHEIGHT (e.g. 1024x768)", t));
+  const PictureSize size{std::stoi(m[1].str()), std::stoi(m[2].str())};
+  if (size.width < 8 || size.height < 8 || size.width > 16384 || size.height > 16384)
+    throw UsageError(fmt::format("size: {} is outside 8x8 .. 16384x16384", t));
+  return size;
+}
+
+const FieldTable<RenderParams>& RenderParams::fields() {
+  static const FieldTable<RenderParams> table = [] {
+    using P = RenderParams;
+    FieldTable<P> t;
+    t.custom<PictureSize>(
+         "size", &P::size, ParamType::String, "Picture size in pixels",
+         [](const PictureSize& s) { return ParamValue(picture_size_text(s)); },
+         [](PictureSize& s, const ParamValue& v) { s = parse_picture_size(std::get<std::string>(v)); })
+        .meta("WxH");
+    t.choice("view", &P::view, view_names(), "Auto-framed orthographic view (z up): front, side, top or iso");
+    t.text("field", &P::field, "Colour by this field (or x, y, z); default RGB when present, else plain").meta("NAME");
+    t.boolean("legend", &P::legend, "Draw the colour bar with its values");
+    t.text("title", &P::title, "Text at the top left");
+    t.boolean("flat", &P::flat_shading, "Meshes: flat shading (one normal per face)");
+    t.boolean("wireframe", &P::wireframe, "Meshes: draw the edges");
+    t.number("point_size", &P::point_size_px, "Splat diameter; 0: from the projected density").unit("pixels").non_negative();
+    t.boolean("eye_dome", &P::eye_dome, "Shade splats by eye-dome lighting");
+    t.integer("supersample", &P::supersample, "Samples per pixel along each axis (anti-aliasing)").range(1, 4);
+    // Built by the caller (the render stage: from eye, target, up, fov_deg; range, tolerance, unit).
+    t.custom<std::optional<Camera>>(
+         "camera", &P::camera, ParamType::String, "A given camera, used instead of view",
+         [](const std::optional<Camera>& c) { return ParamValue(std::string(c ? "given" : "")); },
+         [](std::optional<Camera>& c, const ParamValue& v) {
+           if (std::get<std::string>(v).empty()) c.reset();
+         })
+        .internal();
+    t.custom<std::optional<ColorScale>>(
+         "scale", &P::scale, ParamType::String, "The field's colour scale; default: default_color_scale",
+         [](const std::optional<ColorScale>& s) { return ParamValue(std::string(s ? "given" : "")); },
+         [](std::optional<ColorScale>& s, const ParamValue& v) {
+           if (std::get<std::string>(v).empty()) s.reset();
+         })
+        .internal();
+    t.number("margin", &P::margin, "Share of the picture left around the framed data").range(0.0, 0.5, false, true).internal();
+    t.text("font_file", &P::font_file, "Font of the labels (FreeType)").meta("FILE").internal();
+    return t;
+  }();
+  return table;
+}
+
+void RenderParams::validate() const {
+  if (size.width < 8 || size.height < 8 || size.width > 16384 || size.height > 16384)
+    throw UsageError(fmt::format("render_scene: size: {} is outside 8x8 .. 16384x16384", picture_size_text(size)));
+  fields().validate(*this, "render_scene");
 }
 
 namespace {
@@ -406,9 +457,7 @@ void draw_scale_bar(Image& img, const Layout& lay, double pixels_per_unit, detai
 
 RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& triangles, const RenderParams& p) {
   if (cloud.empty()) throw InputError("render: nothing to draw: the cloud is empty");
-  if (p.width < 8 || p.height < 8 || p.width > 16384 || p.height > 16384)
-    throw UsageError(fmt::format("size: {}x{} is outside 8x8 .. 16384x16384", p.width, p.height));
-  if (p.supersample < 1 || p.supersample > 4) throw UsageError(fmt::format("supersample: {} is outside 1..4", p.supersample));
+  p.validate();
   const bool mesh = !triangles.empty();
   const std::size_t n = cloud.size();
   for (const Triangle& t : triangles)
@@ -460,16 +509,16 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   // The legend's column: wide enough for its longest text.
   int legend_w = 0;
   if (legend) {
-    const int font = legend_font(p.height);
-    legend_w = std::max({110, p.width / 6, text.width(legend_head(p.field, result.scale), font) + 2 * font,
+    const int font = legend_font(p.size.height);
+    legend_w = std::max({110, p.size.width / 6, text.width(legend_head(p.field, result.scale), font) + 2 * font,
                          text.width(legend_band(result.scale), std::max(9, font - 2)) + 2 * font});
-    legend_w = std::min(legend_w, p.width / 2);
+    legend_w = std::min(legend_w, p.size.width / 2);
   }
-  const int title_h = p.title.empty() ? 0 : std::max(16, p.height / 22);
+  const int title_h = p.title.empty() ? 0 : std::max(16, p.size.height / 22);
   lay.plot_x0 = 0;
   lay.plot_y0 = title_h;
-  lay.plot_w = p.width - legend_w;
-  lay.plot_h = p.height - title_h;
+  lay.plot_w = p.size.width - legend_w;
+  lay.plot_h = p.size.height - title_h;
   lay.legend_x = lay.plot_w;
 
   const int s = p.supersample;
@@ -526,7 +575,7 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   ColorScale scale = result.scale;
   const std::vector<Eigen::Vector3f> colors = vertex_colors(cloud, p, mesh, scale, field);
 
-  Buffers buf(p.width * s, p.height * s);
+  Buffers buf(p.size.width * s, p.size.height * s);
   const int bands = (buf.h + kBandRows - 1) / kBandRows;
   const Lights lights = make_lights();
   auto to_camera = [&](const Vector3d& v) {
@@ -627,12 +676,12 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   }
 
   // Down to the picture: the mean of each pixel's samples, the background where none is covered.
-  Image img(p.width, p.height);
+  Image img(p.size.width, p.size.height);
   const float inv = 1.f / float(s * s);
-  tbb::parallel_for(tbb::blocked_range<int>(0, p.height, 8), [&](const tbb::blocked_range<int>& rows) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, p.size.height, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y != rows.end(); ++y) {
-      const Eigen::Vector3f bg = background(y, p.height);
-      for (int x = 0; x < p.width; ++x) {
+      const Eigen::Vector3f bg = background(y, p.size.height);
+      for (int x = 0; x < p.size.width; ++x) {
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
         for (int j = 0; j < s; ++j)
           for (int i = 0; i < s; ++i) {

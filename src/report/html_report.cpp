@@ -332,8 +332,7 @@ HtmlReport build_html_report(const HtmlReportInputs& in, const HtmlReportParams&
   // PNG views from pointsurf's own renderer.
   std::string pictures;
   RenderParams rp;
-  rp.width = params.view_width;
-  rp.height = params.view_height;
+  rp.size = {params.view_width, params.view_height};
   rp.supersample = 2;
   if (has_mesh) {
     PointCloud verts = in.mesh_vertices;
@@ -344,7 +343,7 @@ HtmlReport build_html_report(const HtmlReportInputs& in, const HtmlReportParams&
     }
     for (View v : {View::Iso, View::Front, View::Side, View::Top}) {
       rp.view = v;
-      pictures += png_tag(render_scene(verts, in.mesh_triangles, rp), fmt::format("mesh, {} view{}", view_name(v), rp.field.empty() ? "" : ", deviation"));
+      pictures += png_tag(render_scene(verts, in.mesh_triangles, rp), fmt::format("mesh, {} view{}", view_names().name(v), rp.field.empty() ? "" : ", deviation"));
     }
   }
   if (!in.cloud.empty()) {

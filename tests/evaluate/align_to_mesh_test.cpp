@@ -82,7 +82,9 @@ TEST(AlignToMesh, DegenerateInputIsAnAnswerAndBadParametersThrow) {
   EXPECT_FALSE(align_to_mesh(far, mesh).converged);
 
   MeshAlignParams p;
-  p.max_distance = -1.0;
+  p.max_distance = Length::cloud(-1.0);
+  EXPECT_THROW(align_to_mesh(few, mesh, p), UsageError);
+  p.max_distance = Length::spacings(0.0);
   EXPECT_THROW(align_to_mesh(few, mesh, p), UsageError);
   p = {};
   p.max_iterations = 0;

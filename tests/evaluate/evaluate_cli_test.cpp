@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/cli_run.h"
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/rigid_transform.h"
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/io/io.h"
@@ -158,7 +159,15 @@ TEST_F(EvaluateCli, AlignMovesTheReferenceOntoTheMeshBeforeMeasuring) {
   Eigen::Matrix4d m;
   for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = align["matrix"][static_cast<std::size_t>(i)].get<double>();
   EXPECT_LT(RigidTransform::translation_error(RigidTransform::from_matrix(m), motion.inverse(), center), 1e-4);
-  EXPECT_GT(fit["parameters"]["align_max_distance"].get<double>(), 0.0);
+  EXPECT_EQ(fit["parameters"]["align_max_distance"].get<std::string>(), "10sp");
+  const double used = fit["parameters"]["align_max_distance_used"].get<double>();
+  EXPECT_GT(used, 0.0);
+  // The same distance given in cloud units fits the same.
+  r = test::run_cli(common + " --align --align-max-distance " + format_value(ParamValue(used)) + " --report " + path("fit_cloud.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json fit_cloud = stage("fit_cloud.json", "evaluate");
+  EXPECT_EQ(fit_cloud["metrics"]["align"]["matrix"], align["matrix"]);
+  EXPECT_EQ(fit_cloud["parameters"]["align_max_distance_used"].get<double>(), used);
   const PointCloud written = read_point_cloud(path("dev.ply")).cloud;
   ASSERT_EQ(written.size(), scan.size());
   EXPECT_LT((written.positions[7] - motion.inverse().apply(scan.positions[7])).norm(), 1e-4);

@@ -79,20 +79,10 @@ std::vector<Expected> library_defaults() {
   const CoconeParams cp;
   const BallPivotParams bp;
   const PoissonParams pp;
-  const MeshDistanceParams md;
-  const DeviationParams dev;
-  const SurfaceDistanceParams sd;
   const MultiParams mp;
   const PairParams& pair = mp.pair;
   using I = std::int64_t;
   return {
-      {"evaluate", "", "tolerance", dev.tolerance},
-      {"evaluate", "", "bins", I(dev.bins)},
-      {"evaluate", "", "percentiles", dev.percentiles},
-      {"evaluate", "", "max_distance", md.max_distance},
-      {"evaluate", "", "sign", std::string(distance_sign_name(md.sign))},
-      {"evaluate", "", "samples", I(sd.samples)},
-      {"evaluate", "", "seed", I(sd.seed)},
       {"curvature", "", "normals_k", I{n.k}},
       {"reconstruct", "triangulate", "k", I{tp.k}},
       {"reconstruct", "triangulate", "max_normal_angle_deg", tp.max_normal_angle_deg},

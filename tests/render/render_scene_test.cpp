@@ -39,8 +39,7 @@ std::size_t object_pixels(const Image& img, int x0 = 0, int y0 = 0, int x1 = -1,
 
 RenderParams plain(View view) {
   RenderParams p;
-  p.width = 400;
-  p.height = 300;
+  p.size = {400, 300};
   p.view = view;
   return p;
 }
@@ -54,11 +53,11 @@ TEST(RenderScene, SphereSilhouetteHasTheAreaOfItsDisc) {
     EXPECT_EQ(r.triangles_drawn, sphere.triangles.size());
     const double radius_px = 2.0 * r.pixels_per_unit;
     // Framed: the disc fills the plot's height less the margins.
-    EXPECT_NEAR(2.0 * radius_px, 300.0 * (1.0 - 2.0 * RenderParams{}.margin), 1.0) << view_name(v);
+    EXPECT_NEAR(2.0 * radius_px, 300.0 * (1.0 - 2.0 * RenderParams{}.margin), 1.0) << view_names().name(v);
     const double expected = M_PI * radius_px * radius_px;
     const double measured = double(object_pixels(r.image, 200 - int(radius_px) - 4, 150 - int(radius_px) - 4, 200 + int(radius_px) + 4,
                                                  150 + int(radius_px) + 4));
-    EXPECT_NEAR(measured / expected, 1.0, 0.02) << view_name(v);
+    EXPECT_NEAR(measured / expected, 1.0, 0.02) << view_names().name(v);
   }
 }
 
@@ -181,19 +180,23 @@ TEST(RenderScene, BadInputIsRefusedWithAReason) {
   p.field = "curvature";
   test::expect_error<InputError>([&] { render_scene(c, {}, p); }, "no field \"curvature\" (it has x, y, z, intensity)");
   p = {};
-  p.width = 4;
+  p.size.width = 4;
   test::expect_error<UsageError>([&] { render_scene(c, {}, p); }, "size: 4x768");
   p = {};
   p.supersample = 5;
-  test::expect_error<UsageError>([&] { render_scene(c, {}, p); }, "supersample: 5");
+  test::expect_error<UsageError>([&] { render_scene(c, {}, p); }, "render_scene: supersample must be in [1, 4], got 5");
   test::expect_error<InputError>([&] { render_scene(c, {Triangle(0, 1, 100)}); }, "vertex 100, but there are 100 vertices");
   p = {};
   p.camera = Camera{Vector3d(0, 0, 5), Vector3d::Zero(), Vector3d::UnitZ(), 40.0};
   test::expect_error<UsageError>([&] { render_scene(c, {}, p); }, "parallel to the viewing direction");
   c.positions[3].x() = std::nan("");
   test::expect_error<InputError>([&] { render_scene(c, {}); }, "point 3 is not finite");
-  EXPECT_EQ(view_from_name("top"), View::Top);
-  test::expect_error<UsageError>([] { view_from_name("bottom"); }, "\"bottom\" is not one of front, side, top or iso");
+  EXPECT_EQ(view_names().value("top"), View::Top);
+  EXPECT_EQ(view_names().names(), (std::vector<std::string>{"front", "side", "top", "iso"}));
+  EXPECT_EQ(parse_picture_size("320x200"), (PictureSize{320, 200}));
+  EXPECT_EQ(picture_size_text(PictureSize{}), "1024x768");
+  test::expect_error<UsageError>([] { parse_picture_size("300"); }, "size: \"300\" is not WIDTHxHEIGHT");
+  test::expect_error<UsageError>([] { parse_picture_size("4x768"); }, "size: 4x768 is outside 8x8 .. 16384x16384");
 }
 
 }  // namespace

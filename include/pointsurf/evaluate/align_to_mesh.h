@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <span>
 
+#include "pointsurf/core/fields.h"
+#include "pointsurf/core/length.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/register/icp.h"
@@ -19,13 +21,17 @@ struct MeshAlignParams {
   std::size_t samples = 100000;        // points sampled on the mesh as ICP's target; 0: the mesh's
                                        // vertices (with area-weighted vertex normals)
   std::uint64_t seed = 3;              // seed of the sampling
-  double max_distance = 0.0;           // pairs farther apart are ignored, cloud units; 0:
-                                       // distance_in_spacings x the points' mean spacing
-  double distance_in_spacings = 10.0;  // mean spacings, when max_distance is 0: wider than ICP's
+  Length max_distance = Length::spacings(10.0);  // pairs farther apart are ignored, > 0; in
+                                       // spacings: of the points' mean spacing, wider than ICP's
                                        // default, since a best fit starts from wherever the scan
                                        // was placed
   std::size_t max_iterations = IcpParams{}.max_iterations;
   double relative_rmse = IcpParams{}.relative_rmse;  // converged when the RMSE changes less
+  /// Key, unit, range and doc of each field (core/fields.h). The keys are the evaluate stage's
+  /// (align_max_distance, align_iterations); samples and seed are internal there (the stage
+  /// sets them from its own samples and seed).
+  static const FieldTable<MeshAlignParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 

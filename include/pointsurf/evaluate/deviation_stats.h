@@ -7,6 +7,8 @@
 #include <span>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
+
 namespace pointsurf {
 
 struct DeviationParams {
@@ -15,6 +17,11 @@ struct DeviationParams {
   double histogram_min = 0.0;        // cloud units; both 0: the data's range
   double histogram_max = 0.0;
   std::vector<double> percentiles = {1, 5, 25, 50, 75, 95, 99};  // in percent, of the signed values
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<DeviationParams>& fields();
+  /// Throws UsageError for a negative tolerance, percentiles outside [0, 100] or
+  /// histogram_max < histogram_min.
+  void validate() const;
 };
 
 struct DeviationStats {

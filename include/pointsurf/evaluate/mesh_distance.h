@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/mesh_topology.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/core/triangle_mesh.h"
@@ -26,7 +27,7 @@ enum class DistanceSign {
 };
 
 /// "auto", "pseudo-normal", "winding-number", "unsigned".
-const char* distance_sign_name(DistanceSign sign) noexcept;
+const EnumNames<DistanceSign>& distance_sign_names();
 
 struct MeshDistanceParams {
   DistanceSign sign = DistanceSign::Auto;
@@ -34,6 +35,10 @@ struct MeshDistanceParams {
   double max_crack_share = 0.01;   // Auto: the winding number is used when at most this share
                                    // of the edges are boundary edges (a crack, not an open surface)
   long known_self_intersections = -1;  // Auto: the mesh's count when already known (-1: counted here)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<MeshDistanceParams>& fields();
+  /// Throws UsageError naming the first value out of range (a negative max_distance).
+  void validate() const;
 };
 
 struct MeshDistanceResult {

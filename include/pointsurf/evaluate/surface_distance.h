@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -30,6 +31,10 @@ struct SurfaceDistanceParams {
   std::size_t samples = 100000;    // points sampled on a mesh that distances are measured from
                                    // (and to, when !exact); 0: its vertices
   std::uint64_t seed = 3;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<SurfaceDistanceParams>& fields();
+  /// Throws UsageError naming the first value out of range.
+  void validate() const;
 };
 
 /// Distances from the points of one surface to the other.

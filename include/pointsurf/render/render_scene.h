@@ -7,8 +7,10 @@
 // the data's bounding box in double precision, so coordinates of 1e6 m draw as at the origin.
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/render/colormap.h"
@@ -20,9 +22,18 @@ namespace pointsurf {
 /// down -z (y up on the picture), iso from (+1, -1, +1). All orthographic.
 enum class View { Front, Side, Top, Iso };
 
-/// "front", "side", "top", "iso"; view_from_name throws UsageError for another name.
-const char* view_name(View view) noexcept;
-View view_from_name(const std::string& name);
+/// "front", "side", "top", "iso".
+const EnumNames<View>& view_names();
+
+/// A picture's size in pixels, "WxH" as text (1024x768).
+struct PictureSize {
+  int width = 1024, height = 768;
+  friend bool operator==(const PictureSize&, const PictureSize&) = default;
+};
+/// "1024x768".
+std::string picture_size_text(const PictureSize& size);
+/// Parses "WxH"; throws UsageError "size: ..." for another form or a size outside 8x8 .. 16384x16384.
+PictureSize parse_picture_size(std::string_view text);
 
 /// A given camera: perspective with a vertical field of view, or orthographic showing
 /// `ortho_height` cloud units vertically when fov_deg is 0.
@@ -33,7 +44,7 @@ struct Camera {
 };
 
 struct RenderParams {
-  int width = 1024, height = 768;      // pixels
+  PictureSize size;                    // pixels, 8 .. 16384 each way
   View view = View::Iso;
   std::optional<Camera> camera;        // given: used instead of `view`
   int supersample = 3;                 // samples per pixel along each axis (1: no anti-aliasing)
@@ -47,6 +58,11 @@ struct RenderParams {
   bool eye_dome = true;                // shade splats by eye-dome lighting (depth edges darken)
   double margin = 0.06;                // share of the picture left around the framed data
   std::string font_file = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";  // labels (FreeType)
+  /// Key, unit, range and doc of each field (core/fields.h). camera and scale are internal (the
+  /// render stage builds them from its own eye, target, up, fov_deg, range, tolerance, unit).
+  static const FieldTable<RenderParams>& fields();
+  /// Throws UsageError naming the first value out of range (size, supersample outside 1..4...).
+  void validate() const;
 };
 
 struct RenderResult {
@@ -61,8 +77,7 @@ struct RenderResult {
 /// Renders `cloud` as points, or, when `triangles` is not empty, the mesh whose vertices (and
 /// their normals, colours, fields) are the cloud. Throws InputError for an empty cloud, an
 /// unknown field (naming the fields it has), an index out of range or a non-finite position;
-/// UsageError for a size below 8 x 8 or above 16384, supersample outside 1..4, or a degenerate
-/// camera. Parallel over bands of rows (oneTBB); thread-safe.
+/// UsageError for parameters out of range (RenderParams::validate) or a degenerate camera. Parallel over bands of rows (oneTBB); thread-safe.
 RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& triangles, const RenderParams& params = {});
 
 }  // namespace pointsurf
