@@ -121,6 +121,18 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
   EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
 }
 
+// radius_in_spacings of the previous release is the radius in spacings now, with a warning.
+TEST_F(ReconstructCli, FormerRadiusKeyGivesTheSameMeshWithAWarning) {
+  const PointCloud sphere = test::sample_sphere(2000, 1.0);
+  write_point_cloud(path("sphere.ply"), sphere);
+  ASSERT_EQ(run_cli("reconstruct " + path("sphere.ply") + " " + path("new.ply") + " --radius 4sp --report " + path("new.json"), dir_).exit_code, 0);
+  const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path("old.ply") + " --radius-in-spacings 4 --report " + path("old.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::read_bytes(dir_ / "new.ply"), test::read_bytes(dir_ / "old.ply"));
+  EXPECT_EQ(stage("new.json", "reconstruct")["parameters"]["radius"], "4sp");
+  EXPECT_TRUE(test::contains(test::read_bytes(dir_ / "old.json"), R"(key \"radius_in_spacings\" is deprecated)"));
+}
+
 TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommandAndReportsTheSameCounts) {
   PointCloud sphere = test::sample_sphere(2000, 1.0);
   sphere.positions.push_back(sphere.positions[7]);  // one exact duplicate

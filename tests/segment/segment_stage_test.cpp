@@ -38,11 +38,36 @@ TEST(SegmentStage, RegionEuclideanAndErrors) {
   const test::RunResult hk = test::run_cli("segment " + cube + out + " --method hk", dir);
   EXPECT_EQ(hk.exit_code, 2);
   EXPECT_TRUE(test::contains(hk.err, "surface_type")) << hk.err;
-  const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max_angle_deg 120", dir);
+  const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max-angle-deg 120", dir);
   EXPECT_EQ(bad.exit_code, 1);
   const test::RunResult types = test::run_cli("segment " + cube + out + " --method ransac --types plane,ellipsoid", dir);
   EXPECT_EQ(types.exit_code, 1);
   EXPECT_TRUE(test::contains(types.err, "ellipsoid")) << types.err;
+}
+
+// Keys of the previous release still work, with a warning in the report: the same output as
+// the new key's.
+TEST(SegmentStage, FormerKeysGiveTheSameOutputWithAWarning) {
+  const std::filesystem::path dir = test::temp_dir("segment_stage_former_keys");
+  write_point_cloud(dir / "cube.ply", test::sample_cube(6000, 1.0, 2));
+  const std::string cube = (dir / "cube.ply").string();
+  const auto run = [&](const std::string& name, const std::string& options) {
+    const test::RunResult r = test::run_cli("segment " + cube + " " + (dir / (name + ".ply")).string() + " " + options + " --report " +
+                                                (dir / (name + ".json")).string(),
+                                            dir);
+    EXPECT_EQ(r.exit_code, 0) << options << ": " << r.err;
+    return test::read_bytes(dir / (name + ".json"));
+  };
+  const std::string new_key = run("new", "--method euclidean --radius 4sp");
+  const std::string old_key = run("old", "--method euclidean --radius-in-spacings 4");
+  EXPECT_EQ(test::read_bytes(dir / "new.ply"), test::read_bytes(dir / "old.ply"));
+  EXPECT_FALSE(test::contains(new_key, "deprecated"));
+  EXPECT_TRUE(test::contains(old_key, R"(key \"radius_in_spacings\" is deprecated)")) << old_key;
+  run("new2", "--method ransac --max-normal-angle-deg 20 --epsilon 1.5sp");
+  const std::string old2 = run("old2", "--method ransac --max-normal-deg 20 --epsilon-in-spacings 1.5");
+  EXPECT_EQ(test::read_bytes(dir / "new2.ply"), test::read_bytes(dir / "old2.ply"));
+  EXPECT_TRUE(test::contains(old2, R"(key \"max_normal_deg\" is deprecated)")) << old2;
+  EXPECT_TRUE(test::contains(old2, R"(key \"epsilon_in_spacings\" is deprecated)")) << old2;
 }
 
 }  // namespace
