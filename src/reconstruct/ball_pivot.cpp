@@ -499,8 +499,15 @@ const FieldTable<BallPivotParams>& BallPivotParams::fields() {
     using P = BallPivotParams;
     FieldTable<P> t;
     // Two lists rather than one list of lengths: a parameter value holds one length, not a list.
-    t.numbers("radii", &P::radii, "Ball radii (default: radii_in_spacings x mean spacing)").unit("cloud units").positive().meta("R1,R2,...");
-    t.numbers("radii_in_spacings", &P::radii_in_spacings, "Ball radii when radii are not given").unit("mean spacings").positive();
+    t.numbers("radii", &P::radii, "Ball radii (default: radii_in_spacings x mean spacing)")
+        .unit("cloud units")
+        .positive()
+        .meta("R1,R2,...")
+        .when([](const P& p) { return !p.radii.empty(); });
+    t.numbers("radii_in_spacings", &P::radii_in_spacings, "Ball radii when radii are not given")
+        .unit("mean spacings")
+        .positive()
+        .when([](const P& p) { return p.radii.empty(); });
     t.number("max_normal_angle_deg", &P::max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
         .unit("degrees")
         .range(0, 180, true, false);

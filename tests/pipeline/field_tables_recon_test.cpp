@@ -3,6 +3,7 @@
 // documented, its default within its own range; and the stages' parameters generated from them.
 #include <gtest/gtest.h>
 
+#include "field_tables.h"
 #include "pointsurf/core/fields.h"
 #include "pointsurf/features/boundary_points.h"
 #include "pointsurf/pipeline/registry.h"
@@ -22,8 +23,8 @@
 namespace pointsurf {
 namespace {
 
-// Every field documented, readable and writable, its default within its range; `members` of P
-// named (for a struct derived from DelaunaySurfaceParams the base's members count one by one).
+// The Delaunay methods' structs derive from DelaunaySurfaceParams, whose members an aggregate
+// count sees as one: test::expect_complete with the count of `members` given.
 template <class P>
 void expect_table(const char* name, std::size_t members) {
   const FieldTable<P>& table = P::fields();
@@ -32,31 +33,25 @@ void expect_table(const char* name, std::size_t members) {
     EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
     EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
     if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
-    P q;  // get(set(x)) == x
+    P q;  // set(get(default)) keeps the value
     f.set(q, f.get(P{}));
     EXPECT_EQ(format_value(f.get(q)), format_value(f.get(P{}))) << name << "." << f.spec.name;
   }
 }
 
-template <class P>
-void expect_complete(const char* name) {
-  expect_table<P>(name, detail::aggregate_member_count<P>());
-  EXPECT_NO_THROW(P{}.validate()) << name;
-}
-
 TEST(FieldTablesRecon, EveryMemberOfEveryStageParamsIsDeclared) {
-  expect_complete<RegionGrowingParams>("RegionGrowingParams");
-  expect_complete<EuclideanParams>("EuclideanParams");
-  expect_complete<SurfaceTypeParams>("SurfaceTypeParams");
-  expect_complete<PrimitiveParams>("PrimitiveParams");
-  expect_complete<BoundaryParams>("BoundaryParams");
-  expect_complete<OutlineParams>("OutlineParams");
-  expect_complete<TriangulateParams>("TriangulateParams");
-  expect_complete<BallPivotParams>("BallPivotParams");
-  expect_complete<PoissonParams>("PoissonParams");
-  expect_complete<HoleFillParams>("HoleFillParams");
-  expect_complete<SmallComponentParams>("SmallComponentParams");
-  expect_complete<FlatRegionParams>("FlatRegionParams");
+  test::expect_complete<RegionGrowingParams>("RegionGrowingParams");
+  test::expect_complete<EuclideanParams>("EuclideanParams");
+  test::expect_complete<SurfaceTypeParams>("SurfaceTypeParams");
+  test::expect_complete<PrimitiveParams>("PrimitiveParams");
+  test::expect_complete<BoundaryParams>("BoundaryParams");
+  test::expect_complete<OutlineParams>("OutlineParams");
+  test::expect_complete<TriangulateParams>("TriangulateParams");
+  test::expect_complete<BallPivotParams>("BallPivotParams");
+  test::expect_complete<PoissonParams>("PoissonParams");
+  test::expect_complete<HoleFillParams>("HoleFillParams");
+  test::expect_complete<SmallComponentParams>("SmallComponentParams");
+  test::expect_complete<FlatRegionParams>("FlatRegionParams");
   // The Delaunay methods: their base's fields, then their own.
   const std::size_t base = detail::aggregate_member_count<DelaunaySurfaceParams>();
   expect_table<DelaunaySurfaceParams>("DelaunaySurfaceParams", base);

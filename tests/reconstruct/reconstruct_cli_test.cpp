@@ -121,16 +121,30 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
   EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
 }
 
-// radius_in_spacings of the previous release is the radius in spacings now, with a warning.
-TEST_F(ReconstructCli, FormerRadiusKeyGivesTheSameMeshWithAWarning) {
+// Keys of the previous release still work in a pipeline (radius_in_spacings: the radius in
+// spacings; confidence: weight_by_normal_length), with a warning: the same mesh.
+TEST_F(ReconstructCli, FormerKeysGiveTheSameMeshWithAWarning) {
   const PointCloud sphere = test::sample_sphere(2000, 1.0);
   write_point_cloud(path("sphere.ply"), sphere);
-  ASSERT_EQ(run_cli("reconstruct " + path("sphere.ply") + " " + path("new.ply") + " --radius 4sp --report " + path("new.json"), dir_).exit_code, 0);
-  const RunResult r = run_cli("reconstruct " + path("sphere.ply") + " " + path("old.ply") + " --radius-in-spacings 4 --report " + path("old.json"), dir_);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(test::read_bytes(dir_ / "new.ply"), test::read_bytes(dir_ / "old.ply"));
+  const auto run = [&](const std::string& name, const std::string& step) {
+    test::write_bytes(path(name + "_pipeline.json"), "[\"" + path("sphere.ply") + "\", " + step + ", \"" + path(name + ".ply") + "\"]");
+    const RunResult r = run_cli("run " + path(name + "_pipeline.json") + " --report " + path(name + ".json"), dir_);
+    EXPECT_EQ(r.exit_code, 0) << step << ": " << r.err;
+    return test::read_bytes(dir_ / (name + ".json"));
+  };
+  const auto same_mesh = [&](const std::string& a, const std::string& b) {
+    const std::string x = test::read_bytes(dir_ / (a + ".ply")), y = test::read_bytes(dir_ / (b + ".ply"));
+    return !x.empty() && x == y;
+  };
+  run("new", R"({"type": "reconstruct", "radius": "4sp"})");
+  const std::string old_key = run("old", R"({"type": "reconstruct", "radius_in_spacings": 4})");
+  EXPECT_TRUE(same_mesh("new", "old"));
   EXPECT_EQ(stage("new.json", "reconstruct")["parameters"]["radius"], "4sp");
-  EXPECT_TRUE(test::contains(test::read_bytes(dir_ / "old.json"), R"(key \"radius_in_spacings\" is deprecated)"));
+  EXPECT_TRUE(test::contains(old_key, R"(key \"radius_in_spacings\" is deprecated)")) << old_key;
+  run("new2", R"({"type": "reconstruct", "method": "poisson", "depth": 5, "weight_by_normal_length": true})");
+  const std::string old2 = run("old2", R"({"type": "reconstruct", "method": "poisson", "depth": 5, "confidence": true})");
+  EXPECT_TRUE(same_mesh("new2", "old2"));
+  EXPECT_TRUE(test::contains(old2, R"(key \"confidence\" is deprecated)")) << old2;
 }
 
 TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommandAndReportsTheSameCounts) {
