@@ -103,8 +103,8 @@ TriangulateParams parse_params(int argc, char** argv, int first) {
     const std::string key = arg.substr(0, eq);
     const double value = std::stod(arg.substr(eq + 1));
     if (key == "k") p.k = int(value);
-    else if (key == "radius") p.radius = value;
-    else if (key == "radius_in_spacings") p.radius_in_spacings = value;
+    else if (key == "radius") p.radius = Length::cloud(value);
+    else if (key == "radius_in_spacings") p.radius = Length::spacings(value);
     else if (key == "max_offset_in_spacings") p.max_offset_in_spacings = value;
     else if (key == "max_normal_angle_deg") p.max_normal_angle_deg = value;
     else if (key == "min_angle_deg") p.min_angle_deg = value;

@@ -41,10 +41,10 @@ int main(int argc, char** argv) {
   const std::clock_t c0 = std::clock();  // CPU of all threads: knn_all is parallel, PCL is not
   if (mode == "ransac") {
     PrimitiveParams p;
-    p.types = std::string(argv[3]) == "plane" ? kPlanes : kDefaultPrimitives;
-    p.epsilon = std::stod(argv[4]);
-    p.cluster_epsilon = std::stod(argv[5]);
-    p.max_normal_deg = std::stod(argv[6]);
+    if (std::string(argv[3]) == "plane") p.types = {PrimitiveType::Plane};
+    p.epsilon = Length::cloud(std::stod(argv[4]));
+    p.cluster_epsilon = Length::cloud(std::stod(argv[5]));
+    p.max_normal_angle_deg = std::stod(argv[6]);
     p.min_points = std::stoul(argv[7]);
     p.probability = std::stod(argv[8]);
     if (argc == 11) p.seed = std::stoull(argv[10]);
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
     SegmentResult r;
     if (mode == "euclidean") {
       EuclideanParams p;
-      p.radius = std::stod(argv[3]);
+      p.radius = Length::cloud(std::stod(argv[3]));
       p.min_points = 1;
       r = segment_euclidean(cloud, p);
     } else {

@@ -271,7 +271,7 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   PrimitiveResult found;
   if (params.primitives) {
     PrimitiveParams pp;
-    pp.epsilon = distance;
+    if (distance > 0.0) pp.epsilon = Length::cloud(distance);  // 0 (coincident points): the default, 1 spacing, is 0 too
     pp.band_in_epsilons = 1.0;  // a primitive's points are kept: only those within distance
     pp.seed = params.seed;
     if (cloud.has_normals()) {

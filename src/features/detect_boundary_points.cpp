@@ -17,10 +17,22 @@
 
 namespace pointsurf {
 
+const FieldTable<BoundaryParams>& BoundaryParams::fields() {
+  static const FieldTable<BoundaryParams> table = [] {
+    using P = BoundaryParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point of the angular-gap test").at_least(4).unit("points");
+    t.number("min_gap_deg", &P::min_gap_deg, "A point is on the boundary when its neighbours leave a wider gap").unit("degrees").range(0.0, 360.0, true, true);
+    return t;
+  }();
+  return table;
+}
+
 void BoundaryParams::validate() const {
   if (k < 4) throw UsageError(fmt::format("boundary points: k = {}, expected at least 4", k));
   if (!(min_gap_deg > 0.0 && min_gap_deg < 360.0))
     throw UsageError(fmt::format("boundary points: min_gap_deg = {}, expected a value in (0, 360)", min_gap_deg));
+  fields().validate(*this, "detect_boundary_points");
 }
 
 BoundaryResult detect_boundary_points(const PointCloud& cloud, const BoundaryParams& params, const KdTree* tree) {

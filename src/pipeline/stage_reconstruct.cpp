@@ -52,44 +52,6 @@ LoopKinds classify_loops(const MeshTopology& t, const PointCloud& cloud, const K
   return kinds;
 }
 
-TriangulateParams triangulate_params(const StageArgs& a) {
-  TriangulateParams p;
-  p.k = a.int32("k");
-  p.radius = a.number("radius");
-  p.radius_in_spacings = a.number("radius_in_spacings");
-  p.max_offset_in_spacings = a.number("max_offset_in_spacings");
-  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
-  p.min_angle_deg = a.number("min_angle_deg");
-  p.max_angle_deg = a.number("max_angle_deg");
-  p.max_dihedral_deg = a.number("max_dihedral_deg");
-  p.max_front_angle_deg = a.number("max_front_angle_deg");
-  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
-  return p;
-}
-
-// The manifold-extraction parameters the cocone and the Crust share.
-void read_delaunay_params(const StageArgs& a, DelaunaySurfaceParams& p) {
-  p.normal_filter_angle_deg = a.number("normal_filter_angle_deg");
-  p.sharp_edge_angle_deg = a.number("sharp_edge_angle_deg");
-  const std::string& b = a.text("boundary");
-  p.boundary = b == "closed" ? DelaunayBoundary::Closed : b == "open" ? DelaunayBoundary::Open : DelaunayBoundary::Auto;
-  p.max_boundary_edge_in_spacings = a.number("max_boundary_edge_in_spacings");
-  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
-}
-
-CoconeParams cocone_params(const StageArgs& a) {
-  CoconeParams p;
-  p.cocone_angle_deg = a.number("cocone_angle_deg");
-  read_delaunay_params(a, p);
-  return p;
-}
-
-CrustParams crust_params(const StageArgs& a) {
-  CrustParams p;
-  read_delaunay_params(a, p);
-  return p;
-}
-
 // The counts every method reports (ReconstructionStats), then its own.
 void record_stats(const ReconstructionStats& stats, StageRecord& rec) {
   rec.count("duplicate_points", as_count(stats.duplicate_points));
@@ -99,32 +61,6 @@ void record_stats(const ReconstructionStats& stats, StageRecord& rec) {
   for (const auto& [name, value] : stats.counts) rec.count(name, as_count(value));
   for (const auto& [name, value] : stats.figures) rec.metric(name, value);
   rec.metric("method_seconds", stats.seconds);
-}
-
-BallPivotParams ball_params(const StageArgs& a) {
-  BallPivotParams p;
-  p.radii = a.numbers("radii");
-  p.radii_in_spacings = a.numbers("radii_in_spacings");
-  p.max_normal_angle_deg = a.number("max_normal_angle_deg");
-  p.max_mean_normal_angle_deg = a.number("max_mean_normal_angle_deg");
-  p.max_hole_perimeter_in_spacings = a.number("max_hole_perimeter_in_spacings");
-  return p;
-}
-
-PoissonParams poisson_params(const StageArgs& a) {
-  PoissonParams p;
-  p.depth = a.int32("depth");
-  p.full_depth = a.int32("full_depth");
-  p.samples_per_node = a.number("samples_per_node");
-  p.point_weight = a.number("point_weight");
-  p.boundary = a.text("boundary_condition") == "dirichlet" ? PoissonBoundary::Dirichlet : PoissonBoundary::Neumann;
-  p.confidence = a.boolean("confidence");
-  p.trim_depth = a.number("trim_depth");
-  p.island_area_ratio = a.number("island_area_ratio");
-  p.unsupported_piece_gap = a.number("unsupported_piece_gap");
-  p.max_iterations = a.int32("max_iterations");
-  p.root_refinement_steps = a.int32("root_refinement_steps");
-  return p;
 }
 
 // The Poisson figures beyond the common ones: the depth used, the octree per level, the solver.
@@ -139,23 +75,10 @@ void record_poisson(const PoissonResult& r, StageRecord& rec) {
   rec.metric("relative_residual_per_level", residuals);
 }
 
-SmallComponentParams component_params(const StageArgs& a) {
-  SmallComponentParams p;
-  p.min_share = a.number("min_component_share");
-  return p;
-}
-
-FlatRegionParams region_params(const StageArgs& a) {
-  FlatRegionParams p;
-  p.max_normal_angle_deg = a.number("region_normal_angle_deg");
-  p.max_seed_angle_deg = a.number("region_seed_angle_deg");
-  return p;
-}
-
 // After any method: specks removed (min_component_share), then the flat regions labelled as
 // the face field "region" (issue 12). The topology is analysed again when faces went.
 void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
-  const SmallComponentsResult removed = remove_small_components(result.mesh, component_params(a));
+  const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
   rec.count("components_removed", as_count(removed.components_removed));
   rec.count("faces_removed", as_count(removed.faces_removed));
   if (removed.faces_removed > 0) {
@@ -163,7 +86,7 @@ void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, Sta
     result.topology = analyze_topology(result.mesh);
     result.unused_points += used_before - result.topology.vertices;
   }
-  const FlatRegionResult regions = label_flat_regions(result.mesh, region_params(a));
+  const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a));
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
   rec.count("regions", as_count(regions.regions));
@@ -194,19 +117,19 @@ void run_reconstruct(StageRun& run) {
         noise.median_in_spacings, kNoisyInSpacings));
   ReconstructionResult result;
   if (method == "triangulate") {
-    result = reconstruct_region_growing(cloud, triangulate_params(a), &tree, progress);
+    result = reconstruct_region_growing(cloud, read_params<TriangulateParams>(a), &tree, progress);
   } else if (method == "cocone") {
-    result = reconstruct_cocone(cloud, cocone_params(a), progress);
+    result = reconstruct_cocone(cloud, read_params<CoconeParams>(a), progress);
   } else if (method == "crust") {
-    result = reconstruct_crust(cloud, crust_params(a), progress);
+    result = reconstruct_crust(cloud, read_params<CrustParams>(a), progress);
   } else if (method == "poisson") {
-    PoissonResult poisson = reconstruct_poisson(cloud, poisson_params(a), &tree, progress);
+    PoissonResult poisson = reconstruct_poisson(cloud, read_params<PoissonParams>(a), &tree, progress);
     record_poisson(poisson, rec);
     if (poisson.skipped_normals > 0)
       rec.warnings.push_back(fmt::format("{} skipped: zero or non-finite normal", plural(poisson.skipped_normals, "point")));
     result = std::move(poisson);
   } else {
-    const BallPivotParams p = ball_params(a);
+    const BallPivotParams p = read_params<BallPivotParams>(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
     std::vector<double> radii = p.radii;
     if (radii.empty())
@@ -274,12 +197,6 @@ void run_reconstruct(StageRun& run) {
 }  // namespace
 
 StageSpec reconstruct_stage() {
-  const TriangulateParams tp;
-  const CoconeParams cp;  // the extraction defaults are the Crust's too (DelaunaySurfaceParams)
-  const BallPivotParams bp;
-  const SmallComponentParams scp;
-  const FlatRegionParams fp;
-  const PoissonParams pp;
   StageSpec s;
   s.name = "reconstruct";
   s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson";
@@ -290,95 +207,26 @@ StageSpec reconstruct_stage() {
   s.produces = Slot{"mesh", DataKind::Mesh};
   s.methods = {"triangulate", "cocone", "crust", "ball-pivot", "poisson"};
   s.default_method = "triangulate";
-  const std::vector<std::string> tri = {"triangulate"}, cocone = {"cocone"}, delaunay = {"cocone", "crust"}, ball = {"ball-pivot"}, poisson = {"poisson"};
-  s.params = {
-      P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot", "poisson"}),
-      P::integer("k", tp.k, "At most k neighbours per point (4k within 4x the radius for points on a scan line)").at_least(3).only(tri),
-      P::number("radius", tp.radius, "Search radius and longest edge; 0: radius_in_spacings x local spacing").unit("cloud units").non_negative().meta("R").only(tri),
-      P::number("radius_in_spacings", tp.radius_in_spacings, "Radius when radius is 0").unit("local spacings").positive().only(tri),
-      P::number("max_offset_in_spacings", tp.max_offset_in_spacings, "Ignore neighbours farther from the tangent plane").unit("local spacings").positive().only(tri),
-      P::number("max_normal_angle_deg", tp.max_normal_angle_deg, "Ignore neighbours whose normal deviates more").unit("degrees").range(0, 180, true, false).only(tri),
-      P::number("min_angle_deg", tp.min_angle_deg, "Smallest inner angle of a triangle").unit("degrees").range(0, 60, false, true).only(tri),
-      P::number("max_angle_deg", tp.max_angle_deg, "Largest inner angle of a triangle").unit("degrees").range(60, 180, true, false).only(tri),
-      P::number("max_dihedral_deg", tp.max_dihedral_deg, "Largest angle between neighbouring triangle normals").unit("degrees").range(0, 180, true, false).only(tri),
-      P::number("max_front_angle_deg", tp.max_front_angle_deg, "Close boundary corners opening less than this after growing; 0: off")
-          .unit("degrees")
-          .range(0, 180, false, true)
-          .only(tri),
-      P::number("max_hole_perimeter_in_spacings", HoleFillParams{}.max_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every interpolating method); 0: none")
-          .unit("local spacings")
-          .non_negative()
-          .only({"triangulate", "cocone", "crust", "ball-pivot"}),
-      P::number("cocone_angle_deg", cp.cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true).only(cocone),
-      P::number("normal_filter_angle_deg", cp.normal_filter_angle_deg, "Drop triangles deviating more from the pole vectors; 90: off")
-          .unit("degrees")
-          .range(0, 90, true, false)
-          .only(delaunay),
-      P::number("sharp_edge_angle_deg", cp.sharp_edge_angle_deg, "Sharp-edge pruning gap; 360: off").unit("degrees").range(180, 360).only(delaunay),
-      P::choice("boundary", cp.boundary == DelaunayBoundary::Auto ? "auto" : cp.boundary == DelaunayBoundary::Closed ? "closed" : "open",
-                {"auto", "closed", "open"}, "Surface kind: auto (per piece), closed or open")
-          .only(delaunay),
-      P::number("max_boundary_edge_in_spacings", cp.max_boundary_edge_in_spacings, "Peel rim triangles with a longer boundary edge; 0: off")
-          .unit("mean spacings")
-          .non_negative()
-          .only(delaunay),
-      P::numbers("radii", bp.radii, "Ball radii (default: radii_in_spacings x mean spacing)").unit("cloud units").positive().meta("R1,R2,...").only(ball),
-      P::numbers("radii_in_spacings", bp.radii_in_spacings, "Ball radii when radii are not given").unit("mean spacings").positive().only(ball),
-      P::number("max_normal_angle_deg", bp.max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
-          .unit("degrees")
-          .range(0, 180, true, false)
-          .only(ball),
-      P::number("max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg, "Largest angle between a triangle and its mean vertex normal")
-          .unit("degrees")
-          .range(0, 180, true, false)
-          .only(ball),
-      P::integer("depth", pp.depth, "Finest octree level (2^depth cells across 1.1x the largest extent); 0: the level whose cell is nearest the mean spacing, 6..10")
-          .range(0, 16)
-          .only(poisson),
-      P::integer("full_depth", pp.full_depth, "Octree levels 1..full_depth are complete grids").range(1, 16).only(poisson),
-      P::number("samples_per_node", pp.samples_per_node, "Density output: the depth at which a node holds this many samples").unit("samples").positive().only(poisson),
-      P::number("point_weight", pp.point_weight, "Screening weight alpha: pull of the surface to the samples; 0: plain Poisson").non_negative().only(poisson),
-      P::choice("boundary_condition", pp.boundary == PoissonBoundary::Dirichlet ? "dirichlet" : "neumann", {"neumann", "dirichlet"},
-                "Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)")
-          .only(poisson),
-      P::boolean("confidence", pp.confidence, "Weight each point by its normal's length").only(poisson),
-      P::number("trim_depth", pp.trim_depth, "Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off")
-          .unit("depth")
-          .range(0, 16)
-          .only(poisson),
-      P::number("island_area_ratio", pp.island_area_ratio, "After trimming, remove pieces smaller than this share of the largest's area")
-          .unit("share of area")
-          .range(0, 1)
-          .only(poisson),
-      P::number("unsupported_piece_gap", pp.unsupported_piece_gap,
-                "Remove pieces whose samples per area are this far below the main surface's (outlier bubbles; each unit 4x fewer); 0: keep all")
-          .unit("depth")
-          .range(0, 16)
-          .only(poisson),
-      P::integer("max_iterations", pp.max_iterations, "Conjugate-gradient iterations per sparse level at most").at_least(1).only(poisson),
-      P::integer("root_refinement_steps", pp.root_refinement_steps, "Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps").range(0, 20).only(poisson),
-      P::number("min_component_share", scp.min_share, "Remove components with fewer faces than this share of all; 0: keep all")
-          .unit("share of faces")
-          .range(0, 1),
-      P::number("region_normal_angle_deg", fp.max_normal_angle_deg, "Flat regions: largest normal angle across an edge")
-          .unit("degrees")
-          .range(0, 180, true, false),
-      P::number("region_seed_angle_deg", fp.max_seed_angle_deg, "Flat regions: largest normal angle to the region's seed face; 180: off")
-          .unit("degrees")
-          .range(0, 180, true, false),
-  };
+  s.params = {P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"triangulate", "ball-pivot", "poisson"})};
+  append(s.params, params_of(TriangulateParams::fields(), {"triangulate"}));
+  append(s.params, params_of(CoconeParams::fields(), {"cocone"}));
+  append(s.params, params_of(CrustParams::fields(), {"crust"}));
+  append(s.params, params_of(BallPivotParams::fields(), {"ball-pivot"}));
+  append(s.params, params_of(PoissonParams::fields(), {"poisson"}));
+  append(s.params, params_of(SmallComponentParams::fields()));
+  append(s.params, params_of(FlatRegionParams::fields()));
   s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4",
                 "pointsurf reconstruct scan.ply mesh.ply --method poisson --trim-depth 7"};
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
-    component_params(a).validate();
-    region_params(a).validate();
-    if (a.method() == "triangulate") triangulate_params(a).validate();
-    else if (a.method() == "cocone") cocone_params(a).validate();
-    else if (a.method() == "crust") crust_params(a).validate();
-    else if (a.method() == "poisson") poisson_params(a).validate();
-    else ball_params(a).validate();
+    read_params<SmallComponentParams>(a).validate();
+    read_params<FlatRegionParams>(a).validate();
+    if (a.method() == "triangulate") read_params<TriangulateParams>(a).validate();
+    else if (a.method() == "cocone") read_params<CoconeParams>(a).validate();
+    else if (a.method() == "crust") read_params<CrustParams>(a).validate();
+    else if (a.method() == "poisson") read_params<PoissonParams>(a).validate();
+    else read_params<BallPivotParams>(a).validate();
   };
   return s;
 }

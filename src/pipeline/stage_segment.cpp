@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The segment stage: one integer label per point in the field "segment" (-1 unassigned), by
 // region growing, Euclidean clusters, RANSAC primitives or HK surface type.
-#include <sstream>
-
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
@@ -17,71 +15,9 @@
 namespace pointsurf::detail {
 namespace {
 
-RegionGrowingParams region_params(const StageArgs& a) {
-  RegionGrowingParams p;
-  p.k = a.int32("k");
-  p.max_angle_deg = a.number("max_angle_deg");
-  p.max_variation = a.number("max_variation");
-  p.use_features = a.boolean("use_features");
-  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
-  return p;
-}
-
-EuclideanParams euclidean_params(const StageArgs& a) {
-  EuclideanParams p;
-  p.radius = a.number("radius");
-  p.radius_in_spacings = a.number("radius_in_spacings");
-  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
-  return p;
-}
-
-SurfaceTypeParams hk_params(const StageArgs& a) {
-  SurfaceTypeParams p;
-  p.k = a.int32("k");
-  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
-  return p;
-}
-
-unsigned primitive_types(const std::string& list) {
-  unsigned types = 0;
-  std::stringstream in(list);
-  std::string word;
-  while (std::getline(in, word, ',')) {
-    if (word == "plane") types |= kPlanes;
-    else if (word == "sphere") types |= kSpheres;
-    else if (word == "cylinder") types |= kCylinders;
-    else if (word == "cone") types |= kCones;
-    else if (word == "torus") types |= kTori;
-    else throw UsageError(fmt::format("types: unknown primitive \"{}\" (expected a comma-separated list of plane, sphere, cylinder, cone, torus)", word));
-  }
-  return types;
-}
-
-std::string primitive_type_list(unsigned types) {
-  std::string list;
-  for (unsigned bit = 0; bit < 5; ++bit)
-    if (types & (1u << bit)) list += (list.empty() ? "" : ",") + std::string(primitive_type_name(PrimitiveType(bit)));
-  return list;
-}
-
-PrimitiveParams primitive_params(const StageArgs& a) {
-  PrimitiveParams p;
-  p.types = primitive_types(a.text("types"));
-  p.epsilon = a.number("epsilon");
-  p.epsilon_in_spacings = a.number("epsilon_in_spacings");
-  p.cluster_epsilon = a.number("cluster_epsilon");
-  p.cluster_in_spacings = a.number("cluster_in_spacings");
-  p.max_normal_deg = a.number("max_normal_deg");
-  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
-  p.probability = a.number("probability");
-  p.band_in_epsilons = a.number("band_in_epsilons");
-  p.seed = static_cast<std::uint64_t>(a.integer("seed"));
-  return p;
-}
-
 void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
-  rec.set_used("epsilon", r.epsilon_used);
-  rec.set_used("cluster_epsilon", r.cluster_epsilon_used);
+  rec.set_used("epsilon_used", r.epsilon_used);
+  rec.set_used("cluster_epsilon_used", r.cluster_epsilon_used);
   rec.set_used("min_points", static_cast<std::int64_t>(r.min_points_used));
   rec.count("candidates", as_count(r.candidates));
   for (std::size_t i = 0; i < r.primitives.size(); ++i) {
@@ -112,18 +48,18 @@ void run_segment(StageRun& run) {
   std::vector<std::int32_t> labels;
   std::size_t segments = 0, unassigned = 0;
   if (method == "region") {
-    const SegmentResult r = segment_region_growing(cloud, region_params(a), &run.context.tree(run.output), progress);
+    const SegmentResult r = segment_region_growing(cloud, read_params<RegionGrowingParams>(a), &run.context.tree(run.output), progress);
     labels = r.labels, segments = r.sizes.size(), unassigned = r.unassigned;
   } else if (method == "euclidean") {
-    const SegmentResult r = segment_euclidean(cloud, euclidean_params(a), &run.context.tree(run.output));
+    const SegmentResult r = segment_euclidean(cloud, read_params<EuclideanParams>(a), &run.context.tree(run.output));
     labels = r.labels, segments = r.sizes.size(), unassigned = r.unassigned;
   } else if (method == "hk") {
     if (!cloud.fields.contains("surface_type"))
       throw InputError("the input has no \"surface_type\" field; run the curvature stage first (pointsurf curvature)");
-    const SegmentResult r = segment_surface_types(cloud, hk_params(a), &run.context.tree(run.output));
+    const SegmentResult r = segment_surface_types(cloud, read_params<SurfaceTypeParams>(a), &run.context.tree(run.output));
     labels = r.labels, segments = r.sizes.size(), unassigned = r.unassigned;
   } else {
-    const PrimitiveResult r = detect_primitives(cloud, primitive_params(a), progress);
+    const PrimitiveResult r = detect_primitives(cloud, read_params<PrimitiveParams>(a), progress);
     labels = r.labels, segments = r.primitives.size(), unassigned = r.unassigned;
     record_primitives(rec, r);
   }
@@ -138,31 +74,13 @@ void run_segment(StageRun& run) {
                             unassigned, plural(cloud.size(), "point"), estimated ? ", normals estimated" : "");
 }
 
-BoundaryParams boundary_params(const StageArgs& a) {
-  BoundaryParams p;
-  p.k = a.int32("k");
-  p.min_gap_deg = a.number("min_gap_deg");
-  return p;
-}
-
-OutlineParams outline_params(const StageArgs& a) {
-  OutlineParams p;
-  p.alpha = a.number("alpha");
-  p.alpha_in_spacings = a.number("alpha_in_spacings");
-  p.simplify_in_spacings = a.number("simplify_in_spacings");
-  p.offset_in_spacings = a.number("offset_in_spacings");
-  p.max_rms_in_spacings = a.number("max_rms_in_spacings");
-  p.min_points = static_cast<std::size_t>(a.integer("min_points"));
-  return p;
-}
-
 void run_boundary(StageRun& run) {
   const StageArgs& a = run.args;
   PointCloud& cloud = run.context.item(run.output).cloud;
   StageRecord& rec = run.record;
   if (cloud.size() < 5) throw InputError(fmt::format("{}; the boundary test needs at least 5", plural(cloud.size(), "point")));
   const KdTree& tree = run.context.tree(run.output);
-  const BoundaryResult b = detect_boundary_points(cloud, boundary_params(a), &tree);
+  const BoundaryResult b = detect_boundary_points(cloud, read_params<BoundaryParams>(a), &tree);
   std::vector<double>& field = cloud.fields.add("boundary", cloud.size(), ScalarType::UInt8).values;
   for (std::size_t i = 0; i < field.size(); ++i) field[i] = b.boundary[i];
   rec.count("points", as_count(cloud.size()));
@@ -178,8 +96,8 @@ void run_boundary(StageRun& run) {
     labels = segment_region_growing(cloud, {}, &run.context.tree(run.output)).labels;
     source = "region growing";
   }
-  const OutlineResult o = outline_planar_segments(cloud, labels, outline_params(a));
-  rec.set_used("alpha", o.alpha_used);
+  const OutlineResult o = outline_planar_segments(cloud, labels, read_params<OutlineParams>(a));
+  rec.set_used("alpha_used", o.alpha_used);
   std::vector<Polyline> lines;
   PolylineWriteOptions write;
   write.crs = a.text("crs");
@@ -218,8 +136,6 @@ void run_boundary(StageRun& run) {
 }  // namespace
 
 StageSpec boundary_stage() {
-  const BoundaryParams b;
-  const OutlineParams o;
   StageSpec s;
   s.name = "boundary";
   s.summary = "Boundary points (field \"boundary\", angular gap) and alpha-shape outlines of planar segments, holes included";
@@ -228,32 +144,20 @@ StageSpec boundary_stage() {
   s.order = 81;
   s.consumes = {Slot{"cloud", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
-  s.params = {
-      P::integer("k", b.k, "Neighbours per point of the angular-gap test").at_least(4),
-      P::number("min_gap_deg", b.min_gap_deg, "A point is on the boundary when its neighbours leave a wider gap").unit("degrees").range(0.0, 360.0, true, true),
-      P::number("alpha", o.alpha, "Alpha radius of the outlines; 0: alpha_in_spacings x mean spacing").unit("cloud units").non_negative().meta("A"),
-      P::number("alpha_in_spacings", o.alpha_in_spacings, "Alpha radius when alpha is 0").unit("mean spacings").positive(),
-      P::number("simplify_in_spacings", o.simplify_in_spacings, "Douglas-Peucker tolerance of the loops (0: none)").unit("mean spacings").non_negative(),
-      P::number("offset_in_spacings", o.offset_in_spacings, "Loops are moved this far away from the points (outer out, holes in)").unit("mean spacings").non_negative(),
-      P::number("max_rms_in_spacings", o.max_rms_in_spacings, "A segment is planar when its RMS distance to its plane is at most this").unit("mean spacings").non_negative(),
-      P::integer("min_points", static_cast<std::int64_t>(o.min_points), "Fewest points of an outlined segment").at_least(3),
-      P::text("outlines", "", "Write the outlines to this file (.ply, .obj, .geojson)").meta("FILE"),
-      P::text("crs", "", "GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)").meta("CRS"),
-  };
+  s.params = params_of(BoundaryParams::fields());
+  append(s.params, params_of(OutlineParams::fields()));
+  s.params.push_back(P::text("outlines", "", "Write the outlines to this file (.ply, .obj, .geojson)").meta("FILE"));
+  s.params.push_back(P::text("crs", "", "GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)").meta("CRS"));
   s.examples = {"pointsurf boundary roofs.ply roofs_boundary.ply --outlines roofs.geojson --crs EPSG:25832"};
   s.run = run_boundary;
   s.check = [](const StageArgs& a) {
-    boundary_params(a).validate();
-    outline_params(a).validate();
+    read_params<BoundaryParams>(a).validate();
+    read_params<OutlineParams>(a).validate();
   };
   return s;
 }
 
 StageSpec segment_stage() {
-  const RegionGrowingParams rg;
-  const EuclideanParams eu;
-  const SurfaceTypeParams hk;
-  const PrimitiveParams pr;
   StageSpec s;
   s.name = "segment";
   s.summary = "Split the points into segments: field \"segment\" (-1 unassigned), by region growing, Euclidean clusters, RANSAC primitives or HK surface type";
@@ -266,35 +170,19 @@ StageSpec segment_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.methods = {"region", "euclidean", "ransac", "hk"};
   s.default_method = "region";
-  s.params = {
-      P::integer("k", rg.k, "Neighbours per point (the graph's edges)").at_least(3).only({"region"}),
-      P::number("max_angle_deg", rg.max_angle_deg, "Largest angle between neighbouring normals in one segment").unit("degrees").range(0.0, 90.0, true, false).only({"region"}),
-      P::number("max_variation", rg.max_variation, "Points of higher surface variation join a segment but do not extend it").range(0.0, 1.0 / 3.0).only({"region"}),
-      P::boolean("use_features", rg.use_features, "Feature points (field \"feature\" non-zero) do not extend a segment").only({"region"}),
-      P::integer("min_points", static_cast<std::int64_t>(rg.min_points), "Fewest points of a segment; smaller ones are unassigned").at_least(1).only({"region", "euclidean", "hk"}),
-      P::number("radius", eu.radius, "Cluster distance; 0: radius_in_spacings x mean spacing").unit("cloud units").non_negative().meta("R").only({"euclidean"}),
-      P::number("radius_in_spacings", eu.radius_in_spacings, "Cluster distance when radius is 0").unit("mean spacings").positive().only({"euclidean"}),
-      P::integer("k", hk.k, "Neighbours per point (the graph's edges)").at_least(2).only({"hk"}),
-      P::text("types", primitive_type_list(pr.types), "Primitive types to detect, comma-separated: plane, sphere, cylinder, cone, torus").meta("LIST").only({"ransac"}),
-      P::number("epsilon", pr.epsilon, "A candidate's score counts the points this close; 0: epsilon_in_spacings x mean spacing").unit("cloud units").non_negative().meta("E").only({"ransac"}),
-      P::number("epsilon_in_spacings", pr.epsilon_in_spacings, "Scoring distance when epsilon is 0").unit("mean spacings").positive().only({"ransac"}),
-      P::number("cluster_epsilon", pr.cluster_epsilon, "Connectivity grid cell; 0: cluster_in_spacings x mean spacing").unit("cloud units").non_negative().meta("C").only({"ransac"}),
-      P::number("cluster_in_spacings", pr.cluster_in_spacings, "Connectivity cell when cluster_epsilon is 0").unit("mean spacings").positive().only({"ransac"}),
-      P::number("max_normal_deg", pr.max_normal_deg, "Largest angle between a point's normal and the primitive's").unit("degrees").range(0.0, 90.0, true, true).only({"ransac"}),
-      P::integer("min_points", static_cast<std::int64_t>(pr.min_points), "Fewest inliers of a primitive; 0: max(30, N / 200)").at_least(0).only({"ransac"}),
-      P::number("probability", pr.probability, "Accepted chance of missing a primitive of min_points").range(0.0, 1.0, true, true).only({"ransac"}),
-      P::number("band_in_epsilons", pr.band_in_epsilons, "A found primitive takes the points within this many epsilons of its refit").unit("epsilons").at_least(1.0).only({"ransac"}),
-      P::integer("seed", static_cast<std::int64_t>(pr.seed), "Random seed").at_least(0).only({"ransac"}),
-      P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"region", "ransac"}),
-  };
-  s.examples = {"pointsurf segment part.ply part_segments.ply --method region --max_angle_deg 5",
+  s.params = params_of(RegionGrowingParams::fields(), {"region"});
+  append(s.params, params_of(EuclideanParams::fields(), {"euclidean"}));
+  append(s.params, params_of(SurfaceTypeParams::fields(), {"hk"}));
+  append(s.params, params_of(PrimitiveParams::fields(), {"ransac"}));
+  s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"region", "ransac"}));
+  s.examples = {"pointsurf segment part.ply part_segments.ply --method region --max-angle-deg 5",
                 "pointsurf segment scene.ply primitives.ply --method ransac --report primitives.json"};
   s.run = run_segment;
   s.check = [](const StageArgs& a) {
-    if (a.method() == "region") region_params(a).validate();
-    else if (a.method() == "euclidean") euclidean_params(a).validate();
-    else if (a.method() == "hk") hk_params(a).validate();
-    else primitive_params(a).validate();
+    if (a.method() == "region") read_params<RegionGrowingParams>(a).validate();
+    else if (a.method() == "euclidean") read_params<EuclideanParams>(a).validate();
+    else if (a.method() == "hk") read_params<SurfaceTypeParams>(a).validate();
+    else read_params<PrimitiveParams>(a).validate();
   };
   return s;
 }

@@ -494,6 +494,34 @@ private:
 
 }  // namespace
 
+const FieldTable<BallPivotParams>& BallPivotParams::fields() {
+  static const FieldTable<BallPivotParams> table = [] {
+    using P = BallPivotParams;
+    FieldTable<P> t;
+    // Two lists rather than one list of lengths: a parameter value holds one length, not a list.
+    t.numbers("radii", &P::radii, "Ball radii (default: radii_in_spacings x mean spacing)")
+        .unit("cloud units")
+        .positive()
+        .meta("R1,R2,...")
+        .when([](const P& p) { return !p.radii.empty(); });
+    t.numbers("radii_in_spacings", &P::radii_in_spacings, "Ball radii when radii are not given")
+        .unit("mean spacings")
+        .positive()
+        .when([](const P& p) { return p.radii.empty(); });
+    t.number("max_normal_angle_deg", &P::max_normal_angle_deg, "Largest angle between a triangle and each vertex normal")
+        .unit("degrees")
+        .range(0, 180, true, false);
+    t.number("max_mean_normal_angle_deg", &P::max_mean_normal_angle_deg, "Largest angle between a triangle and its mean vertex normal")
+        .unit("degrees")
+        .range(0, 180, true, false);
+    t.number("max_hole_perimeter_in_spacings", &P::max_hole_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every interpolating method); 0: none")
+        .unit("local spacings")
+        .non_negative();
+    return t;
+  }();
+  return table;
+}
+
 void BallPivotParams::validate() const {
   const BallPivotParams& params = *this;
   for (const double r : params.radii)
@@ -515,6 +543,7 @@ void BallPivotParams::validate() const {
   if (!(params.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(params.max_hole_perimeter_in_spacings))
     throw UsageError(fmt::format("reconstruct_ball_pivoting: max_hole_perimeter_in_spacings must be finite and >= 0 (0: off), got {}",
                                  params.max_hole_perimeter_in_spacings));
+  fields().validate(*this, "reconstruct_ball_pivoting");
 }
 
 ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const BallPivotParams& params, const KdTree* tree,

@@ -94,10 +94,21 @@ std::vector<std::array<int, 3>> cocone_candidates(const detail::DelaunaySetup& s
 
 }  // namespace
 
+const FieldTable<CoconeParams>& CoconeParams::fields() {
+  static const FieldTable<CoconeParams> table = [] {
+    FieldTable<CoconeParams> t;
+    t.number("cocone_angle_deg", &CoconeParams::cocone_angle_deg, "Cocone half-angle theta").unit("degrees").range(0, 90, true, true);
+    detail::add_delaunay_fields(t);
+    return t;
+  }();
+  return table;
+}
+
 void CoconeParams::validate() const {
   if (!(cocone_angle_deg > 0.0 && cocone_angle_deg < 90.0))
     throw UsageError(fmt::format("cocone: cocone_angle_deg = {}, expected a value in (0, 90)", cocone_angle_deg));
   DelaunaySurfaceParams::validate("cocone");
+  fields().validate(*this, "cocone");
 }
 
 ReconstructionResult reconstruct_cocone(const PointCloud& cloud, const CoconeParams& params,

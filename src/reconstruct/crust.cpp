@@ -62,6 +62,15 @@ std::vector<std::array<int, 3>> sample_facets(const detail::DelaunayCells& cells
 
 }  // namespace
 
+const FieldTable<CrustParams>& CrustParams::fields() {
+  static const FieldTable<CrustParams> table = [] {
+    FieldTable<CrustParams> t;
+    detail::add_delaunay_fields(t);
+    return t;
+  }();
+  return table;
+}
+
 ReconstructionResult reconstruct_crust(const PointCloud& cloud, const CrustParams& params, const ProgressCallback& progress,
                                        CrustStats* stats_out) {
   const auto t_start = std::chrono::steady_clock::now();

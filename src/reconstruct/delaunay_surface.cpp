@@ -176,6 +176,20 @@ std::vector<int> components(const Complex& cx, const std::vector<char>& alive, i
 
 }  // namespace
 
+const EnumNames<DelaunayBoundary>& delaunay_boundary_names() {
+  static const EnumNames<DelaunayBoundary> names{{{DelaunayBoundary::Auto, "auto"}, {DelaunayBoundary::Closed, "closed"}, {DelaunayBoundary::Open, "open"}}};
+  return names;
+}
+
+const FieldTable<DelaunaySurfaceParams>& DelaunaySurfaceParams::fields() {
+  static const FieldTable<DelaunaySurfaceParams> table = [] {
+    FieldTable<DelaunaySurfaceParams> t;
+    detail::add_delaunay_fields(t);
+    return t;
+  }();
+  return table;
+}
+
 void DelaunaySurfaceParams::validate(const char* method) const {
   const DelaunaySurfaceParams& params = *this;
   if (!(params.normal_filter_angle_deg > 0.0 && params.normal_filter_angle_deg <= 90.0))
@@ -190,6 +204,7 @@ void DelaunaySurfaceParams::validate(const char* method) const {
   if (!(params.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(params.max_hole_perimeter_in_spacings))
     throw UsageError(fmt::format("{}: max_hole_perimeter_in_spacings = {}, expected a finite value >= 0 (0: off)", method,
                                  params.max_hole_perimeter_in_spacings));
+  fields().validate(*this, method);
 }
 
 namespace detail {

@@ -18,6 +18,21 @@
 
 namespace pointsurf {
 
+const FieldTable<FlatRegionParams>& FlatRegionParams::fields() {
+  static const FieldTable<FlatRegionParams> table = [] {
+    using P = FlatRegionParams;
+    FieldTable<P> t;
+    t.number("region_normal_angle_deg", &P::max_normal_angle_deg, "Flat regions: largest normal angle across an edge")
+        .unit("degrees")
+        .range(0, 180, true, false);
+    t.number("region_seed_angle_deg", &P::max_seed_angle_deg, "Flat regions: largest normal angle to the region's seed face; 180: off")
+        .unit("degrees")
+        .range(0, 180, true, false);
+    return t;
+  }();
+  return table;
+}
+
 void FlatRegionParams::validate() const {
   const auto check = [](const char* name, double value) {
     if (!(value > 0.0 && value <= 180.0))
@@ -25,6 +40,7 @@ void FlatRegionParams::validate() const {
   };
   check("max_normal_angle_deg", max_normal_angle_deg);
   check("max_seed_angle_deg", max_seed_angle_deg);
+  fields().validate(*this, "label_flat_regions");
 }
 
 namespace {

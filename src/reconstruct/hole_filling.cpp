@@ -445,10 +445,22 @@ void close_holes(const std::vector<Vector3d>& positions, const std::vector<Vecto
 
 }  // namespace detail
 
+const FieldTable<HoleFillParams>& HoleFillParams::fields() {
+  static const FieldTable<HoleFillParams> table = [] {
+    FieldTable<HoleFillParams> t;
+    t.number("max_perimeter_in_spacings", &HoleFillParams::max_perimeter_in_spacings, "Close holes up to this perimeter; 0: none")
+        .unit("local spacings")
+        .non_negative();
+    return t;
+  }();
+  return table;
+}
+
 void HoleFillParams::validate() const {
   if (!(max_perimeter_in_spacings >= 0.0) || !std::isfinite(max_perimeter_in_spacings))
     throw UsageError(fmt::format("fill_holes: max_perimeter_in_spacings = {}, expected a finite value >= 0 (0: none closed)",
                                  max_perimeter_in_spacings));
+  fields().validate(*this, "fill_holes");
 }
 
 namespace detail {

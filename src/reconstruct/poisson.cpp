@@ -99,6 +99,44 @@ std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh
 
 }  // namespace
 
+const EnumNames<PoissonBoundary>& poisson_boundary_names() {
+  static const EnumNames<PoissonBoundary> names{{{PoissonBoundary::Neumann, "neumann"}, {PoissonBoundary::Dirichlet, "dirichlet"}}};
+  return names;
+}
+
+const FieldTable<PoissonParams>& PoissonParams::fields() {
+  static const FieldTable<PoissonParams> table = [] {
+    using P = PoissonParams;
+    FieldTable<P> t;
+    t.integer("depth", &P::depth,
+              "Finest octree level (2^depth cells across 1.1x the largest extent); 0: the level whose cell is nearest the mean spacing, 6..10")
+        .range(0, 16);
+    t.integer("full_depth", &P::full_depth, "Octree levels 1..full_depth are complete grids").range(1, 16);
+    t.number("samples_per_node", &P::samples_per_node, "Density output: the depth at which a node holds this many samples").unit("samples").positive();
+    t.number("point_weight", &P::point_weight, "Screening weight alpha: pull of the surface to the samples; 0: plain Poisson").non_negative();
+    t.choice("boundary_condition", &P::boundary, poisson_boundary_names(),
+             "Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)");
+    t.boolean("weight_by_normal_length", &P::weight_by_normal_length, "Weight each point by its normal's length").was("confidence");
+    t.number("trim_depth", &P::trim_depth, "Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off")
+        .unit("depth")
+        .range(0, 16);
+    t.number("island_area_ratio", &P::island_area_ratio, "After trimming, remove pieces smaller than this share of the largest's area")
+        .unit("share of area")
+        .range(0, 1);
+    t.number("unsupported_piece_gap", &P::unsupported_piece_gap,
+             "Remove pieces whose samples per area are this far below the main surface's (outlier bubbles; each unit 4x fewer); 0: keep all")
+        .unit("depth")
+        .range(0, 16);
+    t.integer("root_refinement_steps", &P::root_refinement_steps,
+              "Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps")
+        .range(0, 20);
+    t.integer("max_iterations", &P::max_iterations, "Conjugate-gradient iterations per sparse level at most").at_least(1);
+    t.number("tolerance", &P::tolerance, "Relative residual reduction at which a level's solver stops").range(0, 1, true, true).internal();
+    return t;
+  }();
+  return table;
+}
+
 void PoissonParams::validate() const {
   if (depth != 0 && (depth < 2 || depth > kMaxDepth))
     throw UsageError(fmt::format("reconstruct_poisson: depth must be 0 (from the data) or in [2, {}], got {}", kMaxDepth, depth));
@@ -119,6 +157,7 @@ void PoissonParams::validate() const {
   if (max_iterations < 1) throw UsageError(fmt::format("reconstruct_poisson: max_iterations must be >= 1, got {}", max_iterations));
   if (!(tolerance > 0.0 && tolerance < 1.0))
     throw UsageError(fmt::format("reconstruct_poisson: tolerance must be in (0, 1), got {}", tolerance));
+  fields().validate(*this, "reconstruct_poisson");
 }
 
 PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& params, const KdTree* tree, const ProgressCallback& progress) {
@@ -172,7 +211,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
     const std::size_t i = usable[k];
     samples[k].position = ((cloud.positions[i] - centre) / lattice.size).array() + 0.5;
     const Vector3d& v = cloud.normals[i];
-    samples[k].normal = params.confidence ? v : v.normalized();
+    samples[k].normal = params.weight_by_normal_length ? v : v.normalized();
   });
   detail::PoissonSystemParams sys;
   sys.depth = depth;

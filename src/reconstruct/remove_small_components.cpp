@@ -11,9 +11,21 @@
 
 namespace pointsurf {
 
+const FieldTable<SmallComponentParams>& SmallComponentParams::fields() {
+  static const FieldTable<SmallComponentParams> table = [] {
+    FieldTable<SmallComponentParams> t;
+    t.number("min_component_share", &SmallComponentParams::min_share, "Remove components with fewer faces than this share of all; 0: keep all")
+        .unit("share of faces")
+        .range(0, 1);
+    return t;
+  }();
+  return table;
+}
+
 void SmallComponentParams::validate() const {
   if (!(min_share >= 0.0 && min_share <= 1.0))
     throw UsageError(fmt::format("remove_small_components: min_share must be in [0, 1], got {}", min_share));
+  fields().validate(*this, "remove_small_components");
 }
 
 SmallComponentsResult remove_small_components(TriangleMesh& mesh, const SmallComponentParams& params) {

@@ -593,15 +593,37 @@ std::size_t insert_unused_points(const std::vector<Vector3d>& positions, const s
 
 }  // namespace
 
+const FieldTable<TriangulateParams>& TriangulateParams::fields() {
+  static const FieldTable<TriangulateParams> table = [] {
+    using P = TriangulateParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "At most k neighbours per point (4k within 4x the radius for points on a scan line)").at_least(3).unit("points");
+    t.length("radius", &P::radius, "Search radius and longest edge (in spacings: each point's local spacing)")
+        .positive()
+        .unit("cloud units or local spacings")
+        .was("radius_in_spacings");
+    t.number("max_offset_in_spacings", &P::max_offset_in_spacings, "Ignore neighbours farther from the tangent plane").unit("local spacings").positive();
+    t.number("max_normal_angle_deg", &P::max_normal_angle_deg, "Ignore neighbours whose normal deviates more").unit("degrees").range(0, 180, true, false);
+    t.number("min_angle_deg", &P::min_angle_deg, "Smallest inner angle of a triangle").unit("degrees").range(0, 60, false, true);
+    t.number("max_angle_deg", &P::max_angle_deg, "Largest inner angle of a triangle").unit("degrees").range(60, 180, true, false);
+    t.number("max_dihedral_deg", &P::max_dihedral_deg, "Largest angle between neighbouring triangle normals").unit("degrees").range(0, 180, true, false);
+    t.number("max_front_angle_deg", &P::max_front_angle_deg, "Close boundary corners opening less than this after growing; 0: off")
+        .unit("degrees")
+        .range(0, 180, false, true);
+    t.number("max_hole_perimeter_in_spacings", &P::max_hole_perimeter_in_spacings, "Close holes up to this perimeter (fill_holes, every interpolating method); 0: none")
+        .unit("local spacings")
+        .non_negative();
+    return t;
+  }();
+  return table;
+}
+
 void TriangulateParams::validate() const {
   const TriangulateParams& p = *this;
   const auto bad = [](const char* name, double value, const char* expected) {
     return UsageError(fmt::format("reconstruct_region_growing: {} must be {}, got {}", name, expected, value));
   };
   if (p.k < 3) throw bad("k", p.k, ">= 3");
-  if (!(p.radius >= 0.0) || !std::isfinite(p.radius)) throw bad("radius", p.radius, ">= 0 (0: from the local spacing)");
-  if (p.radius == 0.0 && !(p.radius_in_spacings > 0.0 && std::isfinite(p.radius_in_spacings)))
-    throw bad("radius_in_spacings", p.radius_in_spacings, "> 0");
   if (!(p.max_offset_in_spacings > 0.0) || !std::isfinite(p.max_offset_in_spacings))
     throw bad("max_offset_in_spacings", p.max_offset_in_spacings, "> 0");
   if (!(p.max_normal_angle_deg > 0.0 && p.max_normal_angle_deg <= 180.0))
@@ -614,6 +636,7 @@ void TriangulateParams::validate() const {
     throw bad("max_front_angle_deg", p.max_front_angle_deg, "in [0, 180)");
   if (!(p.max_hole_perimeter_in_spacings >= 0.0) || !std::isfinite(p.max_hole_perimeter_in_spacings))
     throw bad("max_hole_perimeter_in_spacings", p.max_hole_perimeter_in_spacings, ">= 0");
+  fields().validate(*this, "reconstruct_region_growing");
 }
 
 TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
@@ -682,11 +705,11 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   // A point is on a scan line when it and one of its two nearest neighbours look so (see
   // kLineGapDeg). An explicit radius is the user's reach: nothing is widened then.
   for (std::size_t i = 0; i < n; ++i)
-    on_line[i] = static_cast<std::uint8_t>(params.radius <= 0.0 && line_like[i] && ((nearest[i][0] != kNone && line_like[nearest[i][0]]) ||
+    on_line[i] = static_cast<std::uint8_t>(params.radius.in_spacings() && line_like[i] && ((nearest[i][0] != kNone && line_like[nearest[i][0]]) ||
                                                                                     (nearest[i][1] != kNone && line_like[nearest[i][1]])));
   std::vector<double> radius_of(n);
   for (std::size_t i = 0; i < n; ++i) {
-    radius_of[i] = params.radius > 0.0 ? params.radius : params.radius_in_spacings * local_spacing[i];
+    radius_of[i] = params.radius.resolve(local_spacing[i]);
     if (on_line[i]) radius_of[i] *= kLineReachFactor;
   }
 

@@ -137,11 +137,26 @@ std::vector<Eigen::Vector2d> offset_loop(const std::vector<Eigen::Vector2d>& loo
 
 }  // namespace
 
+const FieldTable<OutlineParams>& OutlineParams::fields() {
+  static const FieldTable<OutlineParams> table = [] {
+    using P = OutlineParams;
+    FieldTable<P> t;
+    t.length("alpha", &P::alpha, "Alpha radius of the outlines").positive().was("alpha_in_spacings");
+    t.number("simplify_in_spacings", &P::simplify_in_spacings, "Douglas-Peucker tolerance of the loops (0: none)").unit("mean spacings").non_negative();
+    t.number("offset_in_spacings", &P::offset_in_spacings, "Loops are moved this far away from the points (outer out, holes in)")
+        .unit("mean spacings")
+        .non_negative();
+    t.number("max_rms_in_spacings", &P::max_rms_in_spacings, "A segment is planar when its RMS distance to its plane is at most this")
+        .unit("mean spacings")
+        .non_negative();
+    t.integer("min_points", &P::min_points, "Fewest points of an outlined segment").at_least(3).unit("points");
+    return t;
+  }();
+  return table;
+}
+
 void OutlineParams::validate() const {
   constexpr std::string_view fn = "outline_planar_segments";
-  if (!std::isfinite(alpha) || alpha < 0.0) throw UsageError(fmt::format("{}: alpha must be >= 0 (cloud units), got {}", fn, alpha));
-  if (alpha == 0.0 && !(std::isfinite(alpha_in_spacings) && alpha_in_spacings > 0.0))
-    throw UsageError(fmt::format("{}: alpha_in_spacings must be > 0, got {}", fn, alpha_in_spacings));
   if (!(std::isfinite(max_rms_in_spacings) && max_rms_in_spacings >= 0.0))
     throw UsageError(fmt::format("{}: max_rms_in_spacings must be >= 0, got {}", fn, max_rms_in_spacings));
   if (!(std::isfinite(offset_in_spacings) && offset_in_spacings >= 0.0))
@@ -149,6 +164,7 @@ void OutlineParams::validate() const {
   if (!(std::isfinite(simplify_in_spacings) && simplify_in_spacings >= 0.0))
     throw UsageError(fmt::format("{}: simplify_in_spacings must be >= 0, got {}", fn, simplify_in_spacings));
   if (min_points < 3) throw UsageError(fmt::format("{}: min_points must be >= 3, got {}", fn, min_points));
+  fields().validate(*this, fn);
 }
 
 OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params) {
@@ -159,7 +175,7 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
   OutlineResult result;
   if (cloud.size() < 2) return result;
   const double spacing = mean_spacing(cloud.positions);
-  const double alpha = params.alpha > 0.0 ? params.alpha : params.alpha_in_spacings * spacing;
+  const double alpha = params.alpha.resolve(spacing);
   result.alpha_used = alpha;
   if (!(alpha > 0.0)) return result;
   std::map<std::int32_t, std::vector<std::uint32_t>> members;

@@ -10,12 +10,18 @@
 
 namespace pointsurf {
 
-void EuclideanParams::validate() const {
-  constexpr std::string_view fn = "segment_euclidean";
-  if (!std::isfinite(radius) || radius < 0.0) throw UsageError(fmt::format("{}: radius must be >= 0 (cloud units), got {}", fn, radius));
-  if (radius == 0.0 && !(std::isfinite(radius_in_spacings) && radius_in_spacings > 0.0))
-    throw UsageError(fmt::format("{}: radius_in_spacings must be > 0, got {}", fn, radius_in_spacings));
+const FieldTable<EuclideanParams>& EuclideanParams::fields() {
+  static const FieldTable<EuclideanParams> table = [] {
+    using P = EuclideanParams;
+    FieldTable<P> t;
+    t.length("radius", &P::radius, "Cluster distance").positive().was("radius_in_spacings");
+    t.integer("min_points", &P::min_points, "Fewest points of a cluster; smaller ones are unassigned").at_least(1).unit("points");
+    return t;
+  }();
+  return table;
 }
+
+void EuclideanParams::validate() const { fields().validate(*this, "segment_euclidean"); }
 
 SegmentResult segment_euclidean(const PointCloud& cloud, const EuclideanParams& params, const KdTree* tree) {
   constexpr std::string_view fn = "segment_euclidean";
@@ -26,7 +32,7 @@ SegmentResult segment_euclidean(const PointCloud& cloud, const EuclideanParams& 
     throw UsageError(fmt::format("{}: the kd-tree holds {} points but the cloud has {}", fn, tree->size(), n));
   std::optional<KdTree> own;
   const KdTree& t = tree != nullptr ? *tree : own.emplace(cloud.positions);
-  const double radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(t);
+  const double radius = params.radius.in_spacings() ? params.radius.resolve(mean_spacing(t)) : params.radius.value;
   detail::UnionFind sets(n);
   if (radius > 0.0) {
     const NeighborLists graph = t.radius_all({}, radius);

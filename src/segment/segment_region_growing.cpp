@@ -13,6 +13,20 @@
 
 namespace pointsurf {
 
+const FieldTable<RegionGrowingParams>& RegionGrowingParams::fields() {
+  static const FieldTable<RegionGrowingParams> table = [] {
+    using P = RegionGrowingParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point (the graph's edges)").at_least(3).unit("points");
+    t.number("max_angle_deg", &P::max_angle_deg, "Largest angle between neighbouring normals in one segment").unit("degrees").range(0.0, 90.0, true, false);
+    t.number("max_variation", &P::max_variation, "Points of higher surface variation join a segment but do not extend it").range(0.0, 1.0 / 3.0);
+    t.boolean("use_features", &P::use_features, "Feature points (field \"feature\" non-zero) do not extend a segment");
+    t.integer("min_points", &P::min_points, "Fewest points of a segment; smaller ones are unassigned").at_least(1).unit("points");
+    return t;
+  }();
+  return table;
+}
+
 void RegionGrowingParams::validate() const {
   constexpr std::string_view fn = "segment_region_growing";
   if (k < 3) throw UsageError(fmt::format("{}: k must be >= 3, got {}", fn, k));
@@ -20,6 +34,7 @@ void RegionGrowingParams::validate() const {
     throw UsageError(fmt::format("{}: max_angle_deg must be in (0, 90] degrees, got {}", fn, max_angle_deg));
   if (!(max_variation >= 0.0 && max_variation <= 1.0 / 3.0))
     throw UsageError(fmt::format("{}: max_variation must be in [0, 1/3], got {}", fn, max_variation));
+  fields().validate(*this, fn);
 }
 
 SegmentResult segment_region_growing(const PointCloud& cloud, const RegionGrowingParams& params, const KdTree* tree,

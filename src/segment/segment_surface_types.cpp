@@ -9,8 +9,20 @@
 
 namespace pointsurf {
 
+const FieldTable<SurfaceTypeParams>& SurfaceTypeParams::fields() {
+  static const FieldTable<SurfaceTypeParams> table = [] {
+    using P = SurfaceTypeParams;
+    FieldTable<P> t;
+    t.integer("k", &P::k, "Neighbours per point (the graph's edges)").at_least(2).unit("points");
+    t.integer("min_points", &P::min_points, "Fewest points of a region; smaller ones are unassigned").at_least(1).unit("points");
+    return t;
+  }();
+  return table;
+}
+
 void SurfaceTypeParams::validate() const {
   if (k < 2) throw UsageError(fmt::format("segment_surface_types: k must be >= 2, got {}", k));
+  fields().validate(*this, "segment_surface_types");
 }
 
 SegmentResult segment_surface_types(const PointCloud& cloud, const SurfaceTypeParams& params, const KdTree* tree) {

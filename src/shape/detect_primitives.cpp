@@ -125,35 +125,63 @@ std::vector<std::uint32_t> largest_component(const std::vector<Vector3d>& pts, c
 
 }  // namespace
 
+const EnumNames<PrimitiveType>& primitive_type_names() {
+  static const EnumNames<PrimitiveType> names{{{PrimitiveType::Plane, "plane"},
+                                               {PrimitiveType::Sphere, "sphere"},
+                                               {PrimitiveType::Cylinder, "cylinder"},
+                                               {PrimitiveType::Cone, "cone"},
+                                               {PrimitiveType::Torus, "torus"}}};
+  return names;
+}
+
 const char* primitive_type_name(PrimitiveType type) noexcept {
-  switch (type) {
-    case PrimitiveType::Plane: return "plane";
-    case PrimitiveType::Sphere: return "sphere";
-    case PrimitiveType::Cylinder: return "cylinder";
-    case PrimitiveType::Cone: return "cone";
-    case PrimitiveType::Torus: return "torus";
-  }
-  return "unknown";
+  const std::string& name = primitive_type_names().name(type);
+  return name.empty() ? "unknown" : name.c_str();
+}
+
+unsigned primitive_mask(const std::vector<PrimitiveType>& types) noexcept {
+  unsigned mask = 0;
+  for (const PrimitiveType t : types)
+    if (static_cast<unsigned>(t) < 5) mask |= 1u << static_cast<unsigned>(t);
+  return mask;
+}
+
+const FieldTable<PrimitiveParams>& PrimitiveParams::fields() {
+  static const FieldTable<PrimitiveParams> table = [] {
+    using P = PrimitiveParams;
+    FieldTable<P> t;
+    t.choices("types", &P::types, primitive_type_names(), "Primitive types to detect, comma-separated: plane, sphere, cylinder, cone, torus");
+    t.length("epsilon", &P::epsilon, "A candidate's score counts the points this close").positive().was("epsilon_in_spacings");
+    t.length("cluster_epsilon", &P::cluster_epsilon, "Connectivity grid cell").positive().was("cluster_in_spacings");
+    t.number("max_normal_angle_deg", &P::max_normal_angle_deg, "Largest angle between a point's normal and the primitive's")
+        .unit("degrees")
+        .range(0.0, 90.0, true, true)
+        .was("max_normal_deg");
+    t.integer("min_points", &P::min_points, "Fewest inliers of a primitive; 0: max(30, N / 200)").unit("points");
+    t.number("probability", &P::probability, "Accepted chance of missing a primitive of min_points").range(0.0, 1.0, true, true);
+    t.number("band_in_epsilons", &P::band_in_epsilons, "A found primitive takes the points within this many epsilons of its refit")
+        .unit("epsilons")
+        .at_least(1.0);
+    t.integer("seed", &P::seed, "Random seed");
+    return t;
+  }();
+  return table;
 }
 
 double Primitive::distance(const Eigen::Vector3d& p) const { return residual(*this, p, Vector3d::Zero()).distance; }
 
 void PrimitiveParams::validate() const {
   constexpr std::string_view fn = "detect_primitives";
-  if ((types & kAllPrimitives) == 0 || (types & ~unsigned(kAllPrimitives)) != 0)
-    throw UsageError(fmt::format("{}: types must name at least one of plane, sphere, cylinder, cone, torus, got bits {}", fn, types));
-  auto length = [&](const char* name, double value, double in_spacings, const char* in_name) {
-    if (!std::isfinite(value) || value < 0.0) throw UsageError(fmt::format("{}: {} must be >= 0 (cloud units), got {}", fn, name, value));
-    if (value == 0.0 && !(std::isfinite(in_spacings) && in_spacings > 0.0))
-      throw UsageError(fmt::format("{}: {} must be > 0, got {}", fn, in_name, in_spacings));
-  };
-  length("epsilon", epsilon, epsilon_in_spacings, "epsilon_in_spacings");
-  length("cluster_epsilon", cluster_epsilon, cluster_in_spacings, "cluster_in_spacings");
+  if (types.empty()) throw UsageError(fmt::format("{}: types must name at least one of plane, sphere, cylinder, cone, torus", fn));
+  for (const PrimitiveType t : types)
+    if (primitive_type_names().name(t).empty())
+      throw UsageError(fmt::format("{}: types: unknown primitive type {}", fn, static_cast<unsigned>(t)));
   if (!(band_in_epsilons >= 1.0 && std::isfinite(band_in_epsilons)))
     throw UsageError(fmt::format("{}: band_in_epsilons must be >= 1 (epsilons), got {}", fn, band_in_epsilons));
-  if (!(max_normal_deg > 0.0 && max_normal_deg < 90.0))
-    throw UsageError(fmt::format("{}: max_normal_deg must be in (0, 90) degrees, got {}", fn, max_normal_deg));
+  if (!(max_normal_angle_deg > 0.0 && max_normal_angle_deg < 90.0))
+    throw UsageError(fmt::format("{}: max_normal_angle_deg must be in (0, 90) degrees, got {}", fn, max_normal_angle_deg));
   if (!(probability > 0.0 && probability < 1.0)) throw UsageError(fmt::format("{}: probability must be in (0, 1), got {}", fn, probability));
+  fields().validate(*this, fn);
 }
 
 PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams& params, const ProgressCallback& progress) {
@@ -166,17 +194,18 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
   if (n_all > 0 && !cloud.has_normals())
     throw UsageError(fmt::format("{}: the cloud has no normals (estimate them first: pointsurf normals)", fn));
   if (n_all < 3) return result;
-  const double spacing = (params.epsilon > 0.0 && params.cluster_epsilon > 0.0) ? 0.0 : mean_spacing(cloud.positions);
-  const double eps = params.epsilon > 0.0 ? params.epsilon : params.epsilon_in_spacings * spacing;
-  const double cluster = params.cluster_epsilon > 0.0 ? params.cluster_epsilon : params.cluster_in_spacings * spacing;
+  const double spacing = (params.epsilon.in_spacings() || params.cluster_epsilon.in_spacings()) ? mean_spacing(cloud.positions) : 0.0;
+  const double eps = params.epsilon.resolve(spacing);
+  const double cluster = params.cluster_epsilon.resolve(spacing);
+  const unsigned types = primitive_mask(params.types);
   const std::size_t min_points = params.min_points > 0 ? params.min_points : std::max<std::size_t>(30, n_all / 200);
   result.epsilon_used = eps;
   result.cluster_epsilon_used = cluster;
   result.min_points_used = min_points;
   if (!(eps > 0.0) || !(cluster > 0.0)) return result;  // every point at one place: nothing to fit
-  const double cos_max = std::cos(params.max_normal_deg * kDeg);
+  const double cos_max = std::cos(params.max_normal_angle_deg * kDeg);
   const double band = params.band_in_epsilons * eps;
-  const int samples = (params.types & kTori) ? 4 : 3;  // a torus needs a fourth oriented point
+  const int samples = (types & kTori) ? 4 : 3;  // a torus needs a fourth oriented point
 
   // Points relative to the box centre, in Morton order, so that sampling does not depend on the
   // input order.
@@ -362,7 +391,7 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
       Vector3d p[4], nn[4];
       for (int k = 0; k < samples; ++k) p[k] = pts[rs[k]], nn[k] = nrm[rs[k]];
       std::vector<Primitive> made;
-      detail::make_candidates(p, nn, samples, params.types, eps, cos_max, scene, made);
+      detail::make_candidates(p, nn, samples, types, eps, cos_max, scene, made);
       for (const Primitive& s : made) {
         Candidate c;
         c.shape = s;
@@ -425,7 +454,7 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
       }
     };
     settle(shape, idx);
-    if (shape.type != PrimitiveType::Plane && (params.types & kPlanes) && idx.size() >= min_points) {
+    if (shape.type != PrimitiveType::Plane && (types & kPlanes) && idx.size() >= min_points) {
       // A curved primitive can stand in for a noisy plane (a flat cone, a wide cylinder): the
       // plane, the simpler model, is taken when it holds at least as many points.
       Primitive plane;

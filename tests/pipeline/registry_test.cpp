@@ -18,10 +18,6 @@
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
-#include "pointsurf/reconstruct/ball_pivot.h"
-#include "pointsurf/reconstruct/poisson.h"
-#include "pointsurf/reconstruct/cocone.h"
-#include "pointsurf/reconstruct/triangulate.h"
 #include "pointsurf/register/multi.h"
 #include "pointsurf/shape/curvature.h"
 #include "pointsurf/simplify/simplify.h"
@@ -75,38 +71,11 @@ struct Expected {
 
 std::vector<Expected> library_defaults() {
   const NormalParams n;
-  const TriangulateParams tp;
-  const CoconeParams cp;
-  const BallPivotParams bp;
-  const PoissonParams pp;
   const MultiParams mp;
   const PairParams& pair = mp.pair;
   using I = std::int64_t;
   return {
       {"curvature", "", "normals_k", I{n.k}},
-      {"reconstruct", "triangulate", "k", I{tp.k}},
-      {"reconstruct", "triangulate", "max_normal_angle_deg", tp.max_normal_angle_deg},
-      {"reconstruct", "triangulate", "min_angle_deg", tp.min_angle_deg},
-      {"reconstruct", "triangulate", "max_angle_deg", tp.max_angle_deg},
-      {"reconstruct", "triangulate", "max_dihedral_deg", tp.max_dihedral_deg},
-      {"reconstruct", "triangulate", "max_front_angle_deg", tp.max_front_angle_deg},
-      {"reconstruct", "triangulate", "max_hole_perimeter_in_spacings", tp.max_hole_perimeter_in_spacings},
-      {"reconstruct", "cocone", "cocone_angle_deg", cp.cocone_angle_deg},
-      {"reconstruct", "cocone", "sharp_edge_angle_deg", cp.sharp_edge_angle_deg},
-      {"reconstruct", "cocone", "max_hole_perimeter_in_spacings", cp.max_hole_perimeter_in_spacings},
-      {"reconstruct", "ball-pivot", "radii_in_spacings", bp.radii_in_spacings},
-      {"reconstruct", "ball-pivot", "max_normal_angle_deg", bp.max_normal_angle_deg},
-      {"reconstruct", "ball-pivot", "max_mean_normal_angle_deg", bp.max_mean_normal_angle_deg},
-      {"reconstruct", "ball-pivot", "max_hole_perimeter_in_spacings", bp.max_hole_perimeter_in_spacings},
-      {"reconstruct", "poisson", "depth", I{pp.depth}},
-      {"reconstruct", "poisson", "full_depth", I{pp.full_depth}},
-      {"reconstruct", "poisson", "samples_per_node", pp.samples_per_node},
-      {"reconstruct", "poisson", "point_weight", pp.point_weight},
-      {"reconstruct", "poisson", "trim_depth", pp.trim_depth},
-      {"reconstruct", "poisson", "island_area_ratio", pp.island_area_ratio},
-      {"reconstruct", "poisson", "unsupported_piece_gap", pp.unsupported_piece_gap},
-      {"reconstruct", "poisson", "max_iterations", I{pp.max_iterations}},
-      {"reconstruct", "poisson", "root_refinement_steps", I{pp.root_refinement_steps}},
       {"register", "", "descriptor", std::string(descriptor_type_name(pair.features.type))},
       {"register", "", "icp", std::string(icp_metric_name(pair.icp.metric))},
       {"register", "", "voxel_in_spacings", pair.voxel_in_spacings},

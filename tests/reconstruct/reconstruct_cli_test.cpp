@@ -121,6 +121,32 @@ TEST_F(ReconstructCli, ExplicitRadiiAreInCloudUnits) {
   EXPECT_GT(read_mesh(path("mesh.off")).mesh.triangle_count(), 0u);
 }
 
+// Keys of the previous release still work in a pipeline (radius_in_spacings: the radius in
+// spacings; confidence: weight_by_normal_length), with a warning: the same mesh.
+TEST_F(ReconstructCli, FormerKeysGiveTheSameMeshWithAWarning) {
+  const PointCloud sphere = test::sample_sphere(2000, 1.0);
+  write_point_cloud(path("sphere.ply"), sphere);
+  const auto run = [&](const std::string& name, const std::string& step) {
+    test::write_bytes(path(name + "_pipeline.json"), "[\"" + path("sphere.ply") + "\", " + step + ", \"" + path(name + ".ply") + "\"]");
+    const RunResult r = run_cli("run " + path(name + "_pipeline.json") + " --report " + path(name + ".json"), dir_);
+    EXPECT_EQ(r.exit_code, 0) << step << ": " << r.err;
+    return test::read_bytes(dir_ / (name + ".json"));
+  };
+  const auto same_mesh = [&](const std::string& a, const std::string& b) {
+    const std::string x = test::read_bytes(dir_ / (a + ".ply")), y = test::read_bytes(dir_ / (b + ".ply"));
+    return !x.empty() && x == y;
+  };
+  run("new", R"({"type": "reconstruct", "radius": "4sp"})");
+  const std::string old_key = run("old", R"({"type": "reconstruct", "radius_in_spacings": 4})");
+  EXPECT_TRUE(same_mesh("new", "old"));
+  EXPECT_EQ(stage("new.json", "reconstruct")["parameters"]["radius"], "4sp");
+  EXPECT_TRUE(test::contains(old_key, R"(key \"radius_in_spacings\" is deprecated)")) << old_key;
+  run("new2", R"({"type": "reconstruct", "method": "poisson", "depth": 5, "weight_by_normal_length": true})");
+  const std::string old2 = run("old2", R"({"type": "reconstruct", "method": "poisson", "depth": 5, "confidence": true})");
+  EXPECT_TRUE(same_mesh("new2", "old2"));
+  EXPECT_TRUE(test::contains(old2, R"(key \"confidence\" is deprecated)")) << old2;
+}
+
 TEST_F(ReconstructCli, EveryMethodRunsThroughTheSameCommandAndReportsTheSameCounts) {
   PointCloud sphere = test::sample_sphere(2000, 1.0);
   sphere.positions.push_back(sphere.positions[7]);  // one exact duplicate

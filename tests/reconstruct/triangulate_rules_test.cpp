@@ -140,7 +140,7 @@ TEST(TriangulateRules, MaximumEdgeLength) {
     }
   const TriangulateResult a = reconstruct_region_growing(cloud, rules_only());
   TriangulateParams strict = rules_only();
-  strict.radius = 0.2;
+  strict.radius = Length::cloud(0.2);
   const TriangulateResult b = reconstruct_region_growing(cloud, strict);
   EXPECT_GT(longest_edge(a.mesh), 0.25);
   EXPECT_EQ(a.topology.components, 1u);

@@ -357,7 +357,7 @@ TEST(RegionGrowing, DegenerateInputGivesNoTriangleAndNoCrash) {
   PointCloud three;
   three.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
   three.normals.assign(3, Vector3d(0, 0, 1));
-  const TriangulateResult t = reconstruct_region_growing(three, TriangulateParams{.radius = 2.0});
+  const TriangulateResult t = reconstruct_region_growing(three, TriangulateParams{.radius = Length::cloud(2.0)});
   EXPECT_EQ(t.topology.triangles, 1u);
 }
 
@@ -379,8 +379,8 @@ TEST(RegionGrowing, RejectsBadInput) {
   const PointCloud cloud = test::sample_sphere(100);
   const auto with = [&](TriangulateParams p) { return [&cloud, p] { reconstruct_region_growing(cloud, p); }; };
   expect_error<UsageError>(with({.k = 2}), "k must be >= 3, got 2");
-  expect_error<UsageError>(with({.radius = -1.0}), "radius must be >= 0");
-  expect_error<UsageError>(with({.radius_in_spacings = 0.0}), "radius_in_spacings must be > 0");
+  expect_error<UsageError>(with({.radius = Length::cloud(-1.0)}), "reconstruct_region_growing: radius must be > 0, got -1");
+  expect_error<UsageError>(with({.radius = Length::spacings(0.0)}), "reconstruct_region_growing: radius must be > 0, got 0sp");
   expect_error<UsageError>(with({.max_offset_in_spacings = 0.0}), "max_offset_in_spacings must be > 0");
   expect_error<UsageError>(with({.max_normal_angle_deg = 0.0}), "max_normal_angle_deg must be in (0, 180]");
   expect_error<UsageError>(with({.min_angle_deg = 60.0}), "min_angle_deg must be in [0, 60), got 60");

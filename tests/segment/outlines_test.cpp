@@ -86,7 +86,7 @@ TEST(OutlinePlanarSegments, SkipsCurvedSegmentsAndChecksInput) {
   EXPECT_EQ(r.nonplanar, 1u);
   EXPECT_THROW(outline_planar_segments(sphere, std::vector<std::int32_t>(3, 0)), UsageError);
   OutlineParams p;
-  p.alpha = -1.0;
+  p.alpha = Length::cloud(-1.0);
   EXPECT_THROW(p.validate(), UsageError);
   EXPECT_TRUE(outline_planar_segments(PointCloud{}, {}).outlines.empty());
 }

@@ -38,11 +38,39 @@ TEST(SegmentStage, RegionEuclideanAndErrors) {
   const test::RunResult hk = test::run_cli("segment " + cube + out + " --method hk", dir);
   EXPECT_EQ(hk.exit_code, 2);
   EXPECT_TRUE(test::contains(hk.err, "surface_type")) << hk.err;
-  const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max_angle_deg 120", dir);
+  const test::RunResult bad = test::run_cli("segment " + cube + out + " --method region --max-angle-deg 120", dir);
   EXPECT_EQ(bad.exit_code, 1);
   const test::RunResult types = test::run_cli("segment " + cube + out + " --method ransac --types plane,ellipsoid", dir);
   EXPECT_EQ(types.exit_code, 1);
   EXPECT_TRUE(test::contains(types.err, "ellipsoid")) << types.err;
+}
+
+// Keys of the previous release still work in a pipeline, with a warning in the report: the
+// same output as the new key's.
+TEST(SegmentStage, FormerKeysGiveTheSameOutputWithAWarning) {
+  const std::filesystem::path dir = test::temp_dir("segment_stage_former_keys");
+  write_point_cloud(dir / "cube.ply", test::sample_cube(6000, 1.0, 2));
+  const auto run = [&](const std::string& name, const std::string& step) {
+    const std::filesystem::path pipeline = dir / (name + "_pipeline.json");
+    test::write_bytes(pipeline, "[\"" + (dir / "cube.ply").string() + "\", " + step + ", \"" + (dir / (name + ".ply")).string() + "\"]");
+    const test::RunResult r = test::run_cli("run " + pipeline.string() + " --report " + (dir / (name + ".json")).string(), dir);
+    EXPECT_EQ(r.exit_code, 0) << step << ": " << r.err;
+    return test::read_bytes(dir / (name + ".json"));
+  };
+  const auto same_output = [&](const std::string& a, const std::string& b) {
+    const std::string x = test::read_bytes(dir / (a + ".ply")), y = test::read_bytes(dir / (b + ".ply"));
+    return !x.empty() && x == y;
+  };
+  const std::string new_key = run("new", R"({"type": "segment", "method": "euclidean", "radius": "4sp"})");
+  const std::string old_key = run("old", R"({"type": "segment", "method": "euclidean", "radius_in_spacings": 4})");
+  EXPECT_TRUE(same_output("new", "old"));
+  EXPECT_FALSE(test::contains(new_key, "deprecated"));
+  EXPECT_TRUE(test::contains(old_key, R"(key \"radius_in_spacings\" is deprecated)")) << old_key;
+  run("new2", R"({"type": "segment", "method": "ransac", "max_normal_angle_deg": 20, "epsilon": "1.5sp"})");
+  const std::string old2 = run("old2", R"({"type": "segment", "method": "ransac", "max_normal_deg": 20, "epsilon_in_spacings": 1.5})");
+  EXPECT_TRUE(same_output("new2", "old2"));
+  EXPECT_TRUE(test::contains(old2, R"(key \"max_normal_deg\" is deprecated)")) << old2;
+  EXPECT_TRUE(test::contains(old2, R"(key \"epsilon_in_spacings\" is deprecated)")) << old2;
 }
 
 }  // namespace

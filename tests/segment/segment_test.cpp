@@ -13,6 +13,7 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/shape/curvature.h"
+#include "support/files.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
@@ -150,7 +151,7 @@ TEST(Euclidean, SeparatesBlobsAndDropsSmallOnes) {
   std::vector<int> truth;
   const PointCloud cloud = three_blobs(truth);
   EuclideanParams p;
-  p.radius = 0.3;
+  p.radius = Length::cloud(0.3);
   const SegmentResult r = segment_euclidean(cloud, p);
   ASSERT_EQ(r.sizes.size(), 3u);
   EXPECT_EQ(r.sizes, (std::vector<std::size_t>{3000, 2000, 1000}));
@@ -165,7 +166,7 @@ TEST(Euclidean, InvariantUnderPermutationAndShift) {
   std::vector<int> truth;
   const PointCloud cloud = three_blobs(truth);
   EuclideanParams p;
-  p.radius = 0.15;  // the blobs' cores stay joined; fewer neighbours than 0.3 keep the test short
+  p.radius = Length::cloud(0.15);  // the blobs' cores stay joined; fewer neighbours than 0.3 keep the test short
   const SegmentResult base = segment_euclidean(cloud, p);
   const std::vector<std::size_t> perm = shuffled(cloud.size(), 9);
   expect_permuted(base, segment_euclidean(cloud.select(perm), p), perm);
@@ -249,8 +250,10 @@ TEST(Segment, EmptyCloudsAndBadInputs) {
   rg.max_variation = 0.5;
   EXPECT_THROW(rg.validate(), UsageError);
   EuclideanParams e;
-  e.radius = -1.0;
+  e.radius = Length::cloud(-1.0);
   EXPECT_THROW(e.validate(), UsageError);
+  e.radius = Length::spacings(0.0);
+  test::expect_error<UsageError>([&] { e.validate(); }, "segment_euclidean: radius must be > 0, got 0sp");
   SurfaceTypeParams s;
   s.k = 1;
   EXPECT_THROW(s.validate(), UsageError);

@@ -21,6 +21,9 @@
 namespace pointsurf {
 namespace {
 
+const std::vector<PrimitiveType> kAllTypes = {PrimitiveType::Plane, PrimitiveType::Sphere, PrimitiveType::Cylinder, PrimitiveType::Cone,
+                                              PrimitiveType::Torus};
+
 double axis_angle_deg(const Vector3d& a, const Vector3d& b) {
   return std::acos(std::clamp(std::abs(a.dot(b)), 0.0, 1.0)) * 180.0 / M_PI;
 }
@@ -68,8 +71,8 @@ std::vector<std::pair<double, int>> majority(const PointCloud& cloud, const std:
 
 TEST(DetectPrimitives, RecoversEachPrimitiveOfTheScene) {
   const test::PrimitiveScene scene = test::make_primitive_scene();
-  for (const unsigned types : {unsigned(kDefaultPrimitives), unsigned(kAllPrimitives)}) {
-    SCOPED_TRACE(testing::Message() << "types " << types);
+  for (const std::vector<PrimitiveType>& types : {PrimitiveParams{}.types, kAllTypes}) {
+    SCOPED_TRACE(testing::Message() << "types " << types.size());
     PrimitiveParams params;
     params.types = types;
     const PrimitiveResult r = detect_primitives(scene.cloud, params);
@@ -117,7 +120,7 @@ TEST(DetectPrimitives, RecoversANoisyTorus) {
   PointCloud cloud;
   add_torus(cloud, torus, 250.0, 0.005, 0, 5);
   PrimitiveParams params;
-  params.types = kAllPrimitives;
+  params.types = kAllTypes;
   const PrimitiveResult r = detect_primitives(cloud, params);
   const auto major = majority(cloud, r.labels, 1);
   EXPECT_GE(major[0].first, 0.95);
@@ -128,7 +131,7 @@ TEST(DetectPrimitives, RecoversANoisyTorus) {
       << found.radius << " " << found.minor_radius;
   EXPECT_LT(found.rms, 0.01);
   // Without the torus model no primitive holds it.
-  params.types = kDefaultPrimitives;
+  params.types = PrimitiveParams{}.types;
   const auto without = majority(cloud, detect_primitives(cloud, params).labels, 1);
   EXPECT_FALSE(without[0].first >= 0.95 && without[0].second >= 0);
 }
@@ -145,7 +148,7 @@ TEST(DetectPrimitives, TorusBesidePlanesIsOneSegment) {
   torus.minor_radius = 0.4;
   add_torus(cloud, torus, 300.0, 0.005, 2, 6);
   PrimitiveParams params;
-  params.types = kAllPrimitives;
+  params.types = kAllTypes;
   const PrimitiveResult r = detect_primitives(cloud, params);
   const std::vector<Primitive> truths = {scene.truth[0], scene.truth[1], torus};
   const auto major = majority(cloud, r.labels, truths.size());
@@ -275,7 +278,7 @@ TEST(DetectPrimitives, InvariantUnderPermutationAndShift) {
 TEST(DetectPrimitives, DeterministicForASeedWhateverTheThreads) {
   const test::PrimitiveScene scene = test::make_primitive_scene(100.0);
   PrimitiveParams params;
-  params.types = kAllPrimitives;
+  params.types = kAllTypes;
   const PrimitiveResult base = detect_primitives(scene.cloud, params);
   EXPECT_EQ(detect_primitives(scene.cloud, params).labels, base.labels);
   {
@@ -332,19 +335,19 @@ TEST(DetectPrimitives, RejectsBadParametersAndMissingNormals) {
     EXPECT_NE(std::string(e.what()).find("no normals"), std::string::npos);
   }
   PrimitiveParams p;
-  p.max_normal_deg = 95.0;
+  p.max_normal_angle_deg = 95.0;
   EXPECT_THROW(p.validate(), UsageError);
   p = {};
-  p.types = 0;
+  p.types = {};
   EXPECT_THROW(p.validate(), UsageError);
   p = {};
-  p.epsilon = -1.0;
+  p.epsilon = Length::cloud(-1.0);
   EXPECT_THROW(p.validate(), UsageError);
   p = {};
   p.probability = 1.0;
   EXPECT_THROW(p.validate(), UsageError);
   p = {};
-  p.types = 32;
+  p.types = {PrimitiveType(7)};
   EXPECT_THROW(p.validate(), UsageError);
   p = {};
   p.band_in_epsilons = 0.5;

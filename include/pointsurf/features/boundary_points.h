@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -19,6 +20,8 @@ struct BoundaryParams {
   double min_gap_deg = 90.0;   // a point is on the boundary when the largest angle between
                                // consecutive neighbours around it, in its tangent plane, exceeds
                                // this (PCL's BoundaryEstimation default, pi / 2), in (0, 360)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<BoundaryParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };

@@ -4,6 +4,7 @@
 // "The Ball-Pivoting Algorithm for Surface Reconstruction", IEEE TVCG 5(4), 1999).
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/reconstruct/fill_holes.h"
@@ -30,6 +31,8 @@ struct BallPivotParams {
   // Final pass: holes up to this perimeter (local spacings) are closed by fill_holes() (where
   // the ball could not rest on a hole's corners, typically at a sharp edge); 0: off.
   double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<BallPivotParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
   void validate() const;

@@ -5,6 +5,7 @@
 // input points.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/reconstruct/delaunay_surface.h"
@@ -18,6 +19,8 @@ struct CoconeParams : DelaunaySurfaceParams {
                                    // cocone {y : |angle(y - p, pole vector) - 90| <= theta}
   /// Throws UsageError naming the first value out of range: the one place the values are
   /// checked (the algorithm and the pipeline call it before any work).
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<CoconeParams>& fields();
   void validate() const;
 };
 

@@ -5,6 +5,7 @@
 // points. Its single-Delaunay simplification is the cocone (reconstruct/cocone.h).
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/reconstruct/delaunay_surface.h"
@@ -15,6 +16,8 @@ namespace pointsurf {
 /// The Crust has no parameter of its own: only those of the shared manifold extraction.
 struct CrustParams : DelaunaySurfaceParams {
   /// Throws UsageError naming the first value out of range.
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<CrustParams>& fields();
   void validate() const { DelaunaySurfaceParams::validate("crust"); }
 };
 

@@ -5,6 +5,7 @@
 // its counts.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/reconstruct/fill_holes.h"
 
 namespace pointsurf {
@@ -17,6 +18,8 @@ enum class DelaunayBoundary {
   Closed,  // the surface is closed: rim edges are sharp and their triangles are pruned
   Open,    // the surface may have a boundary: only wedge-sharp edges are pruned
 };
+/// "auto", "closed", "open".
+const EnumNames<DelaunayBoundary>& delaunay_boundary_names();
 
 /// Parameters of the manifold extraction (Amenta, Bern, Kamvysselis 1998, section 4.2).
 struct DelaunaySurfaceParams {
@@ -40,6 +43,8 @@ struct DelaunaySurfaceParams {
   double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;  // >= 0:
                                         // holes up to this perimeter (local spacings) are closed by
                                         // fill_holes() with triangles of the samples; 0: off
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<DelaunaySurfaceParams>& fields();
   /// Throws UsageError naming the first value out of range (`method` prefixes the message).
   void validate(const char* method) const;
 };

@@ -4,6 +4,7 @@
 // of every reconstruction, usable on any edge-manifold, consistently oriented mesh.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -13,6 +14,8 @@ struct HoleFillParams {
                                             // is closed when its perimeter is at most this many
                                             // local spacings (the mean length of the mesh edges at
                                             // its corners); 0: none closed
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<HoleFillParams>& fields();
   /// Throws UsageError naming the value when it is negative or not finite.
   void validate() const;
 };

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -24,6 +25,8 @@ struct FlatRegionParams {
                                        // 1 / ((1 - cos 30) / 2) = 15 regions. The seed normal,
                                        // unlike a running mean, makes a region independent of
                                        // the order in which it grows
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<FlatRegionParams>& fields();
   /// Throws UsageError naming the first value outside the ranges above.
   void validate() const;
 };

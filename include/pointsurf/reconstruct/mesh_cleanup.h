@@ -5,6 +5,7 @@
 // triangles.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -14,6 +15,8 @@ struct SmallComponentParams {
                              // (0.1 %, issue 12) drops specks of one or two triangles from a
                              // mesh of more than 2000 faces while a real part of a scan keeps
                              // far more faces than that; 0: keep all
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<SmallComponentParams>& fields();
   /// Throws UsageError when min_share is outside [0, 1].
   void validate() const;
 };

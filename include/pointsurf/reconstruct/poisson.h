@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/reconstruct/reconstruction.h"
@@ -17,6 +18,8 @@ enum class PoissonBoundary {
   Neumann,    // zero normal derivative on the bounding cube (PoissonRecon's default)
   Dirichlet,  // zero value on the bounding cube
 };
+/// "neumann", "dirichlet".
+const EnumNames<PoissonBoundary>& poisson_boundary_names();
 
 struct PoissonParams {
   // Finest octree level: the cube around the points (1.1 x their largest extent) is split in
@@ -35,7 +38,7 @@ struct PoissonParams {
   PoissonBoundary boundary = PoissonBoundary::Neumann;
   // Weight each sample by its normal's length (the scanner's confidence); default off: every
   // normal counts as unit length. Zero and non-finite normals are skipped either way.
-  bool confidence = false;
+  bool weight_by_normal_length = false;
   // Trimming (PoissonRecon's SurfaceTrimmer): remove the surface where the density is below
   // this depth (depth units, e.g. 7 for a depth-10 reconstruction); 0 (default): off.
   double trim_depth = 0.0;
@@ -56,6 +59,8 @@ struct PoissonParams {
   // levels get at least 100. Each level stops when its residual fell by `tolerance`.
   int max_iterations = 8;
   double tolerance = 1e-3;
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<PoissonParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };

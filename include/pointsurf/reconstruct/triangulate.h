@@ -5,6 +5,7 @@
 // with a final pass that closes small holes.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/reconstruct/fill_holes.h"
@@ -15,9 +16,8 @@ namespace pointsurf {
 
 struct TriangulateParams {
   int k = 30;                          // at most k neighbours per point, >= 3
-  double radius = 0.0;                 // search radius and longest edge, cloud units; 0: from
-                                       // each point's local spacing (below)
-  double radius_in_spacings = 3.0;     // used when radius == 0: radius_in_spacings * local spacing
+  Length radius = Length::spacings(3.0);  // search radius and longest edge, > 0: cloud units, or
+                                       // local spacings (each point's own local spacing)
   double max_offset_in_spacings = 1.25;// neighbours farther than this many local spacings from a
                                        // point's tangent plane are ignored; one whose normal
                                        // agrees with the point's may only lie 0.5 local spacings
@@ -36,6 +36,8 @@ struct TriangulateParams {
   double max_hole_perimeter_in_spacings = HoleFillParams{}.max_perimeter_in_spacings;  // holes (at most 64 corners) whose perimeter is
                                        // at most this many local spacings are closed at the end;
                                        // 0: none closed (nor pinches repaired)
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<TriangulateParams>& fields();
   /// Throws UsageError naming the first value outside the ranges above. The one place they
   /// are checked (reconstruct_region_growing and the pipeline call it).
   void validate() const;

@@ -6,16 +6,17 @@
 #include <span>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/polyline.h"
 
 namespace pointsurf {
 
 struct OutlineParams {
-  double alpha = 0.0;                   // alpha radius (the largest empty disc that still cuts
-                                        // in), cloud units; 0: alpha_in_spacings x mean spacing
-  double alpha_in_spacings = 5.0;       // mean spacings, when alpha is 0 (uniform random samples of
-                                        // 40k points leave empty discs of about 3.7)
+  Length alpha = Length::spacings(5.0);  // alpha radius (the largest empty disc that still cuts
+                                        // in), cloud units or mean spacings, > 0 (uniform random
+                                        // samples of 40k points leave empty discs of about 3.7
+                                        // mean spacings)
   double max_rms_in_spacings = 0.5;     // a segment is planar when the RMS distance of its
                                         // points to their least-squares plane is at most this
                                         // many mean spacings
@@ -27,6 +28,8 @@ struct OutlineParams {
                                         // outermost samples lie inside the true edge by about
                                         // that much (0: through the samples)
   std::size_t min_points = 30;          // segments with fewer points get no outline
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<OutlineParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -30,6 +31,8 @@ struct RegionGrowingParams {
   bool use_features = true;      // points with a non-zero "feature" field (features stage)
                                  // join a region but do not extend it
   std::size_t min_points = 10;   // fewest points of a segment; smaller ones are unassigned
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<RegionGrowingParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
@@ -44,10 +47,11 @@ SegmentResult segment_region_growing(const PointCloud& cloud, const RegionGrowin
                                      const ProgressCallback& progress = {});
 
 struct EuclideanParams {
-  double radius = 0.0;               // points closer than this are in one cluster, cloud units;
-                                     // 0: radius_in_spacings x mean spacing
-  double radius_in_spacings = 3.0;   // mean spacings, when radius is 0
+  Length radius = Length::spacings(3.0);  // points closer than this are in one cluster, cloud
+                                          // units or mean spacings, > 0
   std::size_t min_points = 10;       // fewest points of a cluster; smaller ones are unassigned
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<EuclideanParams>& fields();
   void validate() const;
 };
 
@@ -59,6 +63,8 @@ SegmentResult segment_euclidean(const PointCloud& cloud, const EuclideanParams& 
 struct SurfaceTypeParams {
   int k = 12;                   // neighbours per point (the graph's edges), >= 2
   std::size_t min_points = 10;  // fewest points of a region; smaller ones are unassigned
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<SurfaceTypeParams>& fields();
   void validate() const;
 };
 

@@ -7,6 +7,7 @@
 #include <functional>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 
@@ -15,9 +16,12 @@ namespace pointsurf {
 enum class PrimitiveType : std::uint8_t { Plane = 0, Sphere = 1, Cylinder = 2, Cone = 3, Torus = 4 };
 
 /// "plane", "sphere", "cylinder", "cone", "torus".
+const EnumNames<PrimitiveType>& primitive_type_names();
+/// The type's name in primitive_type_names().
 const char* primitive_type_name(PrimitiveType type) noexcept;
 
-/// Bit flags of the primitive types to look for.
+/// Bit flags of the primitive types to look for (the library's internal form of
+/// PrimitiveParams::types).
 enum PrimitiveMask : unsigned {
   kPlanes = 1u,
   kSpheres = 2u,
@@ -28,25 +32,29 @@ enum PrimitiveMask : unsigned {
   kDefaultPrimitives = 15u,  // planes, spheres, cylinders, cones: tori on request
 };
 
+/// The PrimitiveMask bits of a list of types (duplicates allowed).
+unsigned primitive_mask(const std::vector<PrimitiveType>& types) noexcept;
+
 struct PrimitiveParams {
-  unsigned types = kDefaultPrimitives;  // PrimitiveMask bits
-  double epsilon = 0.0;                 // a candidate's score counts the compatible points this
-                                        // close to it, cloud units; 0: epsilon_in_spacings x mean
-                                        // spacing
-  double epsilon_in_spacings = 1.0;     // mean spacings, when epsilon is 0
-  double cluster_epsilon = 0.0;         // cell size of the connectivity grid, cloud units; 0:
-                                        // cluster_in_spacings x mean spacing
-  double cluster_in_spacings = 3.0;     // mean spacings, when cluster_epsilon is 0
+  // The types to look for, at least one (default: planes, spheres, cylinders, cones; tori on
+  // request).
+  std::vector<PrimitiveType> types = {PrimitiveType::Plane, PrimitiveType::Sphere, PrimitiveType::Cylinder, PrimitiveType::Cone};
+  Length epsilon = Length::spacings(1.0);  // a candidate's score counts the compatible points this
+                                        // close to it, cloud units or mean spacings, > 0
+  Length cluster_epsilon = Length::spacings(3.0);  // cell size of the connectivity grid, cloud
+                                        // units or mean spacings, > 0
   double band_in_epsilons = 3.0;        // extraction: the refitted primitive takes the points within
-                                        // band_in_epsilons x epsilon (normal within max_normal_deg),
+                                        // band_in_epsilons x epsilon (normal within max_normal_angle_deg),
                                         // as CGAL's Efficient_RANSAC does with 3; candidates are
                                         // scored within epsilon. >= 1
-  double max_normal_deg = 25.0;         // largest angle between a point's normal and the
+  double max_normal_angle_deg = 25.0;   // largest angle between a point's normal and the
                                         // primitive's normal there, degrees, in (0, 90)
   std::size_t min_points = 0;           // fewest inliers of a primitive; 0: max(30, N / 200)
   double probability = 0.01;            // accepted chance of missing a primitive of min_points,
                                         // in (0, 1)
   std::uint64_t seed = 42;              // random seed
+  /// Key, unit, range and doc of each field (core/fields.h).
+  static const FieldTable<PrimitiveParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
@@ -84,7 +92,7 @@ struct PrimitiveResult {
 /// sphere 2, cylinder 2, cone 3, torus 4) drawn locally, the first point uniformly and the
 /// others from the same cell of an octree at a random level (levels chosen in proportion to the
 /// primitives they gave). Each candidate is scored lazily on random subsets of growing size
-/// (points within `epsilon` whose normal deviates less than `max_normal_deg`), each subset
+/// (points within `epsilon` whose normal deviates less than `max_normal_angle_deg`), each subset
 /// held in an octree whose cells out of the candidate's epsilon band are skipped; only the
 /// best candidate and those whose score interval (about two standard deviations) overlaps
 /// its are refined. The best is extracted once the chance of having missed a larger one falls

@@ -14,6 +14,30 @@
 
 namespace pointsurf::detail {
 
+/// The fields of DelaunaySurfaceParams into the table of P (DelaunaySurfaceParams or a struct
+/// derived from it: the cocone's and the Crust's), so each method's table names them once.
+template <class P>
+void add_delaunay_fields(FieldTable<P>& t) {
+  using B = DelaunaySurfaceParams;
+  t.number("normal_filter_angle_deg", static_cast<double P::*>(&B::normal_filter_angle_deg),
+           "Drop triangles deviating more from the pole vectors; 90: off")
+      .unit("degrees")
+      .range(0, 90, true, false);
+  t.number("sharp_edge_angle_deg", static_cast<double P::*>(&B::sharp_edge_angle_deg), "Sharp-edge pruning gap; 360: off")
+      .unit("degrees")
+      .range(180, 360);
+  t.choice("boundary", static_cast<DelaunayBoundary P::*>(&B::boundary), delaunay_boundary_names(),
+           "Surface kind: auto (per piece), closed or open");
+  t.number("max_boundary_edge_in_spacings", static_cast<double P::*>(&B::max_boundary_edge_in_spacings),
+           "Peel rim triangles with a longer boundary edge; 0: off")
+      .unit("mean spacings")
+      .non_negative();
+  t.number("max_hole_perimeter_in_spacings", static_cast<double P::*>(&B::max_hole_perimeter_in_spacings),
+           "Close holes up to this perimeter (fill_holes, every interpolating method); 0: none")
+      .unit("local spacings")
+      .non_negative();
+}
+
 /// The samples about a local origin, their Delaunay triangulation and poles.
 struct DelaunaySetup {
   Vector3d origin = Vector3d::Zero();  // bounding-box centre of the input
