@@ -76,8 +76,7 @@ RegistrationResult align_to_mesh(std::span<const Vector3d> points, const Triangl
   icp_params.max_normal_deg = 180.0;
   icp_params.max_iterations = params.max_iterations;
   icp_params.relative_rmse = params.relative_rmse;
-  icp_params.max_distance = params.max_distance;
-  icp_params.distance_in_spacings = params.distance_in_spacings;
+  icp_params.max_distance = params.max_distance > 0.0 ? Length::cloud(params.max_distance) : Length::spacings(params.distance_in_spacings);
   const KdTree tree(target.positions);
   return icp(scan, target, tree, RigidTransform(), icp_params, progress);
 }
