@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "pointsurf/core/error.h"
 #include "pointsurf/core/fields.h"
 #include "pointsurf/pipeline/registry.h"
 #include "pointsurf/register/align.h"
