@@ -86,5 +86,6 @@ Command info_command();
 Command convert_command();
 Command run_command();
 Command report_command();
+Command stages_command();
 
 }  // namespace pointsurf::cli

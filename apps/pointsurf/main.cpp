@@ -24,6 +24,7 @@ std::vector<pointsurf::cli::Command> all_commands() {
   for (Command& c : stage_commands()) commands.push_back(std::move(c));
   commands.push_back(run_command());
   commands.push_back(report_command());
+  commands.push_back(stages_command());
   return commands;
 }
 

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "pointsurf/core/error.h"
-#include "support/shapes.h"
+#include "support/files.h"
 
 namespace pointsurf {
 namespace {

@@ -3,6 +3,8 @@
 // member added to a struct without its key, unit, range and doc fails here.
 #include <gtest/gtest.h>
 
+#include "field_tables.h"
+
 #include "pointsurf/core/fields.h"
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
@@ -12,24 +14,11 @@
 namespace pointsurf {
 namespace {
 
-template <class P>
-void expect_complete(const char* name) {
-  const FieldTable<P>& table = P::fields();
-  EXPECT_EQ(members_named(table), detail::aggregate_member_count<P>()) << name << ": a member has no field in its table";
-  for (const Field<P>& f : table) {
-    EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
-    EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
-    // The default passes the field's own range (the struct's default is valid).
-    if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
-  }
-  EXPECT_NO_THROW(P{}.validate()) << name;
-}
-
 TEST(FieldTables, EveryMemberOfEveryStageParamsIsDeclared) {
-  expect_complete<NormalParams>("NormalParams");
-  expect_complete<OrientParams>("OrientParams");
-  expect_complete<CurvatureParams>("CurvatureParams");
-  expect_complete<FeatureParams>("FeatureParams");
+  test::expect_complete<NormalParams>("NormalParams");
+  test::expect_complete<OrientParams>("OrientParams");
+  test::expect_complete<CurvatureParams>("CurvatureParams");
+  test::expect_complete<FeatureParams>("FeatureParams");
 }
 
 // A stage parameter generated from a table shows the table's default, range and doc.

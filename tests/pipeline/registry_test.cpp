@@ -271,7 +271,9 @@ TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
         // normals_k feeds normal estimation, not this stage's Params; a seed is unsigned by its type.
         // ratio, count and cell are checked against the cloud when the stage runs.
         if (p.name == "ratio" || p.name == "count" || p.name == "cell") continue;
-        if (!p.applies_to(method) || p.name == "normals_k" || p.name == "seed" || (p.type != ParamType::Int && p.type != ParamType::Double)) continue;
+        if (!p.applies_to(method) || p.name == "normals_k" || p.name == "seed" ||
+            (p.type != ParamType::Int && p.type != ParamType::Double && p.type != ParamType::Length))
+          continue;
         for (const bool low : {true, false}) {
           const double bound = low ? p.min : p.max;
           if (!std::isfinite(bound)) continue;
@@ -279,7 +281,9 @@ TEST(Registry, DeclaredRangesAreTheLibrarysValidate) {
           const double step = p.type == ParamType::Int ? 1.0 : open ? 0.0 : 1e-6 * std::max(1.0, std::abs(bound));
           const double outside = low ? bound - step : bound + step;
           std::map<std::string, ParamValue> values = defaults();
-          values[p.name] = p.type == ParamType::Int ? ParamValue(static_cast<std::int64_t>(outside)) : ParamValue(outside);
+          values[p.name] = p.type == ParamType::Int      ? ParamValue(static_cast<std::int64_t>(outside))
+                           : p.type == ParamType::Length ? ParamValue(Length{outside, std::get<Length>(p.default_value).unit})
+                                                         : ParamValue(outside);
           EXPECT_THROW(s.check(StageArgs(values, {{p.name, true}}, method)), UsageError)
               << stage << " " << method << ": " << p.name << " = " << outside << " passes validate() but is outside " << p.range_text();
           ++checked;

@@ -15,4 +15,9 @@ const std::vector<StageSpec>& registered_stages();
 /// The stage named `name`, or nullptr.
 const StageSpec* find_stage(std::string_view name);
 
+/// docs/stages.md: every stage with its command shape, methods, parameters (key, type, unit,
+/// default, range or choices, doc, former keys) and examples, as Markdown generated from the
+/// registry (`pointsurf stages --markdown` prints it; a test checks the committed file).
+std::string stages_markdown();
+
 }  // namespace pointsurf
