@@ -18,24 +18,7 @@
 #include "pointsurf/register/pose_graph.h"
 #include "pointsurf/register/register_pair.h"
 
-#if __has_include("field_tables.h")
 #include "field_tables.h"
-#else
-// Until tests/pipeline/field_tables.h holds it: the check of field_tables_test.cpp.
-namespace pointsurf::test {
-template <class P>
-void expect_complete(const char* name) {
-  const FieldTable<P>& table = P::fields();
-  EXPECT_EQ(members_named(table), detail::aggregate_member_count<P>()) << name << ": a member has no field in its table";
-  for (const Field<P>& f : table) {
-    EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
-    EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
-    if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
-  }
-  EXPECT_NO_THROW(P{}.validate()) << name;
-}
-}  // namespace pointsurf::test
-#endif
 
 namespace pointsurf {
 namespace {
