@@ -45,7 +45,7 @@ int main(int argc, char** argv) {
   const bool with_pfh = argc > 6 && std::string(argv[6]) == "pfh";
 
   DescriptorParams fp;
-  fp.radius = 5.0 * voxel;
+  fp.radius = Length::cloud(5.0 * voxel);
   fp.max_neighbors = 100;
   auto t0 = Clock::now();
   const KdTree source_tree(source.positions), target_tree(target.positions);
@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
   const double fpfh_s = seconds_since(t0);
 
   AlignParams ap;
-  ap.max_distance = 1.5 * voxel;
+  ap.max_distance = Length::cloud(1.5 * voxel);
   ap.edge_length_ratio = 0.9;
   ap.max_iterations = 100000;
   ap.confidence = 0.999;

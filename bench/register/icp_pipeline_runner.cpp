@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
     NormalParams np;
     np.neighborhood = NeighborhoodKind::Hybrid;
     np.k = 30;
-    np.radius = 2.0 * voxel;
+    np.radius = Length::cloud(2.0 * voxel);
     np.keep_variation = false;
     estimate_normals(sd, np, &sd_tree);
     estimate_normals(td, np, &td_tree);
@@ -77,14 +77,14 @@ int main(int argc, char** argv) {
 
     t0 = bench::Clock::now();
     DescriptorParams dp;
-    dp.radius = 5.0 * voxel;
+    dp.radius = Length::cloud(5.0 * voxel);
     dp.max_neighbors = 100;
     const Descriptors fs = compute_descriptors(sd, sd_tree, dp), ft = compute_descriptors(td, td_tree, dp);
     t_fpfh.push_back(bench::seconds_since(t0));
 
     t0 = bench::Clock::now();
     AlignParams ap;
-    ap.max_distance = 1.5 * voxel;
+    ap.max_distance = Length::cloud(1.5 * voxel);
     ap.mutual = true;
     ap.edge_length_ratio = 0.9;
     ap.max_iterations = 100000;
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
     const KdTree tree(target.positions);
     IcpParams ip;
     ip.metric = IcpMetric::PointToPlane;
-    ip.max_distance = 0.4 * voxel;
+    ip.max_distance = Length::cloud(0.4 * voxel);
     ip.max_iterations = 30;
     ip.max_normal_deg = normal_deg;
     fine = icp(source, target, tree, global.transform, ip);

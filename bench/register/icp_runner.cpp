@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   }
   IcpParams p;
   p.metric = std::string(argv[4]) == "point" ? IcpMetric::PointToPoint : IcpMetric::PointToPlane;
-  p.max_distance = std::stod(argv[5]);
+  if (const double d = std::stod(argv[5]); d > 0.0) p.max_distance = Length::cloud(d);  // 0: the default, in spacings
   p.max_iterations = std::stoul(argv[6]);
   p.max_normal_deg = std::stod(argv[7]);
   p.relative_fitness = p.relative_rmse = std::stod(argv[8]);

@@ -82,20 +82,7 @@ RegistrationResult align_to_mesh(std::span<const Vector3d> points, const Triangl
   icp_params.max_normal_deg = 180.0;
   icp_params.max_iterations = params.max_iterations;
   icp_params.relative_rmse = params.relative_rmse;
-  // The distance in cloud units, resolved as ICP resolves one (the points' mean spacing), so
-  // ICP gets a number whichever form IcpParams takes a distance in. Below 6 points ICP answers
-  // before it needs one.
-  double max_distance = params.max_distance.value;
-  if (params.max_distance.in_spacings() && scan.size() >= 6) {
-    scan.validate();  // as ICP would first: finite positions
-    max_distance = params.max_distance.resolve(mean_spacing(scan.positions));
-    if (!(max_distance > 0.0)) {
-      RegistrationResult r;
-      r.message = "the source's points all coincide: no spacing to scale the max distance by";
-      return r;
-    }
-  }
-  icp_params.max_distance = decltype(icp_params.max_distance){max_distance};
+  icp_params.max_distance = params.max_distance;  // a length in spacings is resolved by ICP against the scan
   const KdTree tree(target.positions);
   return icp(scan, target, tree, RigidTransform(), icp_params, progress);
 }

@@ -22,58 +22,7 @@ std::vector<double> matrix_list(const RigidTransform& t) {
   return out;
 }
 
-// The parameters both stages share, declared once with the library's defaults.
-std::vector<ParamSpec> pair_param_specs() {
-  const PairParams pair;
-  const DescriptorParams& d = pair.features;
-  const AlignParams& a = pair.align;
-  const IcpParams& i = pair.icp;
-  return {
-      P::choice("descriptor", descriptor_type_name(d.type), {"fpfh", "pfh"}, "Local descriptor matched for the global alignment (PFH: 125 bins, slower)"),
-      P::choice("icp", icp_metric_name(i.metric), {"point", "plane"}, "ICP error: point-to-point or point-to-plane"),
-      P::number("voxel_in_spacings", pair.voxel_in_spacings, "Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point)")
-          .unit("mean spacings")
-          .non_negative(),
-      P::number("radius_in_spacings", d.radius_in_spacings, "Descriptor radius, in spacings of the downsample (the voxel cell)")
-          .unit("mean spacings")
-          .positive(),
-      P::number("ransac_distance_in_spacings", a.distance_in_spacings, "A descriptor match is a RANSAC inlier within this distance (downsample spacings)")
-          .unit("mean spacings")
-          .positive(),
-      P::number("icp_distance_in_spacings", i.distance_in_spacings, "ICP pairs farther apart than this are rejected (spacings of every point)")
-          .unit("mean spacings")
-          .positive(),
-      P::number("max_normal_deg", i.max_normal_deg, "ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP)")
-          .unit("degrees")
-          .range(0.0, 180.0),
-      P::integer("iterations", std::int64_t(i.max_iterations), "ICP iterations at most (coarse and fine each)").at_least(1),
-      P::integer("ransac_iterations", std::int64_t(a.max_iterations), "RANSAC trials at most").at_least(1),
-      P::number("confidence", a.confidence, "RANSAC stops once a better model would have been found with this probability").range(0.0, 1.0, true, true),
-      P::integer("seed", std::int64_t(a.seed), "Random seed of RANSAC").non_negative(),
-      P::integer("normal_neighbors", pair.normal_neighbors, "k of the normals estimated for a cloud without any").at_least(3).unit("points"),
-      P::number("min_fitness", pair.min_fitness, "Below this final fitness the clouds are taken as not overlapping (exit 3)").range(0.0, 1.0),
-      P::boolean("global_alignment", pair.global, "Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)"),
-  };
-}
-
-PairParams pair_params(const StageArgs& a) {
-  PairParams p;
-  p.features.type = a.text("descriptor") == "pfh" ? DescriptorType::Pfh : DescriptorType::Fpfh;
-  p.icp.metric = a.text("icp") == "point" ? IcpMetric::PointToPoint : IcpMetric::PointToPlane;
-  p.voxel_in_spacings = a.number("voxel_in_spacings");
-  p.features.radius_in_spacings = a.number("radius_in_spacings");
-  p.align.distance_in_spacings = a.number("ransac_distance_in_spacings");
-  p.icp.distance_in_spacings = a.number("icp_distance_in_spacings");
-  p.icp.max_normal_deg = a.number("max_normal_deg");
-  p.icp.max_iterations = std::size_t(a.integer("iterations"));
-  p.align.max_iterations = std::size_t(a.integer("ransac_iterations"));
-  p.align.confidence = a.number("confidence");
-  p.align.seed = std::uint64_t(a.integer("seed"));
-  p.normal_neighbors = a.int32("normal_neighbors");
-  p.min_fitness = a.number("min_fitness");
-  p.global = a.boolean("global_alignment");
-  return p;
-}
+RegisterPairParams pair_params(const StageArgs& a) { return read_params<RegisterPairParams>(a); }
 
 void record_result(StageRecord& rec, const RegistrationResult& r, const std::string& prefix) {
   rec.metric(prefix + "fitness", r.fitness);
@@ -83,10 +32,10 @@ void record_result(StageRecord& rec, const RegistrationResult& r, const std::str
 }
 
 void run_register(StageRun& run) {
-  const PairParams params = pair_params(run.args);
+  const RegisterPairParams params = pair_params(run.args);
   const DataItem& source = run.context.item(run.inputs[0]);
   const PointCloud& target = run.context.item(run.inputs[1]).cloud;
-  const PairResult r = register_pair(source.cloud, target, params, run.progress);
+  const RegisterPairResult r = register_pair(source.cloud, target, params, run.progress);
   StageRecord& rec = run.record;
   rec.count("source_points", as_count(source.cloud.size()));
   rec.count("target_points", as_count(target.size()));
@@ -135,17 +84,10 @@ void run_register(StageRun& run) {
   }
 }
 
-MultiParams multi_params(const StageArgs& a) {
-  MultiParams params;
-  params.pair = pair_params(a);
-  params.mode = a.text("mode") == "first" ? MultiMode::First : MultiMode::Chain;
-  params.refine = a.boolean("refine");
-  params.min_overlap = a.number("min_overlap");
-  return params;
-}
+RegisterScansParams multi_params(const StageArgs& a) { return read_params<RegisterScansParams>(a); }
 
 void run_register_many(StageRun& run) {
-  const MultiParams params = multi_params(run.args);
+  const RegisterScansParams params = multi_params(run.args);
   std::vector<PointCloud> scans;
   std::size_t faces = 0;
   for (const std::string& tag : run.inputs) {
@@ -153,7 +95,7 @@ void run_register_many(StageRun& run) {
     faces += item.triangles.size();
     scans.push_back(item.cloud);
   }
-  const MultiResult r = register_scans(scans, params, run.progress);
+  const RegisterScansResult r = register_scans(scans, params, run.progress);
   StageRecord& rec = run.record;
   if (faces > 0) rec.warnings.push_back(fmt::format("register-many works on points: {} dropped", plural(faces, "face")));
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -200,13 +142,13 @@ StageSpec register_stage() {
   s.description =
       "Finds the rigid transform taking SOURCE onto TARGET from their points alone: PFH or FPFH descriptors of a voxel downsample, "
       "RANSAC over mutual descriptor matches, then ICP rejecting pairs by distance and by normal angle, first on the downsample and "
-      "then on every point. Every length is a multiple of the mean spacing. Missing normals are estimated (with a warning). Writes "
+      "then on every point. Every length defaults to a multiple of the mean spacing (\"3sp\"; a plain number is in cloud units). Missing normals are estimated (with a warning). Writes "
       "the transform as T.json (--out: \"matrix\" 4x4 row by row, fitness, inlier_rmse, iterations, converged, timings) and the "
       "moved source (--apply). Clouds that do not overlap end with exit code 3.";
   s.order = 75;
   s.consumes = {Slot{"source", DataKind::Any}, Slot{"target", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Any};
-  s.params = pair_param_specs();
+  s.params = params_of(RegisterPairParams::fields());
   s.params.push_back(P::text("out", "", "Write the transform as a T.json file (empty: none; the record holds it too)").meta("T.json"));
   s.writes_param = "out";
   s.examples = {"pointsurf register scan2.ply scan1.ply --out T.json",
@@ -218,7 +160,6 @@ StageSpec register_stage() {
 }
 
 StageSpec register_many_stage() {
-  const MultiParams m;
   StageSpec s;
   s.name = "register-many";
   s.summary = "Register several scans into the first one's frame and merge them (field scan)";
@@ -230,12 +171,7 @@ StageSpec register_many_stage() {
   s.order = 76;
   s.consumes = {Slot{"clouds", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
-  s.params = {P::choice("mode", multi_mode_name(m.mode), {"first", "chain"}, "Register each scan to the first, or to the one before it"),
-              P::boolean("refine", m.refine, "Refine all poses together over every overlapping pair (pose graph)"),
-              P::number("min_overlap", m.min_overlap, "Share of a scan within the ICP distance of another for the pair to join the refinement")
-                  .range(0.0, 1.0, true, false)};
-  const std::vector<ParamSpec> pair = pair_param_specs();
-  s.params.insert(s.params.end(), pair.begin(), pair.end());
+  s.params = params_of(RegisterScansParams::fields());
   s.examples = {"pointsurf register-many scan1.ply scan2.ply scan3.ply --out merged.ply",
                 "pointsurf register-many a.ply b.ply c.ply d.ply merged.ply --mode first --icp point"};
   s.run = run_register_many;

@@ -420,18 +420,34 @@ void refine(const MatchFrame& frame, const Ransac& ransac, const FitnessSample& 
 
 }  // namespace
 
+const FieldTable<AlignParams>& AlignParams::fields() {
+  static const FieldTable<AlignParams> table = [] {
+    using P = AlignParams;
+    FieldTable<P> t;
+    t.length("ransac_distance", &P::max_distance, "A descriptor match is a RANSAC inlier within this distance (in spacings: of the downsample)")
+        .positive()
+        .was("ransac_distance_in_spacings");
+    t.boolean("mutual", &P::mutual, "Keep only mutual nearest neighbours in descriptor space").internal();
+    t.number("edge_length_ratio", &P::edge_length_ratio, "Pruning: the two triangles' edge lengths agree within this ratio")
+        .range(0.0, 1.0, true, false)
+        .internal();
+    t.number("ransac_max_normal_deg", &P::max_normal_deg, "Pruning: matched normals agree within this angle; 180 disables the check")
+        .unit("degrees")
+        .range(0.0, 180.0, true, false)
+        .internal();
+    t.integer("ransac_iterations", &P::max_iterations, "RANSAC trials at most").at_least(1);
+    t.number("confidence", &P::confidence, "RANSAC stops once a better model would have been found with this probability")
+        .range(0.0, 1.0, true, true);
+    t.integer("seed", &P::seed, "Random seed of RANSAC");
+    return t;
+  }();
+  return table;
+}
+
 void AlignParams::validate() const {
-  if (!(max_distance >= 0.0 && std::isfinite(max_distance)))
-    throw UsageError(fmt::format("align_global: max_distance must be >= 0, got {}", max_distance));
-  if (max_distance == 0.0 && !(distance_in_spacings > 0.0 && std::isfinite(distance_in_spacings)))
-    throw UsageError(fmt::format("align_global: distance_in_spacings must be > 0, got {}", distance_in_spacings));
-  if (!(edge_length_ratio > 0.0 && edge_length_ratio <= 1.0))
-    throw UsageError(fmt::format("align_global: edge_length_ratio must be in (0, 1], got {}", edge_length_ratio));
-  if (!(max_normal_deg > 0.0 && max_normal_deg <= 180.0))
-    throw UsageError(fmt::format("align_global: max_normal_deg must be in (0, 180], got {}", max_normal_deg));
-  if (max_iterations < 1) throw UsageError("align_global: max_iterations must be >= 1, got 0");
-  if (!(confidence > 0.0 && confidence < 1.0))
-    throw UsageError(fmt::format("align_global: confidence must be in (0, 1), got {}", confidence));
+  if (!std::isfinite(max_distance.value))
+    throw UsageError(fmt::format("align_global: ransac_distance must be finite, got {}", max_distance.value));
+  fields().validate(*this, "align_global");
 }
 
 MatchList match_descriptors(const Descriptors& source, const Descriptors& target, bool mutual) {
@@ -493,7 +509,8 @@ RegistrationResult align_global(const PointCloud& source, const Descriptors& sou
     result.message = fmt::format("too few points ({} source, {} target; 3 needed)", source.size(), target.size());
     return result;
   }
-  const double max_distance = params.max_distance > 0.0 ? params.max_distance : params.distance_in_spacings * mean_spacing(source.positions);
+  const double max_distance =
+      params.max_distance.in_spacings() ? params.max_distance.resolve(mean_spacing(source.positions)) : params.max_distance.value;
   if (!(max_distance > 0.0)) {
     result.message = "the source points all coincide";
     return result;

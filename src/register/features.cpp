@@ -151,24 +151,33 @@ void fpfh(std::uint32_t i, std::span<const Neighbor> neighbors, const std::vecto
 
 }  // namespace
 
-const char* descriptor_type_name(DescriptorType type) noexcept {
-  switch (type) {
-    case DescriptorType::Pfh: return "pfh";
-    case DescriptorType::Fpfh: return "fpfh";
-  }
-  return "unknown";
+const EnumNames<DescriptorType>& descriptor_type_names() {
+  static const EnumNames<DescriptorType> names{{{DescriptorType::Fpfh, "fpfh"}, {DescriptorType::Pfh, "pfh"}}};
+  return names;
+}
+
+const char* descriptor_type_name(DescriptorType type) noexcept { return descriptor_type_names().name(type).c_str(); }
+
+const FieldTable<DescriptorParams>& DescriptorParams::fields() {
+  static const FieldTable<DescriptorParams> table = [] {
+    using P = DescriptorParams;
+    FieldTable<P> t;
+    t.choice("descriptor", &P::type, descriptor_type_names(), "Local descriptor matched for the global alignment (PFH: 125 bins, slower)");
+    t.length("radius", &P::radius, "Descriptor radius (in spacings: of the downsample, the voxel cell)").positive().was("radius_in_spacings");
+    t.integer("max_neighbors", &P::max_neighbors, "Nearest points kept within the radius (the point and 3 neighbours at least)")
+        .at_least(double(kMinPairs + 1))
+        .unit("points")
+        .internal();
+    return t;
+  }();
+  return table;
 }
 
 void DescriptorParams::validate() const {
   if (type != DescriptorType::Pfh && type != DescriptorType::Fpfh)
     throw UsageError(fmt::format("compute_descriptors: unknown descriptor type {}", static_cast<int>(type)));
-  if (!(radius >= 0.0 && std::isfinite(radius)))
-    throw UsageError(fmt::format("compute_descriptors: radius must be >= 0, got {}", radius));
-  if (radius == 0.0 && !(radius_in_spacings > 0.0 && std::isfinite(radius_in_spacings)))
-    throw UsageError(fmt::format("compute_descriptors: radius_in_spacings must be > 0, got {}", radius_in_spacings));
-  if (max_neighbors < kMinPairs + 1)
-    throw UsageError(fmt::format("compute_descriptors: max_neighbors must be >= {} (the point and 3 neighbours), got {}",
-                                 kMinPairs + 1, max_neighbors));
+  if (!std::isfinite(radius.value)) throw UsageError(fmt::format("compute_descriptors: radius must be finite, got {}", radius.value));
+  fields().validate(*this, "compute_descriptors");
 }
 
 Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, const DescriptorParams& params,
@@ -189,10 +198,10 @@ Descriptors compute_descriptors(const PointCloud& cloud, const KdTree& tree, con
   // Fewer points than a neighbourhood needs: every descriptor is invalid (and the mean
   // spacing of a single point is undefined).
   if (n < kMinPairs + 1) {
-    out.radius = params.radius;
+    out.radius = params.radius.in_spacings() ? 0.0 : params.radius.value;
     return out;
   }
-  out.radius = params.radius > 0.0 ? params.radius : params.radius_in_spacings * mean_spacing(tree);
+  out.radius = params.radius.in_spacings() ? params.radius.resolve(mean_spacing(tree)) : params.radius.value;
 
   const bool is_pfh = params.type == DescriptorType::Pfh;
   detail::ProgressReporter reporter(progress, 0.0, 1.0, is_pfh ? n : 2 * n);

@@ -35,28 +35,42 @@ void fill_scores(RegistrationResult& r, const IcpSums& s, std::size_t source_siz
 
 }  // namespace
 
-const char* icp_metric_name(IcpMetric metric) noexcept {
-  switch (metric) {
-    case IcpMetric::PointToPoint: return "point";
-    case IcpMetric::PointToPlane: return "plane";
-  }
-  return "?";
+const EnumNames<IcpMetric>& icp_metric_names() {
+  static const EnumNames<IcpMetric> names{{{IcpMetric::PointToPoint, "point"}, {IcpMetric::PointToPlane, "plane"}}};
+  return names;
+}
+
+const char* icp_metric_name(IcpMetric metric) noexcept { return icp_metric_names().name(metric).c_str(); }
+
+const FieldTable<IcpParams>& IcpParams::fields() {
+  static const FieldTable<IcpParams> table = [] {
+    using P = IcpParams;
+    FieldTable<P> t;
+    t.choice("icp", &P::metric, icp_metric_names(), "ICP error: point-to-point or point-to-plane");
+    t.length("icp_distance", &P::max_distance, "ICP pairs farther apart than this are rejected (in spacings: of every point)")
+        .positive()
+        .was("icp_distance_in_spacings");
+    t.number("max_normal_deg", &P::max_normal_deg, "ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP)")
+        .unit("degrees")
+        .range(0.0, 180.0);
+    t.integer("iterations", &P::max_iterations, "ICP iterations at most (coarse and fine each)").range(1, 100000);
+    t.number("relative_fitness", &P::relative_fitness, "Converged when the number of pairs changes by less than this relative amount")
+        .non_negative()
+        .internal();
+    t.number("relative_rmse", &P::relative_rmse, "Converged when the RMSE of the pairs changes by less than this relative amount")
+        .non_negative()
+        .internal();
+    return t;
+  }();
+  return table;
 }
 
 void IcpParams::validate() const {
   if (metric != IcpMetric::PointToPoint && metric != IcpMetric::PointToPlane) throw UsageError("icp: unknown metric");
-  if (!(max_distance >= 0.0) || !std::isfinite(max_distance))
-    throw UsageError(fmt::format("icp: max_distance must be finite and >= 0 (0: from the spacing), got {}", max_distance));
-  if (!(distance_in_spacings > 0.0) || !std::isfinite(distance_in_spacings))
-    throw UsageError(fmt::format("icp: distance_in_spacings must be finite and > 0, got {}", distance_in_spacings));
-  if (!(max_normal_deg >= 0.0 && max_normal_deg <= 180.0))
-    throw UsageError(fmt::format("icp: max_normal_deg must be in [0, 180] (180 disables the check), got {}", max_normal_deg));
-  if (max_iterations < 1 || max_iterations > 100000)
-    throw UsageError(fmt::format("icp: max_iterations must be in [1, 100000], got {}", max_iterations));
-  if (!(relative_fitness >= 0.0) || !std::isfinite(relative_fitness))
-    throw UsageError(fmt::format("icp: relative_fitness must be finite and >= 0, got {}", relative_fitness));
-  if (!(relative_rmse >= 0.0) || !std::isfinite(relative_rmse))
-    throw UsageError(fmt::format("icp: relative_rmse must be finite and >= 0, got {}", relative_rmse));
+  if (!std::isfinite(max_distance.value)) throw UsageError(fmt::format("icp: icp_distance must be finite, got {}", max_distance.value));
+  if (!std::isfinite(relative_fitness)) throw UsageError(fmt::format("icp: relative_fitness must be finite, got {}", relative_fitness));
+  if (!std::isfinite(relative_rmse)) throw UsageError(fmt::format("icp: relative_rmse must be finite, got {}", relative_rmse));
+  fields().validate(*this, "icp");
 }
 
 RegistrationResult icp(const PointCloud& source, const PointCloud& target, const KdTree& target_tree, const RigidTransform& initial,
@@ -79,7 +93,8 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
     result.message = fmt::format("too few source points ({}; {} needed)", source.size(), min_pairs);
     return result;
   }
-  const double max_distance = params.max_distance > 0.0 ? params.max_distance : params.distance_in_spacings * mean_spacing(source.positions);
+  const double max_distance =
+      params.max_distance.in_spacings() ? params.max_distance.resolve(mean_spacing(source.positions)) : params.max_distance.value;
   if (!(max_distance > 0.0)) {
     result.message = "the source's points all coincide: no spacing to scale the max distance by";
     return result;

@@ -191,10 +191,25 @@ SolveOutcome solve(std::vector<Pose>& poses, const std::vector<Edge>& edges, con
 
 }  // namespace
 
+const FieldTable<PoseGraphParams>& PoseGraphParams::fields() {
+  static const FieldTable<PoseGraphParams> table = [] {
+    using P = PoseGraphParams;
+    FieldTable<P> t;
+    t.integer("fixed", &P::fixed, "The scan whose pose is kept").internal();
+    t.integer("max_iterations", &P::max_iterations, "Gauss-Newton iterations at most, per solve").at_least(1).internal();
+    t.number("tolerance", &P::tolerance, "Converged when an iteration lowers the cost by less than this share of it").non_negative().internal();
+    t.number("prune_distance", &P::prune_distance, "Drop an uncertain edge whose RMS point displacement exceeds this; 0 keeps all")
+        .unit("cloud units")
+        .non_negative()
+        .internal();
+    t.vector3("center", &P::center, "Origin of the frame of the residuals and information").unit("cloud units").internal();
+    return t;
+  }();
+  return table;
+}
+
 void PoseGraphParams::validate() const {
-  if (max_iterations < 1) throw UsageError("pose graph: max_iterations must be at least 1");
-  if (!(tolerance >= 0.0)) throw UsageError(fmt::format("pose graph: tolerance must be >= 0, got {}", tolerance));
-  if (!(prune_distance >= 0.0)) throw UsageError(fmt::format("pose graph: prune_distance must be >= 0, got {}", prune_distance));
+  fields().validate(*this, "pose graph");
   if (!center.allFinite()) throw UsageError("pose graph: the centre is not finite");
 }
 

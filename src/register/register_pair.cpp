@@ -13,11 +13,47 @@
 
 namespace pointsurf {
 
-void PairParams::validate() const {
-  if (!(voxel_in_spacings >= 0.0) || !std::isfinite(voxel_in_spacings))
-    throw UsageError(fmt::format("voxel_in_spacings must be >= 0, got {}", voxel_in_spacings));
-  if (normal_neighbors < 3) throw UsageError(fmt::format("normal_neighbors must be at least 3, got {}", normal_neighbors));
-  if (!(min_fitness >= 0.0 && min_fitness <= 1.0)) throw UsageError(fmt::format("min_fitness must be in [0, 1], got {}", min_fitness));
+const FieldTable<RegisterPairParams>& RegisterPairParams::fields() {
+  static const FieldTable<RegisterPairParams> table = [] {
+    using P = RegisterPairParams;
+    FieldTable<P> t;
+    // The keys of the nested tables are the stages' own (ransac_iterations, confidence,
+    // icp_distance, iterations...): no prefix.
+    t.nested(&P::features, DescriptorParams::fields());
+    t.length("voxel", &P::voxel, "Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point)")
+        .non_negative()
+        .was("voxel_in_spacings");
+    t.nested(&P::align, AlignParams::fields());
+    t.nested(&P::icp, IcpParams::fields());
+    t.integer("normal_neighbors", &P::normal_neighbors, "k of the normals estimated for a cloud without any").at_least(3).unit("points");
+    t.number("min_fitness", &P::min_fitness, "Below this final fitness the clouds are taken as not overlapping (exit 3)").range(0.0, 1.0);
+    t.boolean("global_alignment", &P::global,
+              "Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)");
+    t.custom<RigidTransform>(
+         "initial", &P::initial, ParamType::DoubleList, "Start of ICP when global_alignment is false (4x4 matrix, row by row)",
+         [](const RigidTransform& x) {
+           const Eigen::Matrix4d m = x.matrix();
+           std::vector<double> out;
+           for (int r = 0; r < 4; ++r)
+             for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
+           return ParamValue(out);
+         },
+         [](RigidTransform& x, const ParamValue& v) {
+           const auto& n = std::get<std::vector<double>>(v);
+           Eigen::Matrix4d m;
+           for (int r = 0; r < 4; ++r)
+             for (int c = 0; c < 4; ++c) m(r, c) = n.at(std::size_t(4 * r + c));
+           x = RigidTransform::from_matrix(m);
+         })
+        .internal();
+    return t;
+  }();
+  return table;
+}
+
+void RegisterPairParams::validate() const {
+  if (!std::isfinite(voxel.value)) throw UsageError(fmt::format("register_pair: voxel must be finite, got {}", voxel.value));
+  fields().validate(*this, "register_pair");
   features.validate();
   align.validate();
   icp.validate();
@@ -25,7 +61,7 @@ void PairParams::validate() const {
 
 namespace detail {
 
-PreparedScan prepare_points(const PointCloud& cloud, const PairParams& params, const std::string& what, const ProgressCallback& progress) {
+PreparedScan prepare_points(const PointCloud& cloud, const RegisterPairParams& params, const std::string& what, const ProgressCallback& progress) {
   if (cloud.size() < kMinRegistrationPoints)
     throw InputError(fmt::format("{}: {} point{}; registration needs at least {}", what, cloud.size(), cloud.size() == 1 ? "" : "s",
                                  kMinRegistrationPoints));
@@ -48,21 +84,21 @@ PreparedScan prepare_points(const PointCloud& cloud, const PairParams& params, c
   return s;
 }
 
-PairLengths resolve_lengths(const PairParams& params, double largest_spacing) {
+PairLengths resolve_lengths(const RegisterPairParams& params, double largest_spacing) {
   PairLengths l;
   l.spacing = largest_spacing;
-  l.voxel = params.voxel_in_spacings * largest_spacing;
+  l.voxel = params.voxel.resolve(largest_spacing);
   // A centroid downsample of cell v has points about v apart.
   l.coarse_spacing = l.voxel > 0.0 ? l.voxel : largest_spacing;
   l.features = params.features;
-  if (l.features.radius <= 0.0) l.features.radius = params.features.radius_in_spacings * l.coarse_spacing;
+  l.features.radius = Length::cloud(params.features.radius.resolve(l.coarse_spacing));
   l.align = params.align;
-  if (l.align.max_distance <= 0.0) l.align.max_distance = params.align.distance_in_spacings * l.coarse_spacing;
+  l.align.max_distance = Length::cloud(params.align.max_distance.resolve(l.coarse_spacing));
   l.fine_icp = params.icp;
-  if (l.fine_icp.max_distance <= 0.0) l.fine_icp.max_distance = params.icp.distance_in_spacings * largest_spacing;
+  l.fine_icp.max_distance = Length::cloud(params.icp.max_distance.resolve(largest_spacing));
   // The coarse ICP starts where RANSAC stopped, within about its inlier distance.
   l.coarse_icp = params.icp;
-  l.coarse_icp.max_distance = std::max(l.align.max_distance, l.fine_icp.max_distance);
+  l.coarse_icp.max_distance = Length::cloud(std::max(l.align.max_distance.value, l.fine_icp.max_distance.value));
   return l;
 }
 
@@ -76,9 +112,9 @@ void prepare_coarse(PreparedScan& scan, const PairLengths& lengths) {
   scan.sampled_tree = std::make_unique<KdTree>(scan.sampled->positions);
 }
 
-PairResult register_prepared(const PreparedScan& source, const PreparedScan& target, const PairParams& params, const PairLengths& lengths,
+RegisterPairResult register_prepared(const PreparedScan& source, const PreparedScan& target, const RegisterPairParams& params, const PairLengths& lengths,
                              const ProgressCallback& progress) {
-  PairResult out;
+  RegisterPairResult out;
   out.spacing = lengths.spacing;
   out.voxel = lengths.voxel;
   out.source_samples = source.coarse().size();
@@ -100,14 +136,14 @@ PairResult register_prepared(const PreparedScan& source, const PreparedScan& tar
   if (out.result.fitness < params.min_fitness) {
     out.result.converged = false;
     out.result.message = fmt::format("no overlap found: fitness {:.3g} < min_fitness {:.3g} (pairs within {:.4g} of the target)",
-                                     out.result.fitness, params.min_fitness, lengths.fine_icp.max_distance);
+                                     out.result.fitness, params.min_fitness, lengths.fine_icp.max_distance.value);
   }
   return out;
 }
 
 }  // namespace detail
 
-PairResult register_pair(const PointCloud& source, const PointCloud& target, const PairParams& params, const ProgressCallback& progress) {
+RegisterPairResult register_pair(const PointCloud& source, const PointCloud& target, const RegisterPairParams& params, const ProgressCallback& progress) {
   params.validate();
   const auto t0 = std::chrono::steady_clock::now();
   detail::PreparedScan s = detail::prepare_points(source, params, "source", detail::progress_part(progress, 0.0, 0.1));
@@ -122,7 +158,7 @@ PairResult register_pair(const PointCloud& source, const PointCloud& target, con
     t.features = compute_descriptors(t.coarse(), t.coarse_tree(), lengths.features, detail::progress_part(progress, 0.3, 0.4));
   }
   const double descriptors = detail::seconds_since(t1);
-  PairResult out = detail::register_prepared(s, t, params, lengths, detail::progress_part(progress, 0.4, 1.0));
+  RegisterPairResult out = detail::register_prepared(s, t, params, lengths, detail::progress_part(progress, 0.4, 1.0));
   out.seconds_prepare = prepare;
   out.seconds_descriptors = descriptors;
   return out;

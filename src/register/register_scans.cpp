@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -10,13 +11,36 @@
 
 namespace pointsurf {
 
-const char* multi_mode_name(MultiMode mode) noexcept { return mode == MultiMode::First ? "first" : "chain"; }
+const EnumNames<MultiMode>& multi_mode_names() {
+  static const EnumNames<MultiMode> names{{{MultiMode::First, "first"}, {MultiMode::Chain, "chain"}}};
+  return names;
+}
 
-void MultiParams::validate() const {
+const char* multi_mode_name(MultiMode mode) noexcept { return multi_mode_names().name(mode).c_str(); }
+
+const FieldTable<RegisterScansParams>& RegisterScansParams::fields() {
+  static const FieldTable<RegisterScansParams> table = [] {
+    using P = RegisterScansParams;
+    FieldTable<P> t;
+    t.choice("mode", &P::mode, multi_mode_names(), "Register each scan to the first, or to the one before it");
+    t.boolean("refine", &P::refine, "Refine all poses together over every overlapping pair (pose graph)");
+    t.number("min_overlap", &P::min_overlap, "Share of a scan within the ICP distance of another for the pair to join the refinement")
+        .range(0.0, 1.0, true, false);
+    t.nested(&P::pair, RegisterPairParams::fields());
+    t.length("prune", &P::prune, "An overlap pair that disagrees with the refined poses by more than this (RMS) is dropped")
+        .positive()
+        .internal()
+        .was("prune_in_spacings");
+    t.integer("graph_iterations", &P::graph_iterations, "Gauss-Newton iterations of the pose graph at most").at_least(1).internal();
+    return t;
+  }();
+  return table;
+}
+
+void RegisterScansParams::validate() const {
   pair.validate();
-  if (!(min_overlap > 0.0 && min_overlap <= 1.0)) throw UsageError(fmt::format("min_overlap must be in (0, 1], got {}", min_overlap));
-  if (graph_iterations < 1) throw UsageError("graph_iterations must be at least 1");
-  if (!(prune_in_spacings > 0.0)) throw UsageError(fmt::format("prune_in_spacings must be > 0, got {}", prune_in_spacings));
+  if (!std::isfinite(prune.value)) throw UsageError(fmt::format("register_scans: prune must be finite, got {}", prune.value));
+  fields().validate(*this, "register_scans");
 }
 
 namespace {
@@ -33,11 +57,11 @@ bool boxes_meet(const BoundingBox& a, const BoundingBox& b, double margin) {
 
 }  // namespace
 
-MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiParams& params, const ProgressCallback& progress) {
+RegisterScansResult register_scans(const std::vector<PointCloud>& scans, const RegisterScansParams& params, const ProgressCallback& progress) {
   params.validate();
   const std::size_t n = scans.size();
   if (n < 2) throw UsageError(fmt::format("register_scans: {} scan{}; give at least 2", n, n == 1 ? "" : "s"));
-  MultiResult out;
+  RegisterScansResult out;
   auto t0 = std::chrono::steady_clock::now();
 
   // Each scan made ready once: normals, trees, spacing; then the common lengths, downsamples
@@ -63,7 +87,7 @@ MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiPara
   out.initial_poses.assign(n, RigidTransform());
   for (std::size_t i = 1; i < n; ++i) {
     const std::size_t j = params.mode == MultiMode::First ? 0 : i - 1;
-    const PairResult r = detail::register_prepared(prepared[i], prepared[j], params.pair, lengths,
+    const RegisterPairResult r = detail::register_prepared(prepared[i], prepared[j], params.pair, lengths,
                                                    detail::progress_part(progress, 0.3 + 0.3 * double(i - 1) / double(n - 1), 0.3 + 0.3 * double(i) / double(n - 1)));
     if (r.result.fitness < params.pair.min_fitness)
       throw ComputeError(fmt::format("scan {} could not be registered to scan {}: {}", i, j, r.result.message));
@@ -76,10 +100,10 @@ MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiPara
 
   // Further pairs that overlap under those poses, registered by ICP from there.
   t0 = std::chrono::steady_clock::now();
-  const double reach = lengths.fine_icp.max_distance;
+  const double reach = lengths.fine_icp.max_distance.value;
   std::vector<BoundingBox> boxes;
   for (std::size_t i = 0; i < n; ++i) boxes.push_back(moved_box(prepared[i].coarse(), out.initial_poses[i]));
-  PairParams local = params.pair;
+  RegisterPairParams local = params.pair;
   local.global = false;
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = 0; j < i; ++j) {
@@ -91,7 +115,7 @@ MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiPara
       const RegistrationResult overlap =
           evaluate_registration(prepared[i].coarse(), prepared[j].coarse(), prepared[j].coarse_tree(), local.initial, reach);
       if (overlap.fitness < params.min_overlap) continue;
-      const PairResult r = detail::register_prepared(prepared[i], prepared[j], local, lengths, {});
+      const RegisterPairResult r = detail::register_prepared(prepared[i], prepared[j], local, lengths, {});
       if (r.result.fitness >= params.pair.min_fitness) out.links.push_back({i, j, r.result, false, false});
     }
     if (progress && !progress(0.6 + 0.3 * double(i + 1) / double(n))) throw CancelledError();
@@ -103,7 +127,7 @@ MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiPara
   PoseGraphParams graph;
   graph.max_iterations = params.graph_iterations;
   graph.center = prepared[0].coarse().positions.empty() ? Vector3d::Zero() : bounding_box(prepared[0].coarse().positions).center();
-  graph.prune_distance = params.prune_in_spacings * lengths.spacing;
+  graph.prune_distance = params.prune.resolve(lengths.spacing);
   std::vector<PoseGraphEdge> edges;
   for (const ScanLink& l : out.links) {
     PoseGraphEdge e;
@@ -111,7 +135,7 @@ MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiPara
     e.target = l.target;
     e.transform = l.result.transform;
     e.information = information_from_pairs(prepared[l.source].coarse(), prepared[l.target].coarse_tree(), l.result.transform,
-                                           lengths.fine_icp.max_distance, graph.center);
+                                           lengths.fine_icp.max_distance.value, graph.center);
     // Pairs that fit loosely (a thin or grazing overlap, where ICP slides) count for less: the
     // information of a pair is that of a displacement measured with the link's inlier RMSE.
     const double rmse = std::max(l.result.inlier_rmse / lengths.spacing, 1e-3);

@@ -190,5 +190,37 @@ TEST_F(RegisterCli, PipelineReadsTwoScansByTagRegistersAndMerges) {
   EXPECT_TRUE(test::contains(q.err, "stage 2 (register): takes 2 inputs, got 1")) << q.err;
 }
 
+// The keys of the previous release (x_in_spacings numbers) still work, with a warning, and
+// give what the lengths in spacings give.
+TEST_F(RegisterCli, OldInSpacingsKeysAreLengthsInSpacingsWithAWarning) {
+  write_two_views(*this);
+  const auto pipeline = [&](const std::string& params, const std::string& name) {
+    return R"([{"type": "read", "filename": ")" + path("a.ply") + R"(", "tag": "a"},
+      {"type": "read", "filename": ")" + path("b.ply") + R"(", "tag": "b"},
+      {"type": "register", "inputs": ["b", "a"], "out": ")" + path(name + ".json") + R"(", )" + params + R"(}, ")" + path(name + ".ply") + "\"]";
+  };
+  test::write_bytes(dir_ / "old.json", pipeline(R"("voxel_in_spacings": 3, "icp_distance_in_spacings": 4, "radius_in_spacings": 8)", "T_old"));
+  test::write_bytes(dir_ / "new.json", pipeline(R"("voxel": "3sp", "icp_distance": "4sp", "radius": "8sp")", "T_new"));
+  test::CliResult r = test::run_cli("run " + path("old.json") + " --report " + path("old_report.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_cli("run " + path("new.json") + " --report " + path("new_report.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_transform_file(path("T_old.json")).transform.matrix(), read_transform_file(path("T_new.json")).transform.matrix());
+  const nlohmann::json old_report = nlohmann::json::parse(test::read_bytes(path("old_report.json")));
+  const nlohmann::json new_report = nlohmann::json::parse(test::read_bytes(path("new_report.json")));
+  std::string warnings;
+  for (const auto& w : old_report["warnings"]) warnings += w.get<std::string>() + "\n";
+  for (const char* key : {"voxel_in_spacings", "icp_distance_in_spacings", "radius_in_spacings"})
+    EXPECT_TRUE(test::contains(warnings, fmt::format("key \"{}\" is deprecated", key))) << warnings;
+  EXPECT_FALSE(test::contains(new_report["warnings"].dump(), "deprecated"));
+  nlohmann::json params = old_report["stages"][2]["parameters"], new_params = new_report["stages"][2]["parameters"];
+  EXPECT_EQ(params["voxel"], "3sp");
+  EXPECT_EQ(params["icp_distance"], "4sp");
+  EXPECT_FALSE(params.contains("voxel_in_spacings"));
+  params.erase("out");
+  new_params.erase("out");
+  EXPECT_EQ(params, new_params);
+}
+
 }  // namespace
 }  // namespace pointsurf

@@ -18,7 +18,6 @@
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/features/feature_points.h"
 #include "pointsurf/normals/normals.h"
-#include "pointsurf/register/multi.h"
 #include "pointsurf/shape/curvature.h"
 #include "pointsurf/simplify/simplify.h"
 #include "support/shapes.h"
@@ -71,26 +70,9 @@ struct Expected {
 
 std::vector<Expected> library_defaults() {
   const NormalParams n;
-  const MultiParams mp;
-  const PairParams& pair = mp.pair;
   using I = std::int64_t;
   return {
       {"curvature", "", "normals_k", I{n.k}},
-      {"register", "", "descriptor", std::string(descriptor_type_name(pair.features.type))},
-      {"register", "", "icp", std::string(icp_metric_name(pair.icp.metric))},
-      {"register", "", "voxel_in_spacings", pair.voxel_in_spacings},
-      {"register", "", "radius_in_spacings", pair.features.radius_in_spacings},
-      {"register", "", "ransac_distance_in_spacings", pair.align.distance_in_spacings},
-      {"register", "", "icp_distance_in_spacings", pair.icp.distance_in_spacings},
-      {"register", "", "max_normal_deg", pair.icp.max_normal_deg},
-      {"register", "", "iterations", I(pair.icp.max_iterations)},
-      {"register", "", "ransac_iterations", I(pair.align.max_iterations)},
-      {"register", "", "confidence", pair.align.confidence},
-      {"register", "", "seed", I(pair.align.seed)},
-      {"register", "", "min_fitness", pair.min_fitness},
-      {"register-many", "", "mode", std::string(multi_mode_name(mp.mode))},
-      {"register-many", "", "min_overlap", mp.min_overlap},
-      {"register-many", "", "voxel_in_spacings", pair.voxel_in_spacings},
   };
 }
 

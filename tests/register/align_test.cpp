@@ -239,20 +239,20 @@ TEST(AlignGlobal, BadParametersAndInputsThrowUsageError) {
     }
   };
   AlignParams p;
-  p.max_distance = -1.0;
-  expect_usage(p, "max_distance must be >= 0");
+  p.max_distance = Length::cloud(-1.0);
+  expect_usage(p, "align_global: ransac_distance must be > 0, got -1");
   p = {};
-  p.distance_in_spacings = 0.0;
-  expect_usage(p, "distance_in_spacings must be > 0");
+  p.max_distance = Length::spacings(0.0);
+  expect_usage(p, "align_global: ransac_distance must be > 0, got 0sp");
   p = {};
   p.edge_length_ratio = 1.5;
   expect_usage(p, "edge_length_ratio must be in (0, 1]");
   p = {};
   p.max_normal_deg = 0.0;
-  expect_usage(p, "max_normal_deg must be in (0, 180]");
+  expect_usage(p, "ransac_max_normal_deg must be in (0, 180]");
   p = {};
   p.max_iterations = 0;
-  expect_usage(p, "max_iterations must be >= 1");
+  expect_usage(p, "ransac_iterations must be >= 1");
   p = {};
   p.confidence = 1.0;
   expect_usage(p, "confidence must be in (0, 1)");

@@ -24,7 +24,7 @@ Descriptors describe(const PointCloud& cloud, DescriptorType type, double radius
   const KdTree tree(cloud.positions);
   DescriptorParams params;
   params.type = type;
-  params.radius_in_spacings = radius_in_spacings;
+  params.radius = Length::spacings(radius_in_spacings);
   params.max_neighbors = max_neighbors;
   return compute_descriptors(cloud, tree, params);
 }
@@ -271,11 +271,11 @@ TEST(Descriptors, BadInputThrowsUsageError) {
     }
   };
   DescriptorParams p;
-  p.radius = -1.0;
-  expect_usage(cloud, p, "radius must be >= 0");
+  p.radius = Length::cloud(-1.0);
+  expect_usage(cloud, p, "compute_descriptors: radius must be > 0, got -1");
   p = {};
-  p.radius_in_spacings = 0.0;
-  expect_usage(cloud, p, "radius_in_spacings must be > 0");
+  p.radius = Length::spacings(0.0);
+  expect_usage(cloud, p, "compute_descriptors: radius must be > 0, got 0sp");
   p = {};
   p.max_neighbors = 3;
   expect_usage(cloud, p, "max_neighbors must be >= 4");

@@ -245,7 +245,7 @@ TEST(Icp, TheNormalAngleCheckKeepsAThinWallFromLockingOntoItsFarSide) {
   for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
     IcpParams params;
     params.metric = metric;
-    params.max_distance = 0.15;
+    params.max_distance = Length::cloud(0.15);
     params.max_normal_deg = 180.0;
     const RegistrationResult plain = icp(b.source, b.target, tree, b.start, params);
     params.max_normal_deg = 45.0;
@@ -317,7 +317,7 @@ TEST(Icp, ASphereTurnedAboutItsCentreStopsWithTheCentreFound) {
   for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
     IcpParams params;
     params.metric = metric;
-    params.max_distance = 0.2;
+    params.max_distance = Length::cloud(0.2);
     const RegistrationResult r = icp(source, target, tree, RigidTransform(), params);
     SCOPED_TRACE(icp_metric_name(metric));
     EXPECT_TRUE(r.converged) << r.message;
@@ -392,17 +392,19 @@ TEST(Icp, RejectsBadParametersAndMissingNormals) {
     return "no error";
   };
   IcpParams p;
-  p.max_distance = -1.0;
-  EXPECT_NE(message_of(p, cloud, cloud).find("max_distance"), std::string::npos);
+  p.max_distance = Length::cloud(-1.0);
+  EXPECT_EQ(message_of(p, cloud, cloud), "icp: icp_distance must be > 0, got -1");
   p = {};
-  p.distance_in_spacings = 0.0;
-  EXPECT_NE(message_of(p, cloud, cloud).find("distance_in_spacings"), std::string::npos);
+  p.max_distance = Length::spacings(0.0);
+  EXPECT_EQ(message_of(p, cloud, cloud), "icp: icp_distance must be > 0, got 0sp");
   p = {};
   p.max_normal_deg = 181.0;
   EXPECT_NE(message_of(p, cloud, cloud).find("max_normal_deg"), std::string::npos);
   p = {};
   p.max_iterations = 0;
-  EXPECT_NE(message_of(p, cloud, cloud).find("max_iterations"), std::string::npos);
+  EXPECT_EQ(message_of(p, cloud, cloud), "icp: iterations must be in [1, 100000], got 0");
+  p.max_iterations = 100001;
+  EXPECT_EQ(message_of(p, cloud, cloud), "icp: iterations must be in [1, 100000], got 100001");
   p = {};
   p.relative_rmse = -1.0;
   EXPECT_NE(message_of(p, cloud, cloud).find("relative_rmse"), std::string::npos);

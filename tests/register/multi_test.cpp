@@ -32,9 +32,9 @@ TEST(RegisterScans, GlobalRefinementBeatsTheChainAndClosesTheLoop) {
   double chain_total = 0.0, refined_total = 0.0;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const test::ScanViews s = test::scan_views(4, 0.3, seed);
-    MultiParams p;
+    RegisterScansParams p;
     p.mode = MultiMode::Chain;
-    const MultiResult r = register_scans(s.clouds, p);
+    const RegisterScansResult r = register_scans(s.clouds, p);
     ASSERT_EQ(r.poses.size(), 4u);
     // The first pass is a chain of 3 links; the refinement found the loop (3, 0) at least.
     std::size_t initial = 0;
@@ -60,11 +60,11 @@ TEST(RegisterScans, GlobalRefinementBeatsTheChainAndClosesTheLoop) {
 
 TEST(RegisterScans, FirstModeAndNoRefinement) {
   const test::ScanViews s = test::scan_views(3, 0.2, 7, 45.0);
-  MultiParams p;
+  RegisterScansParams p;
   p.mode = MultiMode::First;
   p.refine = false;
   p.min_overlap = 0.05;
-  const MultiResult r = register_scans(s.clouds, p);
+  const RegisterScansResult r = register_scans(s.clouds, p);
   ASSERT_EQ(r.links.size(), 2u);
   EXPECT_EQ(r.links[0].target, 0u);
   EXPECT_EQ(r.links[1].target, 0u);
@@ -98,10 +98,10 @@ TEST(RegisterScans, BadInputIsRefused) {
   // A scan far from every other cannot be placed: the answer names it.
   PointCloud far = s.clouds[1];
   for (Eigen::Vector3d& p : far.positions) p = Eigen::Vector3d(p.x(), p.y() * 0.05, p.z() * 3.0);  // a different, flattened shape
-  MultiParams p;
+  RegisterScansParams p;
   p.pair.min_fitness = 0.9;
   test::expect_error<ComputeError>([&] { register_scans({s.clouds[0], far}, p); }, "scan 1 could not be registered to scan 0");
-  MultiParams bad;
+  RegisterScansParams bad;
   bad.min_overlap = 0.0;
   test::expect_error<UsageError>([&] { register_scans(s.clouds, bad); }, "min_overlap must be in (0, 1]");
 }

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/register/features.h"
@@ -17,10 +18,9 @@
 namespace pointsurf {
 
 struct AlignParams {
-  double max_distance = 0.0;             // a matched pair is an inlier within this distance after
-                                         // the transform, cloud units; 0: distance_in_spacings x
-                                         // the source's mean spacing
-  double distance_in_spacings = 1.5;     // mean spacings, when max_distance is 0
+  Length max_distance = Length::spacings(1.5);  // a matched pair is an inlier within this
+                                         // distance after the transform, cloud units or the
+                                         // source's mean spacings, > 0
   bool mutual = true;                    // keep only mutual nearest neighbours in descriptor space
   double edge_length_ratio = 0.9;        // pruning: the two triangles' edge lengths agree within
                                          // this ratio, in (0, 1]
@@ -30,6 +30,10 @@ struct AlignParams {
   double confidence = 0.999;             // stop when a better model would have been found with
                                          // this probability, in (0, 1)
   std::uint64_t seed = 42;               // random seed
+  /// Key, unit, range and doc of each field (core/fields.h): ransac_distance, ransac_iterations,
+  /// confidence, seed (the keys of the register stages).
+  static const FieldTable<AlignParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 

@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 
@@ -17,15 +18,17 @@ namespace pointsurf {
 class KdTree;
 
 enum class DescriptorType : std::uint8_t { Pfh = 0, Fpfh = 1 };
-/// "pfh", "fpfh".
+/// "fpfh", "pfh".
+const EnumNames<DescriptorType>& descriptor_type_names();
+/// "fpfh", "pfh" (descriptor_type_names()).
 const char* descriptor_type_name(DescriptorType type) noexcept;
 
 struct DescriptorParams {
   DescriptorType type = DescriptorType::Fpfh;
-  double radius = 0.0;               // neighbourhood radius, cloud units; 0: radius_in_spacings x
-                                     // mean spacing
-  double radius_in_spacings = 10.0;  // mean spacings, when radius is 0
+  Length radius = Length::spacings(10.0);  // neighbourhood radius, cloud units or mean spacings, > 0
   std::size_t max_neighbors = 100;   // nearest points kept within the radius
+  /// Key, unit, range and doc of each field (core/fields.h): descriptor, radius.
+  static const FieldTable<DescriptorParams>& fields();
   /// Throws UsageError naming the first value out of range.
   void validate() const;
 };

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/register/result.h"
@@ -24,21 +25,26 @@ class KdTree;
 
 enum class IcpMetric : std::uint8_t { PointToPoint = 0, PointToPlane = 1 };
 /// "point", "plane".
+const EnumNames<IcpMetric>& icp_metric_names();
+/// "point", "plane" (icp_metric_names()).
 const char* icp_metric_name(IcpMetric metric) noexcept;
 
 struct IcpParams {
   IcpMetric metric = IcpMetric::PointToPlane;
-  double max_distance = 0.0;           // pairs farther apart are rejected, cloud units; 0:
-                                       // distance_in_spacings x the source's mean spacing
-  double distance_in_spacings = 3.0;   // mean spacings, when max_distance is 0
+  Length max_distance = Length::spacings(3.0);  // pairs farther apart are rejected, cloud
+                                       // units or the source's mean spacings, > 0
   double max_normal_deg = 45.0;        // pairs whose normals differ more are rejected, degrees;
                                        // 180 disables the check (plain ICP)
-  std::size_t max_iterations = 50;     // iterations at most
+  std::size_t max_iterations = 50;     // iterations at most, in [1, 100000]
   double relative_fitness = 1e-6;      // converged when the number of pairs used and their RMSE
   double relative_rmse = 1e-6;         // change by less than these relative amounts between two
                                        // iterations, when an update moves the points by less
                                        // than 0.001 x the max distance (RMS), or when ICP comes
                                        // back to where it was two updates before (a 2-cycle)
+  /// Key, unit, range and doc of each field (core/fields.h): icp, icp_distance, max_normal_deg,
+  /// iterations (the keys of the register stages).
+  static const FieldTable<IcpParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 

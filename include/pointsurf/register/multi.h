@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/register/pose_graph.h"
@@ -21,20 +22,26 @@ enum class MultiMode : std::uint8_t {
   Chain = 1,  // scan i registered to scan i - 1: neighbours overlap most; errors add up
 };
 /// "first", "chain".
+const EnumNames<MultiMode>& multi_mode_names();
+/// "first", "chain" (multi_mode_names()).
 const char* multi_mode_name(MultiMode mode) noexcept;
 
-struct MultiParams {
-  PairParams pair;                     // each pairwise registration
+struct RegisterScansParams {
+  RegisterPairParams pair;             // each pairwise registration
   MultiMode mode = MultiMode::Chain;
   bool refine = true;                  // global refinement over all overlapping pairs
   double min_overlap = 0.2;            // a further pair (i, j) joins the refinement when this
                                        // share of i's downsample lies within the fine ICP distance
                                        // of j under the initial poses, in (0, 1]
-  double prune_in_spacings = 0.75;     // an overlap pair (not one of the first pass) that still
-                                       // disagrees with the refined poses by more than this (RMS
-                                       // displacement of its points, mean spacings) is taken as a
-                                       // wrong registration and dropped
+  Length prune = Length::spacings(0.75);  // an overlap pair (not one of the first pass) that
+                                       // still disagrees with the refined poses by more than this
+                                       // (RMS displacement of its points, cloud units or the
+                                       // largest mean spacing) is taken as a wrong registration
+                                       // and dropped, > 0
   std::size_t graph_iterations = 50;   // Gauss-Newton iterations of the pose graph at most
+  /// Key, unit, range and doc of each field (core/fields.h), those of pair included.
+  static const FieldTable<RegisterScansParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 
@@ -47,7 +54,7 @@ struct ScanLink {
   bool pruned = false;                 // dropped by the pose graph (its residual stayed large)
 };
 
-struct MultiResult {
+struct RegisterScansResult {
   std::vector<RigidTransform> poses;          // pose i maps scan i into scan 0's frame (pose 0
                                               // is the identity)
   std::vector<RigidTransform> initial_poses;  // the same from the first pass alone
@@ -67,7 +74,8 @@ struct MultiResult {
 /// params.pair.min_fitness), UsageError for bad parameters, CancelledError when `progress`
 /// returns false. Bounded: n - 1 registrations, at most n (n - 1) / 2 overlap checks and
 /// registrations, and the pose graph's bounded solves. Thread-safe.
-MultiResult register_scans(const std::vector<PointCloud>& scans, const MultiParams& params = {}, const ProgressCallback& progress = {});
+RegisterScansResult register_scans(const std::vector<PointCloud>& scans, const RegisterScansParams& params = {},
+                                   const ProgressCallback& progress = {});
 
 /// The scans moved by their poses and appended in order, with a field "scan" (UInt16, or UInt32
 /// beyond 65536 scans) holding each point's scan index; attributes present in only some scans

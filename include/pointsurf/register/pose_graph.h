@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/rigid_transform.h"
 
@@ -47,6 +48,9 @@ struct PoseGraphParams {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // origin of the frame the residuals and
                                       // information are expressed in (a point near the scans,
                                       // so 1e6 m coordinates lose nothing)
+  /// Key, unit, range and doc of each field (core/fields.h); no stage offers them.
+  static const FieldTable<PoseGraphParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 

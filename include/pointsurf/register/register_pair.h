@@ -7,6 +7,7 @@
 // `register` stage, the command line and Python call.
 #include <cstddef>
 
+#include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
 #include "pointsurf/register/align.h"
@@ -16,26 +17,30 @@
 
 namespace pointsurf {
 
-struct PairParams {
-  double voxel_in_spacings = 2.0;    // the global alignment and the coarse ICP work on a voxel
-                                     // downsample whose cell is this many mean spacings (the
-                                     // larger of the two clouds'); 0 keeps every point
+struct RegisterPairParams {
+  Length voxel = Length::spacings(2.0);  // the global alignment and the coarse ICP work on a voxel
+                                     // downsample of this cell, cloud units or mean spacings
+                                     // (the larger of the two clouds'); 0 keeps every point
   int normal_neighbors = 30;         // k of the PCA normals estimated for a cloud without any
                                      // (oriented by MST), >= 3
-  DescriptorParams features;            // descriptors of the downsample; radius_in_spacings counts
+  DescriptorParams features;         // descriptors of the downsample; a radius in spacings counts
                                      // the downsample's spacing (the voxel cell)
-  AlignParams align;                 // RANSAC on the downsample; distance_in_spacings likewise
-  IcpParams icp;                     // the fine ICP on every point; distance_in_spacings counts
-                                     // the source's own mean spacing
+  AlignParams align;                 // RANSAC on the downsample; a distance in spacings likewise
+  IcpParams icp;                     // the fine ICP on every point; a distance in spacings counts
+                                     // the larger mean spacing of the two clouds
   bool global = true;                // false: skip descriptors and RANSAC, start ICP at `initial`
   RigidTransform initial;            // the start when global is false (source onto target)
   double min_fitness = 0.1;          // a final fitness below this means the clouds were not
                                      // found to overlap: converged = false, said in `message`
+  /// Key, unit, range and doc of each field (core/fields.h), those of features, align and icp
+  /// included.
+  static const FieldTable<RegisterPairParams>& fields();
+  /// Throws UsageError naming the first value out of range.
   void validate() const;
 };
 
 /// The answer and what each step took.
-struct PairResult {
+struct RegisterPairResult {
   RegistrationResult result;          // the final answer (after the fine ICP): source onto target
   RegistrationResult global;          // RANSAC's answer (global = true)
   RegistrationResult coarse;          // the coarse ICP's answer on the downsample
@@ -58,8 +63,8 @@ struct PairResult {
 /// overlap, no consistent match) is an answer: converged = false with the reason in `message`.
 /// Every step is bounded (RANSAC by max_iterations, ICP by its iterations). Works in frames
 /// centred on the target, so 1e6 m coordinates lose nothing. Thread-safe.
-PairResult register_pair(const PointCloud& source, const PointCloud& target, const PairParams& params = {},
-                         const ProgressCallback& progress = {});
+RegisterPairResult register_pair(const PointCloud& source, const PointCloud& target, const RegisterPairParams& params = {},
+                                 const ProgressCallback& progress = {});
 
 /// Fewest points a cloud must have to be registered.
 inline constexpr std::size_t kMinRegistrationPoints = 10;

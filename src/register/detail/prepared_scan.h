@@ -37,12 +37,12 @@ struct PairLengths {
 
 /// Normals (estimated when missing), kd-tree and spacing. InputError for too few points or
 /// points that all coincide; `what` names the cloud in messages ("source", "scan 3").
-PreparedScan prepare_points(const PointCloud& cloud, const PairParams& params, const std::string& what, const ProgressCallback& progress);
-PairLengths resolve_lengths(const PairParams& params, double largest_spacing);
+PreparedScan prepare_points(const PointCloud& cloud, const RegisterPairParams& params, const std::string& what, const ProgressCallback& progress);
+PairLengths resolve_lengths(const RegisterPairParams& params, double largest_spacing);
 /// The downsample and its tree (nothing when lengths.voxel is 0).
 void prepare_coarse(PreparedScan& scan, const PairLengths& lengths);
 /// Global alignment (unless params.global is off), coarse ICP and fine ICP of prepared scans.
-PairResult register_prepared(const PreparedScan& source, const PreparedScan& target, const PairParams& params, const PairLengths& lengths,
+RegisterPairResult register_prepared(const PreparedScan& source, const PreparedScan& target, const RegisterPairParams& params, const PairLengths& lengths,
                              const ProgressCallback& progress);
 
 /// The part [begin, end] of a whole progress range (empty when `whole` is).
