@@ -98,20 +98,18 @@ def merge(clouds: Sequence[Data], /, *, progress: Progress = None) -> PointCloud
     """Merge several clouds into one (attributes present in only some are zero-filled)
     """
 
-def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., std_ratio: float = ..., min_neighbours: int = ..., radius: float = ..., radius_in_spacings: float = ..., distance: float = ..., distance_in_spacings: float = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., primitives: bool = ..., primitive_band: float = ..., exact: bool = ..., max_neighbours: int = ..., height_sigma: float = ..., height_sigma_in_spacings: float = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> PointCloud:
+def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., std_ratio: float = ..., min_neighbors: int = ..., radius: float | str = ..., distance: float | str = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., primitives: bool = ..., primitive_band: float = ..., exact: bool = ..., max_neighbors: int = ..., height_sigma: float | str = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> PointCloud:
     """Remove outliers and duplicates, denoise (local, sor, radius, ransac, duplicates, bilateral, trilateral)
 
     method = 'local': one of local, sor, radius, ransac, duplicates, bilateral, trilateral
-    k = 16: Neighbours per point, the point excluded ([2, inf))
+    k = 16: Neighbours per point, the point excluded (points, [2, inf))
     min_ratio = 3.0: Drop only points whose mean neighbour distance is above this many times their neighbours' ((1, inf))
     mad_sigmas = 10.0: ... and above the median ratio by this many robust standard deviations ((0, inf))
     far_ratio = 12.0: Also drop points whose mean neighbour distance is above this many times the cloud's median ((1, inf))
     std_ratio = 2.0: Drop points whose mean kNN distance >= mean + std_ratio x std ((0, inf))
-    min_neighbours = 4: Keep points with at least this many others within the radius ([1, inf))
-    radius = 0.0: Search radius; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
-    radius_in_spacings = 4.0: Radius when radius is 0 (mean spacings, (0, inf))
-    distance = 0.0: Plane distance (ransac) or merge distance (duplicates); 0: distance_in_spacings x mean spacing (cloud units, [0, inf))
-    distance_in_spacings = 1.0: Plane distance when distance is 0 (mean spacings, (0, inf))
+    min_neighbors = 4: Keep points with at least this many others within the radius (points, [1, inf))
+    radius = '4sp': Search radius ((0, inf))
+    distance = '1sp': Plane distance ((0, inf))
     iterations = 50: Random planes tried per point ([1, inf))
     min_support = 0.3: Fraction of the neighbourhood a plane needs ((0, 1])
     min_relative_support = 0.7: A plane through the point holding (or scoring) this fraction of the neighbours (of the dominant plane) keeps it ([0, 1])
@@ -119,9 +117,8 @@ def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac',
     primitives = True: Judge points explained by planes, spheres, cylinders, cones (efficient RANSAC) by those
     primitive_band = 2.0: A point amid a primitive's inliers farther than this from it is an outlier (plane distances, (0, inf))
     exact = False: Merge only points with identical coordinates
-    max_neighbours = 48: At most this many nearest points within the radius ([3, inf))
-    height_sigma = 0.0: Range sigma along the normal; 0: height_sigma_in_spacings x mean spacing (cloud units, [0, inf))
-    height_sigma_in_spacings = 1.0: Range sigma when height_sigma is 0 (mean spacings, (0, inf))
+    max_neighbors = 48: At most this many nearest points within the radius (points, [3, inf))
+    height_sigma = '1sp': Range sigma along the normal ((0, inf))
     sharpness_angle_deg = 20.0: Sigma of the angle between normals (degrees, (0, 90])
     normal_iterations = 2: Passes of the normal filter ([1, inf))
     height_sigma_scale = 1.5: Range sigma of the position pass, times the height sigma ((0, inf))
@@ -129,18 +126,18 @@ def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac',
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     """
 
-def simplify(cloud: Data, /, *, method: Literal['grid', 'random', 'curvature', 'regional', 'curvature-distance', 'lfs'] = ..., ratio: float = ..., count: int = ..., cell: float = ..., mode: Literal['centroid', 'nearest'] = ..., seed: int = ..., k: int = ..., flat_weight: float = ..., region_in_spacings: float = ..., region_angle_deg: float = ..., variation_weight: float = ..., normal_weight: float = ..., distance_weight: float = ..., feature_threshold: float = ..., max_feature_share: float = ..., keep_boundary: bool = ..., split_quantile: float = ..., high_to_low_distance: float = ..., adaptivity: float = ..., fill_neighbours: int = ..., progress: Progress = None) -> PointCloud:
+def simplify(cloud: Data, /, *, method: Literal['grid', 'random', 'curvature', 'regional', 'curvature-distance', 'lfs'] = ..., ratio: float = ..., count: int = ..., cell: float = ..., mode: Literal['centroid', 'nearest'] = ..., seed: int = ..., k: int = ..., flat_weight: float = ..., region_size: float | str = ..., region_angle_deg: float = ..., variation_weight: float = ..., normal_weight: float = ..., distance_weight: float = ..., feature_threshold: float = ..., max_feature_share: float = ..., keep_boundary: bool = ..., split_quantile: float = ..., high_to_low_distance: float = ..., adaptivity: float = ..., fill_neighbors: int = ..., progress: Progress = None) -> PointCloud:
     """Fewer points that keep the surface: grid, random, curvature, regional, curvature-distance or lfs
 
     method = 'grid': one of grid, random, curvature, regional, curvature-distance, lfs
     ratio = 0.1: Kept fraction of the points ((0, 1])
-    count = 0: Number of output points instead of ratio; 0: use ratio ([0, inf))
+    count = 0: Number of output points instead of ratio; 0: use ratio (points, [0, inf))
     cell = 0.0: Length instead of a count: grid cell; Poisson-disk distance of flat points (regional, curvature-distance); spacing at the median feature size (lfs) (cloud units, [0, inf))
     mode = 'centroid': centroid (average each cell) or nearest (keep the sample nearest to it)
     seed = 42: Random seed ([0, inf))
-    k = 20: Neighbours for normals and variation when the input has none ([3, inf))
+    k = 20: Neighbours for normals and variation when the input has none (points, [3, inf))
     flat_weight = 0.1: Weight of a flat point relative to the mean variation ([0, inf))
-    region_in_spacings = 10.0: Cluster cell size (mean spacings, (0, inf))
+    region_size = '10sp': Cluster cell size ((0, inf))
     region_angle_deg = 30.0: Normal angle joining a cluster (degrees, (0, 90])
     variation_weight = 1.0: Weight of the surface variation in the feature factor ([0, inf))
     normal_weight = 1.0: Weight of the normal deviation in the feature factor ([0, inf))
@@ -151,140 +148,132 @@ def simplify(cloud: Data, /, *, method: Literal['grid', 'random', 'curvature', '
     split_quantile = 0.9: Variation quantile splitting high from low ((0, 1))
     high_to_low_distance = 0.4: High-part distance / low-part distance ((0, 1])
     adaptivity = 4.0: Feature size clamped to [median/a, median*a] ([1, inf))
-    fill_neighbours = 6: kNN edges tested for gaps when filling ([1, inf))
+    fill_neighbors = 6: kNN edges tested for gaps when filling ([1, inf))
     """
 
-def normals(cloud: Data, /, *, neighborhood: Literal['knn', 'radius', 'hybrid'] = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., orient: Literal['mst', 'viewpoint', 'direction', 'none', 'input', 'keep'] = ..., viewpoint: Sequence[float] = ..., direction: Sequence[float] = ..., orient_k: int = ..., progress: Progress = None) -> Data:
+def normals(cloud: Data, /, *, neighborhood: Literal['knn', 'radius', 'hybrid'] = ..., k: int = ..., radius: float | str = ..., orient: Literal['mst', 'viewpoint', 'direction', 'none', 'input', 'keep'] = ..., viewpoint: Sequence[float] = ..., direction: Sequence[float] = ..., orient_k: int = ..., progress: Progress = None) -> Data:
     """Estimate normals by PCA and orient them (MST propagation by default)
 
     neighborhood = 'knn': Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius when only radius is given, hybrid when k is given too
-    k = 30: Neighbours per point (knn; hybrid: at most k within r) ([3, inf))
-    radius = 0.0: Neighbourhood radius; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
-    radius_in_spacings = 3.0: Radius in mean spacings when radius is 0 (mean spacings, (0, inf))
+    k = 30: Neighbours per point (knn; hybrid: at most k within r) (points, [3, inf))
+    radius = '3sp': Neighbourhood radius (radius, hybrid) ((0, inf))
     orient = 'mst': Orientation: mst (consistent, Hoppe 1992), viewpoint, direction, none, input (each new normal on the side of the input's) or keep (the input's normals, no estimation); default: input when the input has normals, else mst
     viewpoint = [0.0, 0.0, 0.0]: Scanner position (orient viewpoint) (cloud units)
     direction = [0.0, 0.0, 1.0]: Direction normals should face (orient direction)
-    orient_k = 10: Neighbours per point in the MST graph (orient mst) ([1, inf))
+    orient_k = 10: Neighbours per point in the MST graph (orient mst) (points, [1, inf))
     """
 
-def curvature(cloud: Data, /, *, neighborhood: Literal['knn', 'radius', 'hybrid'] = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., degree: int = ..., scale_in_noise: float = ..., max_k: int = ..., zero_curvature: float = ..., zero_in_noise: float = ..., update_normals: bool = ..., normals_k: int = ..., progress: Progress = None) -> Data:
+def curvature(cloud: Data, /, *, neighborhood: Literal['knn', 'radius', 'hybrid'] = ..., k: int = ..., radius: float | str = ..., degree: int = ..., scale_in_noise: float = ..., max_k: int = ..., zero_curvature: float = ..., zero_in_noise: float = ..., update_normals: bool = ..., normals_k: int = ..., progress: Progress = None) -> Data:
     """Principal curvatures, mean and Gaussian curvature, variation and HK surface type by jet fitting
 
     neighborhood = 'knn': Neighbourhood: knn (k nearest), radius (all within r) or hybrid (at most k within r); default: radius when only radius is given, hybrid when k is given too
-    k = 0: Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid) ([0, inf))
-    radius = 0.0: Neighbourhood radius; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
-    radius_in_spacings = 6.0: Radius in mean spacings when radius is 0 (mean spacings, (0, inf))
+    k = 0: Neighbours per point; 0: chosen from the noise (knn, from 24 for degree 2, 40 for degree 3), 24 / 40 (hybrid) (points, [0, inf))
+    radius = '6sp': Neighbourhood radius (radius, hybrid) ((0, inf))
     degree = 2: Jet degree, 2 or 3 ([2, 3])
     scale_in_noise = 8.0: k = 0: the neighbourhood radius grows to this many times the noise (the jet's residual) ((0, inf))
-    max_k = 1536: k = 0: the most neighbours the noise may call for ([6, inf))
+    max_k = 1536: k = 0: the most neighbours the noise may call for (points, [6, inf))
     zero_curvature = 0.0: Curvature below which H or a principal curvature counts as zero; 0: derived from the fit residuals (1/cloud units, [0, inf))
     zero_in_noise = 3.0: Derived zero threshold in standard errors of the fitted curvature ((0, inf))
     update_normals = False: Write the jet (Monge) normals instead of the input ones
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     """
 
-def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., dn_deg: float = ..., min_turn_deg: float = ..., dd: float = ..., dd_in_spacings: float = ..., min_cluster_points: int = ..., normals: Literal['robust', 'input'] = ..., truth_field: str = ..., progress: Progress = None) -> Data:
+def features(cloud: Data, /, *, k: int = ..., variation_threshold: float = ..., cluster_angle_deg: float = ..., min_turn_deg: float = ..., plane_distance: float | str = ..., min_cluster_points: int = ..., normals: Literal['robust', 'input'] = ..., truth_field: str = ..., progress: Progress = None) -> Data:
     """Sharp-feature points: field "feature" = 0 none, 1 edge, 2 corner
 
-    k = 30: Neighbours per point ([6, inf))
+    k = 30: Neighbours per point (points, [6, inf))
     variation_threshold = 0.0: Candidate surface-variation threshold; 0: max(half a min_turn_deg crease's, 4 x median variation) ([0, 0.3333333333333333))
-    dn_deg = 20.0: Normal-angle clustering threshold (degrees, (0, 90))
+    cluster_angle_deg = 20.0: Normal-angle clustering threshold (degrees, (0, 90))
     min_turn_deg = 28.0: Smallest crease kept (angle between its two planes); sets the candidate floor (degrees, (0, 90))
-    dd = 0.0: Point-to-plane distance; 0: dd_in_spacings x mean spacing (cloud units, [0, inf))
-    dd_in_spacings = 1.0: Point-to-plane distance when dd is 0 (mean spacings, (0, inf))
+    plane_distance = '1sp': Point-to-plane distance of a cluster's plane ((0, inf))
     min_cluster_points = 5: Fewest neighbours a cluster needs to give a plane, at most k ([3, inf))
     normals = 'robust': Normals to cluster by: robust (flattest shifted neighbourhood) or input (estimated when absent)
     truth_field = '': Field marking true feature points (non-zero): report precision and recall
     """
 
-def register(source: Data, target: Data, /, *, descriptor: Literal['fpfh', 'pfh'] = ..., icp: Literal['point', 'plane'] = ..., voxel_in_spacings: float = ..., radius_in_spacings: float = ..., ransac_distance_in_spacings: float = ..., icp_distance_in_spacings: float = ..., max_normal_deg: float = ..., iterations: int = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., normal_neighbors: int = ..., min_fitness: float = ..., global_alignment: bool = ..., out: str = ..., progress: Progress = None) -> Data:
+def register(source: Data, target: Data, /, *, descriptor: Literal['fpfh', 'pfh'] = ..., radius: float | str = ..., voxel: float | str = ..., ransac_distance: float | str = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., icp: Literal['point', 'plane'] = ..., icp_distance: float | str = ..., max_normal_angle_deg: float = ..., iterations: int = ..., normals_k: int = ..., min_fitness: float = ..., global_alignment: bool = ..., out: str = ..., progress: Progress = None) -> Data:
     """Register a source cloud onto a target (descriptors, RANSAC, ICP): the moved source and T.json
 
     descriptor = 'fpfh': Local descriptor matched for the global alignment (PFH: 125 bins, slower)
-    icp = 'plane': ICP error: point-to-point or point-to-plane
-    voxel_in_spacings = 2.0: Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) (mean spacings, [0, inf))
-    radius_in_spacings = 10.0: Descriptor radius, in spacings of the downsample (the voxel cell) (mean spacings, (0, inf))
-    ransac_distance_in_spacings = 1.5: A descriptor match is a RANSAC inlier within this distance (downsample spacings) (mean spacings, (0, inf))
-    icp_distance_in_spacings = 3.0: ICP pairs farther apart than this are rejected (spacings of every point) (mean spacings, (0, inf))
-    max_normal_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
-    iterations = 50: ICP iterations at most (coarse and fine each) ([1, inf))
+    radius = '10sp': Descriptor radius (in spacings: of the downsample, the voxel cell) ((0, inf))
+    voxel = '2sp': Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) ([0, inf))
+    ransac_distance = '1.5sp': A descriptor match is a RANSAC inlier within this distance (in spacings: of the downsample) ((0, inf))
     ransac_iterations = 100000: RANSAC trials at most ([1, inf))
     confidence = 0.999: RANSAC stops once a better model would have been found with this probability ((0, 1))
     seed = 42: Random seed of RANSAC ([0, inf))
-    normal_neighbors = 30: k of the normals estimated for a cloud without any (points, [3, inf))
+    icp = 'plane': ICP error: point-to-point or point-to-plane
+    icp_distance = '3sp': ICP pairs farther apart than this are rejected (in spacings: of every point) ((0, inf))
+    max_normal_angle_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
+    iterations = 50: ICP iterations at most (coarse and fine each) ([1, 100000])
+    normals_k = 30: Neighbours for normals when the input has none (points, [3, inf))
     min_fitness = 0.1: Below this final fitness the clouds are taken as not overlapping (exit 3) ([0, 1])
     global_alignment = True: Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)
     out = '': Write the transform as a T.json file (empty: none; the record holds it too)
     """
 
-def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] = ..., refine: bool = ..., min_overlap: float = ..., descriptor: Literal['fpfh', 'pfh'] = ..., icp: Literal['point', 'plane'] = ..., voxel_in_spacings: float = ..., radius_in_spacings: float = ..., ransac_distance_in_spacings: float = ..., icp_distance_in_spacings: float = ..., max_normal_deg: float = ..., iterations: int = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., normal_neighbors: int = ..., min_fitness: float = ..., global_alignment: bool = ..., progress: Progress = None) -> PointCloud:
+def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] = ..., refine: bool = ..., min_overlap: float = ..., descriptor: Literal['fpfh', 'pfh'] = ..., radius: float | str = ..., voxel: float | str = ..., ransac_distance: float | str = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., icp: Literal['point', 'plane'] = ..., icp_distance: float | str = ..., max_normal_angle_deg: float = ..., iterations: int = ..., normals_k: int = ..., min_fitness: float = ..., global_alignment: bool = ..., progress: Progress = None) -> PointCloud:
     """Register several scans into the first one's frame and merge them (field scan)
 
     mode = 'chain': Register each scan to the first, or to the one before it
     refine = True: Refine all poses together over every overlapping pair (pose graph)
     min_overlap = 0.2: Share of a scan within the ICP distance of another for the pair to join the refinement ((0, 1])
     descriptor = 'fpfh': Local descriptor matched for the global alignment (PFH: 125 bins, slower)
-    icp = 'plane': ICP error: point-to-point or point-to-plane
-    voxel_in_spacings = 2.0: Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) (mean spacings, [0, inf))
-    radius_in_spacings = 10.0: Descriptor radius, in spacings of the downsample (the voxel cell) (mean spacings, (0, inf))
-    ransac_distance_in_spacings = 1.5: A descriptor match is a RANSAC inlier within this distance (downsample spacings) (mean spacings, (0, inf))
-    icp_distance_in_spacings = 3.0: ICP pairs farther apart than this are rejected (spacings of every point) (mean spacings, (0, inf))
-    max_normal_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
-    iterations = 50: ICP iterations at most (coarse and fine each) ([1, inf))
+    radius = '10sp': Descriptor radius (in spacings: of the downsample, the voxel cell) ((0, inf))
+    voxel = '2sp': Cell of the voxel downsample the global alignment and coarse ICP work on (0: every point) ([0, inf))
+    ransac_distance = '1.5sp': A descriptor match is a RANSAC inlier within this distance (in spacings: of the downsample) ((0, inf))
     ransac_iterations = 100000: RANSAC trials at most ([1, inf))
     confidence = 0.999: RANSAC stops once a better model would have been found with this probability ((0, 1))
     seed = 42: Random seed of RANSAC ([0, inf))
-    normal_neighbors = 30: k of the normals estimated for a cloud without any (points, [3, inf))
+    icp = 'plane': ICP error: point-to-point or point-to-plane
+    icp_distance = '3sp': ICP pairs farther apart than this are rejected (in spacings: of every point) ((0, inf))
+    max_normal_angle_deg = 45.0: ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP) (degrees, [0, 180])
+    iterations = 50: ICP iterations at most (coarse and fine each) ([1, 100000])
+    normals_k = 30: Neighbours for normals when the input has none (points, [3, inf))
     min_fitness = 0.1: Below this final fitness the clouds are taken as not overlapping (exit 3) ([0, 1])
     global_alignment = True: Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)
     """
 
-def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float = ..., radius_in_spacings: float = ..., types: str = ..., epsilon: float = ..., epsilon_in_spacings: float = ..., cluster_epsilon: float = ..., cluster_in_spacings: float = ..., max_normal_deg: float = ..., probability: float = ..., band_in_epsilons: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:
+def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 'hk'] = ..., k: int = ..., max_angle_deg: float = ..., max_variation: float = ..., use_features: bool = ..., min_points: int = ..., radius: float | str = ..., types: str | Sequence[str] = ..., epsilon: float | str = ..., cluster_epsilon: float | str = ..., max_normal_angle_deg: float = ..., probability: float = ..., band_in_epsilons: float = ..., seed: int = ..., normals_k: int = ..., progress: Progress = None) -> Data:
     """Split the points into segments: field "segment" (-1 unassigned), by region growing, Euclidean clusters, RANSAC primitives or HK surface type
 
     method = 'region': one of region, euclidean, ransac, hk
-    k = 16: Neighbours per point (the graph's edges) ([3, inf))
+    k = 16: Neighbours per point (the graph's edges) (points, [3, inf))
     max_angle_deg = 8.0: Largest angle between neighbouring normals in one segment (degrees, (0, 90])
     max_variation = 0.05: Points of higher surface variation join a segment but do not extend it ([0, 0.3333333333333333])
     use_features = True: Feature points (field "feature" non-zero) do not extend a segment
-    min_points = 10: Fewest points of a segment; smaller ones are unassigned ([1, inf))
-    radius = 0.0: Cluster distance; 0: radius_in_spacings x mean spacing (cloud units, [0, inf))
-    radius_in_spacings = 3.0: Cluster distance when radius is 0 (mean spacings, (0, inf))
+    min_points = 10: Fewest points of a segment; smaller ones are unassigned (points, [1, inf))
+    radius = '3sp': Cluster distance ((0, inf))
     types = 'plane,sphere,cylinder,cone': Primitive types to detect, comma-separated: plane, sphere, cylinder, cone, torus
-    epsilon = 0.0: A candidate's score counts the points this close; 0: epsilon_in_spacings x mean spacing (cloud units, [0, inf))
-    epsilon_in_spacings = 1.0: Scoring distance when epsilon is 0 (mean spacings, (0, inf))
-    cluster_epsilon = 0.0: Connectivity grid cell; 0: cluster_in_spacings x mean spacing (cloud units, [0, inf))
-    cluster_in_spacings = 3.0: Connectivity cell when cluster_epsilon is 0 (mean spacings, (0, inf))
-    max_normal_deg = 25.0: Largest angle between a point's normal and the primitive's (degrees, (0, 90))
+    epsilon = '1sp': A candidate's score counts the points this close ((0, inf))
+    cluster_epsilon = '3sp': Connectivity grid cell ((0, inf))
+    max_normal_angle_deg = 25.0: Largest angle between a point's normal and the primitive's (degrees, (0, 90))
     probability = 0.01: Accepted chance of missing a primitive of min_points ((0, 1))
     band_in_epsilons = 3.0: A found primitive takes the points within this many epsilons of its refit (epsilons, [1, inf))
     seed = 42: Random seed ([0, inf))
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     """
 
-def boundary(cloud: Data, /, *, k: int = ..., min_gap_deg: float = ..., alpha: float = ..., alpha_in_spacings: float = ..., simplify_in_spacings: float = ..., offset_in_spacings: float = ..., max_rms_in_spacings: float = ..., min_points: int = ..., outlines: str = ..., crs: str = ..., progress: Progress = None) -> Data:
+def boundary(cloud: Data, /, *, k: int = ..., min_gap_deg: float = ..., alpha: float | str = ..., simplify_in_spacings: float = ..., offset_in_spacings: float = ..., max_rms_in_spacings: float = ..., min_points: int = ..., outlines: str = ..., crs: str = ..., progress: Progress = None) -> Data:
     """Boundary points (field "boundary", angular gap) and alpha-shape outlines of planar segments, holes included
 
-    k = 30: Neighbours per point of the angular-gap test ([4, inf))
+    k = 30: Neighbours per point of the angular-gap test (points, [4, inf))
     min_gap_deg = 90.0: A point is on the boundary when its neighbours leave a wider gap (degrees, (0, 360))
-    alpha = 0.0: Alpha radius of the outlines; 0: alpha_in_spacings x mean spacing (cloud units, [0, inf))
-    alpha_in_spacings = 5.0: Alpha radius when alpha is 0 (mean spacings, (0, inf))
+    alpha = '5sp': Alpha radius of the outlines ((0, inf))
     simplify_in_spacings = 2.0: Douglas-Peucker tolerance of the loops (0: none) (mean spacings, [0, inf))
     offset_in_spacings = 1.0: Loops are moved this far away from the points (outer out, holes in) (mean spacings, [0, inf))
     max_rms_in_spacings = 0.5: A segment is planar when its RMS distance to its plane is at most this (mean spacings, [0, inf))
-    min_points = 30: Fewest points of an outlined segment ([3, inf))
+    min_points = 30: Fewest points of an outlined segment (points, [3, inf))
     outlines = '': Write the outlines to this file (.ply, .obj, .geojson)
     crs = '': GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)
     """
 
-def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot', 'poisson'] = ..., normals_k: int = ..., k: int = ..., radius: float = ..., radius_in_spacings: float = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., depth: int = ..., full_depth: int = ..., samples_per_node: float = ..., point_weight: float = ..., boundary_condition: Literal['neumann', 'dirichlet'] = ..., confidence: bool = ..., trim_depth: float = ..., island_area_ratio: float = ..., unsupported_piece_gap: float = ..., max_iterations: int = ..., root_refinement_steps: int = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
+def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone', 'crust', 'ball-pivot', 'poisson'] = ..., normals_k: int = ..., k: int = ..., radius: float | str = ..., max_offset_in_spacings: float = ..., max_normal_angle_deg: float = ..., min_angle_deg: float = ..., max_angle_deg: float = ..., max_dihedral_deg: float = ..., max_front_angle_deg: float = ..., max_hole_perimeter_in_spacings: float = ..., cocone_angle_deg: float = ..., normal_filter_angle_deg: float = ..., sharp_edge_angle_deg: float = ..., boundary: Literal['auto', 'closed', 'open'] = ..., max_boundary_edge_in_spacings: float = ..., radii: Sequence[float] = ..., radii_in_spacings: Sequence[float] = ..., max_mean_normal_angle_deg: float = ..., depth: int = ..., full_depth: int = ..., samples_per_node: float = ..., point_weight: float = ..., boundary_condition: Literal['neumann', 'dirichlet'] = ..., weight_by_normal_length: bool = ..., trim_depth: float = ..., island_area_ratio: float = ..., unsupported_piece_gap: float = ..., root_refinement_steps: int = ..., max_iterations: int = ..., min_component_share: float = ..., region_normal_angle_deg: float = ..., region_seed_angle_deg: float = ..., progress: Progress = None) -> TriangleMesh:
     """Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson
 
     method = 'triangulate': one of triangulate, cocone, crust, ball-pivot, poisson
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
-    k = 30: At most k neighbours per point (4k within 4x the radius for points on a scan line) ([3, inf))
-    radius = 0.0: Search radius and longest edge; 0: radius_in_spacings x local spacing (cloud units, [0, inf))
-    radius_in_spacings = 3.0: Radius when radius is 0 (local spacings, (0, inf))
+    k = 30: At most k neighbours per point (4k within 4x the radius for points on a scan line) (points, [3, inf))
+    radius = '3sp': Search radius and longest edge (in spacings: each point's local spacing) (cloud units or local spacings, (0, inf))
     max_offset_in_spacings = 1.25: Ignore neighbours farther from the tangent plane (local spacings, (0, inf))
     max_normal_angle_deg = 120.0: Ignore neighbours whose normal deviates more (degrees, (0, 180])
     min_angle_deg = 5.0: Smallest inner angle of a triangle (degrees, [0, 60))
@@ -305,12 +294,12 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     samples_per_node = 1.5: Density output: the depth at which a node holds this many samples (samples, (0, inf))
     point_weight = 4.0: Screening weight alpha: pull of the surface to the samples; 0: plain Poisson ([0, inf))
     boundary_condition = 'neumann': Function on the bounding cube: zero slope (neumann) or zero value (dirichlet)
-    confidence = False: Weight each point by its normal's length
+    weight_by_normal_length = False: Weight each point by its normal's length
     trim_depth = 0.0: Remove the surface where the density is below this depth (PoissonRecon --trim, e.g. 7 at depth 10); 0: off (depth, [0, 16])
     island_area_ratio = 0.001: After trimming, remove pieces smaller than this share of the largest's area (share of area, [0, 1])
     unsupported_piece_gap = 2.0: Remove pieces whose samples per area are this far below the main surface's (outlier bubbles; each unit 4x fewer); 0: keep all (depth, [0, 16])
-    max_iterations = 8: Conjugate-gradient iterations per sparse level at most ([1, inf))
     root_refinement_steps = 1: Vertex placement per edge crossing: 0 linear, 1 quadratic through the edge midpoint (exact here), more: further false-position steps ([0, 20])
+    max_iterations = 8: Conjugate-gradient iterations per sparse level at most ([1, inf))
     min_component_share = 0.001: Remove components with fewer faces than this share of all; 0: keep all (share of faces, [0, 1])
     region_normal_angle_deg = 15.0: Flat regions: largest normal angle across an edge (degrees, (0, 180])
     region_seed_angle_deg = 30.0: Flat regions: largest normal angle to the region's seed face; 180: off (degrees, (0, 180])
@@ -320,33 +309,29 @@ def quality(mesh: TriangleMesh, /, *, progress: Progress = None) -> TriangleMesh
     """Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume
     """
 
-def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., align: bool = ..., align_max_distance: float = ..., align_iterations: int = ..., progress: Progress = None) -> PointCloud:
+def evaluate(mesh: TriangleMesh, reference: Data, /, *, tolerance: float = ..., bins: int = ..., percentiles: Sequence[float] = ..., sign: Literal['auto', 'pseudo-normal', 'winding-number', 'unsigned'] = ..., max_distance: float = ..., samples: int = ..., seed: int = ..., region_field: str = ..., allow_far: bool = ..., align: bool = ..., align_max_distance: float | str = ..., align_iterations: int = ..., progress: Progress = None) -> PointCloud:
     """Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality
 
     tolerance = 0.0: Share within +-tolerance is reported; 0: the reference's mean spacing (cloud units, [0, inf))
-    sign = 'auto': How the side is decided: auto picks pseudo-normals, the winding number, or unsigned
-    max_distance = 0.0: Points farther are left out of the statistics; 0: no limit (cloud units, [0, inf))
     bins = 0: Histogram bins; 0: from the data ([0, 10000])
     percentiles = [1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0]: Percentiles of the signed deviation (percent, [0, 100])
-    samples = 100000: Points sampled area-uniformly on the mesh for the mesh-to-reference distance ([1, 1000000000])
+    sign = 'auto': How the side is decided: auto picks pseudo-normals, the winding number, or unsigned
+    max_distance = 0.0: Points farther are left out of the statistics; 0: no limit (cloud units, [0, inf))
+    samples = 100000: Points sampled area-uniformly on the mesh for the mesh-to-reference distance (points, [1, 1000000000])
     seed = 3: Seed of the sampling ([0, inf))
     region_field = '': Field with region labels for a per-region breakdown; default segment or region when present
     allow_far = False: Measure even when the reference lies farther from the mesh than their size
     align = False: Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported
-    align_max_distance = 0.0: Pairs farther apart are ignored while aligning; 0: 10 x the reference's mean spacing (cloud units, [0, inf))
+    align_max_distance = '10sp': Pairs farther apart are ignored while aligning ((0, inf))
     align_iterations = 50: ICP iterations at most while aligning ([1, 100000])
     """
 
-def render(data: Data, /, filename: Path, *, size: str = ..., view: Literal['front', 'side', 'top', 'iso'] = ..., field: str = ..., diverging: bool = ..., range: Sequence[float] = ..., tolerance: float = ..., unit: str = ..., legend: bool = ..., title: str = ..., flat: bool = ..., wireframe: bool = ..., point_size: float = ..., eye_dome: bool = ..., supersample: int = ..., eye: Sequence[float] = ..., target: Sequence[float] = ..., up: Sequence[float] = ..., fov_deg: float = ..., progress: Progress = None) -> dict[str, Any]:
+def render(data: Data, /, filename: Path, *, size: str = ..., view: Literal['front', 'side', 'top', 'iso'] = ..., field: str = ..., legend: bool = ..., title: str = ..., flat: bool = ..., wireframe: bool = ..., point_size: float = ..., eye_dome: bool = ..., supersample: int = ..., diverging: bool = ..., range: Sequence[float] = ..., tolerance: float = ..., unit: str = ..., eye: Sequence[float] = ..., target: Sequence[float] = ..., up: Sequence[float] = ..., fov_deg: float = ..., progress: Progress = None) -> dict[str, Any]:
     """Draw a PNG picture of a cloud or mesh: shaded, coloured by a field with its legend, auto-framed views
 
     size = '1024x768': Picture size in pixels
     view = 'iso': Auto-framed orthographic view (z up): front, side, top or iso
     field = '': Colour by this field (or x, y, z); default RGB when present, else plain
-    diverging = False: Use the diverging (blue-white-red) map for any field
-    range = []: Colour map range MIN,MAX (default from the data)
-    tolerance = 0.0: Diverging map: values within +-tolerance are green (0: no band) (field units, [0, inf))
-    unit = '': Unit shown on the legend
     legend = True: Draw the colour bar with its values
     title = '': Text at the top left
     flat = False: Meshes: flat shading (one normal per face)
@@ -354,6 +339,10 @@ def render(data: Data, /, filename: Path, *, size: str = ..., view: Literal['fro
     point_size = 0.0: Splat diameter; 0: from the projected density (pixels, [0, inf))
     eye_dome = True: Shade splats by eye-dome lighting
     supersample = 3: Samples per pixel along each axis (anti-aliasing) ([1, 4])
+    diverging = False: Use the diverging (blue-white-red) map for any field
+    range = []: Colour map range MIN,MAX (default from the data)
+    tolerance = 0.0: Diverging map: values within +-tolerance are green (0: no band) (field units, [0, inf))
+    unit = '': Unit shown on the legend
     eye = []: Camera position: a perspective view instead of the auto-framed one (cloud units)
     target = []: Point the camera looks at (default the data's centre) (cloud units)
     up = [0.0, 0.0, 1.0]: Camera up direction

@@ -153,7 +153,7 @@ const FieldTable<RadiusOutlierParams>& RadiusOutlierParams::fields() {
   static const FieldTable<RadiusOutlierParams> table = [] {
     using P = RadiusOutlierParams;
     FieldTable<P> t;
-    t.integer("min_neighbours", &P::min_neighbours, "Keep points with at least this many others within the radius").at_least(1).unit("points");
+    t.integer("min_neighbors", &P::min_neighbours, "Keep points with at least this many others within the radius").at_least(1).unit("points").was("min_neighbours");
     t.length("radius", &P::radius, "Search radius").positive().was("radius_in_spacings");
     return t;
   }();

@@ -152,7 +152,7 @@ const FieldTable<BilateralParams>& BilateralParams::fields() {
     using P = BilateralParams;
     FieldTable<P> t;
     t.length("radius", &P::radius, "Neighbourhood radius").positive().was("radius_in_spacings");
-    t.integer("max_neighbours", &P::max_neighbours, "At most this many nearest points within the radius").at_least(3).unit("points");
+    t.integer("max_neighbors", &P::max_neighbours, "At most this many nearest points within the radius").at_least(3).unit("points").was("max_neighbours");
     t.length("height_sigma", &P::height_sigma, "Range sigma along the normal").positive().was("height_sigma_in_spacings");
     t.integer("iterations", &P::iterations, "Position passes").at_least(1);
     return t;

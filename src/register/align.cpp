@@ -431,7 +431,7 @@ const FieldTable<AlignParams>& AlignParams::fields() {
     t.number("edge_length_ratio", &P::edge_length_ratio, "Pruning: the two triangles' edge lengths agree within this ratio")
         .range(0.0, 1.0, true, false)
         .internal();
-    t.number("ransac_max_normal_deg", &P::max_normal_deg, "Pruning: matched normals agree within this angle; 180 disables the check")
+    t.number("ransac_max_normal_angle_deg", &P::max_normal_deg, "Pruning: matched normals agree within this angle; 180 disables the check")
         .unit("degrees")
         .range(0.0, 180.0, true, false)
         .internal();

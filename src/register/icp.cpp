@@ -50,9 +50,10 @@ const FieldTable<IcpParams>& IcpParams::fields() {
     t.length("icp_distance", &P::max_distance, "ICP pairs farther apart than this are rejected (in spacings: of every point)")
         .positive()
         .was("icp_distance_in_spacings");
-    t.number("max_normal_deg", &P::max_normal_deg, "ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP)")
+    t.number("max_normal_angle_deg", &P::max_normal_deg, "ICP pairs whose normals differ more are rejected; 180 disables the check (plain ICP)")
         .unit("degrees")
-        .range(0.0, 180.0);
+        .range(0.0, 180.0)
+        .was("max_normal_deg");
     t.integer("iterations", &P::max_iterations, "ICP iterations at most (coarse and fine each)").range(1, 100000);
     t.number("relative_fitness", &P::relative_fitness, "Converged when the number of pairs changes by less than this relative amount")
         .non_negative()
@@ -80,8 +81,8 @@ RegistrationResult icp(const PointCloud& source, const PointCloud& target, const
   const bool check_normals = params.max_normal_deg < 180.0;
   if (plane && !target.has_normals()) throw UsageError("icp: point-to-plane needs the target's normals (estimate them first)");
   if (check_normals && (!source.has_normals() || !target.has_normals()))
-    throw UsageError(fmt::format("icp: the normal-angle check (max_normal_deg {}) needs both clouds' normals; estimate them or set "
-                                 "max_normal_deg to 180",
+    throw UsageError(fmt::format("icp: the normal-angle check (max_normal_angle_deg {}) needs both clouds' normals; estimate them or set "
+                                 "max_normal_angle_deg to 180",
                                  params.max_normal_deg));
   source.validate();
   target.validate();

@@ -25,7 +25,7 @@ const FieldTable<RegisterPairParams>& RegisterPairParams::fields() {
         .was("voxel_in_spacings");
     t.nested(&P::align, AlignParams::fields());
     t.nested(&P::icp, IcpParams::fields());
-    t.integer("normal_neighbors", &P::normal_neighbors, "k of the normals estimated for a cloud without any").at_least(3).unit("points");
+    t.integer("normals_k", &P::normal_neighbors, "Neighbours for normals when the input has none").at_least(3).unit("points").was("normal_neighbors");
     t.number("min_fitness", &P::min_fitness, "Below this final fitness the clouds are taken as not overlapping (exit 3)").range(0.0, 1.0);
     t.boolean("global_alignment", &P::global,
               "Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)");

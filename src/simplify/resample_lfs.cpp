@@ -141,7 +141,7 @@ const FieldTable<LfsParams>& LfsParams::fields() {
     t.nested(&P::target, SimplifyTarget::fields());
     t.integer("k", &P::k, "Neighbours for normals, variation and feature size").at_least(3).unit("points");
     t.number("adaptivity", &P::adaptivity, "Feature size clamped to [median/a, median*a]").at_least(1.0);
-    t.integer("fill_neighbours", &P::fill_neighbours, "kNN edges tested for gaps when filling").at_least(1);
+    t.integer("fill_neighbors", &P::fill_neighbours, "kNN edges tested for gaps when filling").at_least(1).was("fill_neighbours");
     return t;
   }();
   return table;

@@ -468,7 +468,7 @@ TEST(Outliers, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { remove_statistical_outliers(cloud, {.k = 0}); }, "remove_statistical_outliers: k must be >= 1, got 0");
   expect_error<UsageError>([&] { remove_statistical_outliers(cloud, {.k = 5, .std_ratio = 0.0}); }, "std_ratio must be > 0, got 0");
   expect_error<UsageError>([&] { remove_statistical_outliers(cloud, {.k = 5, .std_ratio = NAN}); }, "std_ratio must be > 0");
-  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.min_neighbours = 0}); }, "min_neighbours must be >= 1, got 0");
+  expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.min_neighbours = 0}); }, "min_neighbors must be >= 1, got 0");
   expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius = Length::cloud(-1.0)}); }, "remove_radius_outliers: radius must be > 0, got -1");
   expect_error<UsageError>([&] { remove_radius_outliers(cloud, {.radius = Length::spacings(0.0)}); }, "radius must be > 0, got 0sp");
   expect_error<UsageError>([&] { remove_ransac_outliers(cloud, {.k = 3}); }, "remove_ransac_outliers: k must be >= 4, got 3");

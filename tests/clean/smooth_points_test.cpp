@@ -183,7 +183,7 @@ TEST(Smoothing, BadParametersAreUsageErrors) {
   PointCloud cloud = test::sample_sphere(200);
   expect_error<UsageError>([&] { smooth_bilateral(cloud, {.radius = Length::cloud(-1.0)}); }, "smooth_bilateral: radius must be > 0, got -1");
   expect_error<UsageError>([&] { smooth_bilateral(cloud, {.radius = Length::spacings(0.0)}); }, "radius must be > 0, got 0sp");
-  expect_error<UsageError>([&] { smooth_bilateral(cloud, {.max_neighbours = 2}); }, "max_neighbours must be >= 3, got 2");
+  expect_error<UsageError>([&] { smooth_bilateral(cloud, {.max_neighbours = 2}); }, "max_neighbors must be >= 3, got 2");
   expect_error<UsageError>([&] { smooth_bilateral(cloud, {.height_sigma = Length::cloud(-2.0)}); }, "height_sigma must be > 0, got -2");
   expect_error<UsageError>([&] { smooth_bilateral(cloud, {.iterations = 0}); }, "iterations must be >= 1, got 0");
   expect_error<UsageError>([&] { smooth_trilateral(cloud, {.sharpness_angle_deg = 0.0}); },

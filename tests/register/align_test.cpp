@@ -249,7 +249,7 @@ TEST(AlignGlobal, BadParametersAndInputsThrowUsageError) {
   expect_usage(p, "edge_length_ratio must be in (0, 1]");
   p = {};
   p.max_normal_deg = 0.0;
-  expect_usage(p, "ransac_max_normal_deg must be in (0, 180]");
+  expect_usage(p, "ransac_max_normal_angle_deg must be in (0, 180]");
   p = {};
   p.max_iterations = 0;
   expect_usage(p, "ransac_iterations must be >= 1");

@@ -399,7 +399,7 @@ TEST(Icp, RejectsBadParametersAndMissingNormals) {
   EXPECT_EQ(message_of(p, cloud, cloud), "icp: icp_distance must be > 0, got 0sp");
   p = {};
   p.max_normal_deg = 181.0;
-  EXPECT_NE(message_of(p, cloud, cloud).find("max_normal_deg"), std::string::npos);
+  EXPECT_NE(message_of(p, cloud, cloud).find("max_normal_angle_deg"), std::string::npos);
   p = {};
   p.max_iterations = 0;
   EXPECT_EQ(message_of(p, cloud, cloud), "icp: iterations must be in [1, 100000], got 0");

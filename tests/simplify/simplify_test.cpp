@@ -645,7 +645,7 @@ TEST(Simplify, BadParametersAreUsageErrors) {
   expect_error<UsageError>([&] { resample_lfs(sphere, lfs); }, "adaptivity must be >= 1, got 0.5");
   lfs = {};
   lfs.fill_neighbours = 0;
-  expect_error<UsageError>([&] { resample_lfs(sphere, lfs); }, "fill_neighbours must be >= 1, got 0");
+  expect_error<UsageError>([&] { resample_lfs(sphere, lfs); }, "fill_neighbors must be >= 1, got 0");
   lfs = {};
   lfs.target.count = 400;  // growing is allowed for resampling
   EXPECT_NO_THROW(resample_lfs(sphere, lfs));
