@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # pointsurf set-up and entry point on Debian 12 (bookworm).
-#   ./pointsurf.sh demo    install missing packages, build (Release), run the demo pipeline
-#   ./pointsurf.sh test    install missing packages, build (Release), run the test suite
+#   ./pointsurf.sh demo    install missing packages, build the CLI (Release), run the demo pipeline
+#   ./pointsurf.sh test    install missing packages, build everything (Release), run the test suite
 #   ./pointsurf.sh test-sanitize  build in build-asan/ with AddressSanitizer and
 #                          UndefinedBehaviorSanitizer (RelWithDebInfo), run the test suite under them
-#   ./pointsurf.sh build   install missing packages and build only
+#   ./pointsurf.sh build   install missing packages and build everything only
 #   ./pointsurf.sh bench   build, then run bench/run_bench.sh (needs python3-open3d, pcl-tools)
+# demo, test, build and bench share one configuration of build/ (tests and the Python module on), so
+# `test` after `demo` compiles only the tests and the module, and `pip install ./python` reuses it.
 # A second call rebuilds only what changed. Set BUILD_DIR to build elsewhere (default: build/).
 set -euo pipefail
 
@@ -25,10 +27,12 @@ BUILD_PACKAGES=(
 TEST_PACKAGES=(chromium python3)
 # The sanitizer runtimes of Debian's GCC 12 (g++ pulls them in; named so a slimmed machine gets them).
 SANITIZE_PACKAGES=(libasan8 libubsan1)
-# Node.js (Debian nodejs, npm; installed in build() when the commands are missing) runs laz-perf and
+# Node.js (Debian nodejs, npm; installed by the tests when the commands are missing) runs laz-perf and
 # web-e57 (npm, installed into $BUILD_DIR/npm) to cross-check pointsurf's LAZ and E57.
-# The Python module (python/): pybind11, Debian's Python with numpy, pytest; setuptools and venv for pip.
-PYTHON_PACKAGES=(pybind11-dev python3-dev python3-numpy python3-pytest python3-setuptools python3-venv)
+# The Python module (python/): pybind11 and Debian's Python headers to configure and build it (every
+# configuration of build/ has it, demo's too); numpy, pytest, setuptools and venv to test it and for pip.
+PYTHON_BUILD_PACKAGES=(pybind11-dev python3-dev)
+PYTHON_PACKAGES=(python3-numpy python3-pytest python3-setuptools python3-venv)
 BENCH_PACKAGES=(libbenchmark-dev python3-open3d python3-numpy pcl-tools libcgal-demo libosmesa6-dev libpcl-dev)
 
 log() { printf '\033[1mpointsurf.sh:\033[0m %s\n' "$*" >&2; }
@@ -53,28 +57,58 @@ install_missing() {
   "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
+# The one configuration of build/ for demo, test, build and bench: the library, the CLI, the tests
+# and the Python module (for Debian's /usr/bin/python3). The library is always built -fPIC
+# (CMakeLists.txt), so its objects do not depend on which of these targets are built.
+CONFIG_OPTIONS=(-DCMAKE_BUILD_TYPE=Release -DPOINTSURF_BUILD_TESTS=ON -DPOINTSURF_BUILD_PYTHON=ON
+                -DPython3_EXECUTABLE=/usr/bin/python3)
+
+# True when $BUILD_DIR's CMake cache holds every -DNAME=VALUE of "$@".
+configured_with() {
+  local cache="$BUILD_DIR/CMakeCache.txt" opt name line
+  [ -f "$cache" ] || return 1
+  for opt in "$@"; do
+    opt="${opt#-D}"; name="${opt%%=*}"
+    line="$(grep -m1 "^${name}:" "$cache")" || return 1
+    [ "${line#*=}" = "${opt#*=}" ] || return 1
+  done
+}
+
+# configure [-DNAME=VALUE...]: installs the build packages and configures $BUILD_DIR with the
+# options given, unless its cache holds them already (then CMake is not rerun here; the build
+# reruns it when a CMakeLists.txt changed).
+configure() {
+  install_missing "${BUILD_PACKAGES[@]}" "${PYTHON_BUILD_PACKAGES[@]}"
+  configured_with "$@" && return 0
+  local generator=()
+  if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; then generator=(-G Ninja); fi
+  cmake -S "$ROOT" -B "$BUILD_DIR" "${generator[@]}" "$@"
+}
+
+# build [-DNAME=VALUE...]: configures build/ (CONFIG_OPTIONS, then the options given) and builds
+# every target.
 build() {
-  # Debian's nodejs and npm only where the commands are missing: a machine may carry another
-  # Node.js build (NodeSource's nodejs bundles npm and conflicts with Debian's npm package).
-  local node_packages=()
+  configure "${CONFIG_OPTIONS[@]}" "$@"
+  cmake --build "$BUILD_DIR" --parallel "$JOBS"
+}
+
+# Node.js (Debian nodejs and npm, only where the commands are missing: a machine may carry another
+# Node.js build, and NodeSource's nodejs bundles npm and conflicts with Debian's npm package) and
+# the npm packages "$@" in $BUILD_DIR/npm, for the cross-checks of the tests.
+install_npm_tools() {
+  local node_packages=() pkg
   command -v node >/dev/null 2>&1 || node_packages+=(nodejs)
   command -v npm >/dev/null 2>&1 || node_packages+=(npm)
-  install_missing "${BUILD_PACKAGES[@]}" "${node_packages[@]}"
-  local generator=()
-  if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
-    command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
-    cmake -S "$ROOT" -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
-      -DPOINTSURF_BUILD_TESTS=ON "$@"
-  elif [ $# -gt 0 ]; then
-    cmake -S "$ROOT" -B "$BUILD_DIR" "$@"
-  fi
-  cmake --build "$BUILD_DIR" --parallel "$JOBS"
-  [ -d "$BUILD_DIR/npm/node_modules/laz-perf" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund laz-perf@0.0.7 >/dev/null 2>&1 ||
-    log "could not install laz-perf from npm (no network?): the LAZ cross-check will skip"
+  install_missing "${node_packages[@]}"
+  for pkg in "$@"; do
+    [ -d "$BUILD_DIR/npm/node_modules/${pkg%@*}" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund "$pkg" >/dev/null 2>&1 ||
+      log "could not install ${pkg%@*} from npm (no network or no npm): its cross-check will skip"
+  done
 }
 
 demo() {
-  build
+  configure "${CONFIG_OPTIONS[@]}"
+  cmake --build "$BUILD_DIR" --parallel "$JOBS" --target pointsurf_cli  # the CLI only
   local cli="$BUILD_DIR/pointsurf" out="$ROOT/out"
   mkdir -p "$out"
   cd "$ROOT"  # the example pipelines name data/ and out/ relative to the repository
@@ -98,10 +132,10 @@ demo() {
 
 run_tests() {
   install_missing "${TEST_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
-  build -DPOINTSURF_BUILD_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
-  # web-e57 (npm) reads pointsurf's E57 in tests/io/e57_test.cpp; the test skips without it.
-  [ -d "$BUILD_DIR/npm/node_modules/web-e57" ] || npm install --prefix "$BUILD_DIR/npm" --no-audit --no-fund web-e57@1.2.0 >/dev/null 2>&1 ||
-    log "could not install web-e57 from npm (no network or no npm): the E57 cross-check will skip"
+  build
+  # laz-perf decodes pointsurf's LAZ (tests/io/lazperf_check.sh), web-e57 reads its E57
+  # (tests/io/e57_test.cpp); each check skips without its package.
+  install_npm_tools laz-perf@0.0.7 web-e57@1.2.0
   cd "$BUILD_DIR"
   ctest --output-on-failure --parallel "$JOBS" --timeout 900
   # The Python module from this build; pytest exits 5 (failing the script) when it collects nothing.
@@ -119,10 +153,13 @@ SANITIZE_EXCLUDE=(
 run_sanitized_tests() {
   install_missing "${SANITIZE_PACKAGES[@]}"
   BUILD_DIR="${SANITIZE_BUILD_DIR:-$ROOT/build-asan}"
-  build -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  # Without the Python module: an ASan-built extension cannot load into Debian's python3.
+  configure -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPOINTSURF_BUILD_TESTS=ON -DPOINTSURF_BUILD_PYTHON=OFF \
     "-DCMAKE_CXX_FLAGS=$SANITIZE_FLAGS" \
     "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" \
     "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined"
+  cmake --build "$BUILD_DIR" --parallel "$JOBS"
+  install_npm_tools laz-perf@0.0.7
   cd "$BUILD_DIR"
   local exclude=()
   if [ ${#SANITIZE_EXCLUDE[@]} -gt 0 ]; then
