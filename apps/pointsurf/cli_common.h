@@ -80,7 +80,12 @@ struct Command {
   std::string name, summary;
   std::function<int(const std::vector<std::string>& args)> run;
   std::function<std::string()> help;
+  /// How the command writes an error (empty: Error::what(), the pipeline's wording).
+  std::function<std::string(const Error&)> words;
 };
+/// An error in a one-stage command's words: no stage prefix (the command is the stage), and a
+/// parameter key written as its option ("--k: 0 is out of range [1, inf)").
+std::string cli_words(const Error& e);
 std::vector<Command> stage_commands();
 Command info_command();
 Command convert_command();

@@ -43,20 +43,15 @@ int run_convert(const std::vector<std::string>& args) {
   StepText read{"read", "in", {}, read_params}, write{"write", "out", {}, write_params};
   read.params.emplace_back("filename", positionals[0]);
   write.params.emplace_back("filename", positionals[1]);
-  Pipeline pipeline;
-  try {
-    pipeline = build_pipeline({read, write}, "convert");
-  } catch (const UsageError& e) {
-    std::string m = e.what();
-    if (const std::size_t at = m.find("): "); at != std::string::npos) m = m.substr(at + 3);
-    throw UsageError(m);
-  }
+  const Pipeline pipeline = build_pipeline({read, write}, "convert");
   run_with_report(pipeline, common, "convert");
   return 0;
 }
 
 }  // namespace
 
-Command convert_command() { return {"convert", "Convert between formats; the output format follows OUT's extension", run_convert, convert_help}; }
+Command convert_command() {
+  return {"convert", "Convert between formats; the output format follows OUT's extension", run_convert, convert_help, cli_words};
+}
 
 }  // namespace pointsurf::cli

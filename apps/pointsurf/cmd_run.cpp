@@ -49,7 +49,24 @@ int run_run(const std::vector<std::string>& args) {
   if (!in) throw UsageError(fmt::format("{}: cannot read the pipeline", file));
   std::stringstream text;
   text << in.rdbuf();
-  const Pipeline pipeline = parse_pipeline(text.str(), file, sets);
+  Pipeline pipeline;
+  try {
+    pipeline = parse_pipeline(text.str(), file, sets);
+  } catch (const Error& e) {
+    // The report is written also when the pipeline is refused before any work.
+    if (!common.report_path.empty()) {
+      RunReport failed;
+      failed.command = "run";
+      failed.origin = file;
+      failed.fail(e);
+      try {
+        write_text_atomically(common.report_path, report_json(failed));
+      } catch (const Error&) {
+        // The pipeline's own error matters more.
+      }
+    }
+    throw;
+  }
   if (!html.empty()) check_output_path(html, common.no_clobber, "html");
   std::string report;
   run_with_report(pipeline, common, "run", &report);

@@ -4,7 +4,6 @@
 // [read IN, STAGE, write OUT], so the command and the pipeline give the same output.
 #include <algorithm>
 #include <map>
-#include <regex>
 #include <set>
 
 #include <fmt/format.h>
@@ -47,13 +46,16 @@ std::string help_row(const std::string& left, const std::string& text) {
   return out + "\n";
 }
 
-// A stage measuring its input against a reference (evaluate): on the command line the
-// reference is a file, read like the input.
-bool takes_reference(const StageSpec& s) { return s.consumes.size() == 2 && s.consumes[1].name == "reference"; }
+// The command's shape is the stage's declared CommandShape (pointsurf/pipeline/stage.h):
+// Compare takes the reference as a file, read like the input.
+bool takes_reference(const StageSpec& s) { return s.shape == CommandShape::Compare; }
 
-// A stage of two inputs of equal standing (register: source, target): `STAGE A B [--out FILE]
+// Pair: two inputs of equal standing (register: source, target): `STAGE A B [--out FILE]
 // [--apply OUT]`, its own file (T.json) under --out and its product written by --apply.
-bool takes_pair(const StageSpec& s) { return s.consumes.size() == 2 && !takes_reference(s) && !s.measures; }
+bool takes_pair(const StageSpec& s) { return s.shape == CommandShape::Pair; }
+
+// Picture: `STAGE IN OUT` where the stage writes OUT itself (render: a PNG).
+bool own_file(const StageSpec& s) { return s.shape == CommandShape::Picture; }
 
 // One help line per parameter declaration.
 std::string param_line(const std::string& stage, const ParamSpec& p, bool show_methods) {
@@ -76,17 +78,9 @@ std::string param_line(const std::string& stage, const ParamSpec& p, bool show_m
 }
 
 std::string stage_help(const StageSpec& s) {
-  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
-  const bool own_file = !s.writes_param.empty() && !takes_pair(s);
-  auto upper = [](std::string t) {
-    for (char& c : t) c = char(std::toupper(static_cast<unsigned char>(c)));
-    return t;
-  };
-  std::string out = takes_pair(s) ? fmt::format("pointsurf {} {} {} [{} {}] [--apply OUT] [options]\n{}\n", s.name, upper(s.consumes[0].name),
-                                                upper(s.consumes[1].name), dashed(s.writes_param), s.find_param(s.writes_param)->meta, s.summary)
-                    : own_file ? fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary) : s.measures ? fmt::format("pointsurf {} IN{} [--out FILE] [options]\n{}\n", s.name, takes_reference(s) ? " --reference FILE" : "", s.summary)
-                    : multi ? fmt::format("pointsurf {0} IN1 IN2 [IN...] OUT [options]\n   or: pointsurf {0} IN1 IN2 [IN...] --out OUT [options]\n{1}\n", s.name, s.summary)
-                               : fmt::format("pointsurf {} IN OUT [options]\n{}\n", s.name, s.summary);
+  const bool multi = s.takes_many();
+  const bool own_file = pointsurf::cli::own_file(s);
+  std::string out = command_synopsis(s) + "\n" + s.summary + "\n";
   if (!s.description.empty()) out += s.description + "\n";
   if (!s.params.empty() || !s.methods.empty()) out += "\nOptions (pipeline keys are the same with _ for -):\n";
   if (!s.methods.empty()) {
@@ -97,10 +91,10 @@ std::string stage_help(const StageSpec& s) {
   }
   for (const ParamSpec& p : s.params) {
     if (own_file && p.name == s.writes_param) continue;  // OUT
-    if (s.measures && p.name == "reference") out += help_row("--reference FILE", "The cloud or mesh to measure (required)");
+    if (s.measures() && p.name == "reference") out += help_row("--reference FILE", "The cloud or mesh to measure (required)");
     else out += param_line(s.name, p, !s.methods.empty());
   }
-  if (s.measures) out += help_row("--out FILE", "Write the result (evaluate: the reference with a field deviation)");
+  if (s.measures()) out += help_row("--out FILE", "Write the result (evaluate: the reference with a field deviation)");
   if (takes_pair(s)) out += help_row("--apply OUT", fmt::format("Write the {}'s product (the moved {})", s.name, s.consumes[0].name));
   if (multi) out += help_row("--out OUT", "The output file, when every file name given is an input");
   out += "\nInput options:\n";
@@ -118,48 +112,13 @@ std::string stage_help(const StageSpec& s) {
   return out;
 }
 
-// "stage 2 (normals): k: 2 is out of range" -> "--k: 2 is out of range": the command line's
-// words for a one-stage pipeline's message.
-std::string cli_message(const std::string& message, const StageSpec& s) {
-  static const std::regex prefix(R"(^cli: stage \d+ \((\w+)\): ([a-z_0-9]+)([:, ].*)$)");
-  std::smatch m;
-  if (std::regex_match(message, m, prefix)) {
-    const std::string stage = m[1].str(), key = m[2].str();
-    const StageSpec* owner = find_stage(stage);
-    if (owner != nullptr && (owner->find_param(key) != nullptr || key == "method")) return option_name(stage, key) + m[3].str();
-  }
-  static const std::regex bare(R"(^cli: stage \d+ \(\w+\): (.*)$)");
-  if (std::regex_match(message, m, bare)) {
-    // `key "radii" belongs to ...` -> `--radii belongs to ...`
-    static const std::regex key(R"(key \"([a-z_0-9]+)\")");
-    std::string rest = m[1].str();
-    std::smatch k;
-    if (std::regex_search(rest, k, key)) rest = k.prefix().str() + dashed(k[1].str()) + k.suffix().str();
-    return rest;
-  }
-  if (message.rfind("cli: ", 0) == 0) return message.substr(5);
-  (void)s;
-  return message;
-}
-
 using KeyValues = std::vector<std::pair<std::string, std::string>>;
 
 // Builds and runs a checked pipeline for one command, in the command line's words.
 void run_steps(const StageSpec& s, const std::vector<StepText>& steps, const CommonOptions& common) {
-  Pipeline pipeline;
-  try {
-    pipeline = build_pipeline(steps, "cli");
-  } catch (const UsageError& e) {
-    throw UsageError(cli_message(e.what(), s));
-  }
-  try {
-    run_with_report(pipeline, common, s.name);
-  } catch (const Error& e) {
-    const std::string m = cli_message(fmt::format("cli: {}", e.what()), s);
-    if (e.exit_code() == 1) throw UsageError(m);
-    if (e.exit_code() == 2) throw InputError(m);
-    throw ComputeError(m);
-  }
+  (void)s;
+  const Pipeline pipeline = build_pipeline(steps, "cli");
+  run_with_report(pipeline, common, s.name);
 }
 
 // `pointsurf evaluate MESH --reference FILE [--out FILE]`, `pointsurf quality MESH [--out FILE]`:
@@ -246,7 +205,7 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
                          stage_params.emplace_back("method", v);
                        }});
   std::string reference_file, out_file;
-  if (s.measures) {
+  if (s.measures()) {
     options.push_back({"--out", false, "FILE", [&](const std::string& v) {
                          if (!out_file.empty()) throw UsageError("--out given twice");
                          out_file = v;
@@ -260,8 +219,8 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
       seen.insert("--reference");
     }
   }
-  const bool own_file = !s.writes_param.empty() && !takes_pair(s);
-  const bool multi = !s.consumes.empty() && s.consumes.front().name == "clouds";
+  const bool own_file = pointsurf::cli::own_file(s);
+  const bool multi = s.takes_many();
   for (const ParamSpec& p : s.params)
     if (!own_file || p.name != s.writes_param) add(s.name, p, stage_params);
   std::string apply_file, multi_out;
@@ -295,8 +254,20 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
     fmt::print("{}", stage_help(s));
     return 0;
   }
-  if (s.measures) return run_measure(s, positionals, reference_file, out_file, stage_params, read_params, write_params, common);
-  if (takes_pair(s)) return run_pair(s, positionals, apply_file, stage_params, read_params, write_params, common);
+  switch (s.shape) {
+    case CommandShape::Compare:
+    case CommandShape::Measure:
+      return run_measure(s, positionals, reference_file, out_file, stage_params, read_params, write_params, common);
+    case CommandShape::Pair:
+      return run_pair(s, positionals, apply_file, stage_params, read_params, write_params, common);
+    case CommandShape::Read:
+    case CommandShape::Write:
+      throw UsageError(fmt::format("{} is a pipeline stage without a command (see pointsurf convert)", s.name));
+    case CommandShape::Transform:
+    case CommandShape::Merge:
+    case CommandShape::Picture:
+      break;
+  }
   if (!multi_out.empty()) positionals.push_back(multi_out);
   if (positionals.size() < (multi ? 3u : 2u) || (!multi && positionals.size() > 2))
     throw UsageError(fmt::format("expected {} OUT, got {} file name{} (see pointsurf {} --help)", multi ? "IN1 IN2 [IN...]" : "IN",
@@ -327,11 +298,25 @@ int run_stage(const StageSpec& s, const std::vector<std::string>& args) {
 
 }  // namespace
 
+// An error in the command line's words (core/error.h): no stage prefix, since the command is the
+// stage, and a parameter named as its option ("--k: 0 is out of range [1, inf)").
+std::string cli_words(const Error& e) {
+  const ErrorPlace& at = e.place();
+  const std::string& m = e.message();
+  if (!at.key.empty() && m.compare(0, at.key.size(), at.key) == 0) {
+    const StageSpec* owner = find_stage(at.stage);
+    if (owner != nullptr && (owner->find_param(at.key) != nullptr || at.key == "method"))
+      return option_name(at.stage, at.key) + m.substr(at.key.size());
+  }
+  return m;
+}
+
 std::vector<Command> stage_commands() {
   std::vector<Command> out;
   for (const StageSpec& s : registered_stages()) {
-    if (s.name == "read" || s.name == "write") continue;
-    out.push_back({s.name, s.summary, [&s](const std::vector<std::string>& args) { return run_stage(s, args); }, [&s] { return stage_help(s); }});
+    if (s.shape == CommandShape::Read || s.shape == CommandShape::Write) continue;
+    out.push_back({s.name, s.summary, [&s](const std::vector<std::string>& args) { return run_stage(s, args); }, [&s] { return stage_help(s); },
+                   cli_words});
   }
   return out;
 }

@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
       threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(n));
     return command->run(args);
   } catch (const Error& e) {
-    fmt::print(stderr, "pointsurf {}: error: {}\n", name, e.what());
+    fmt::print(stderr, "pointsurf {}: error: {}\n", name, command->words ? command->words(e) : std::string(e.what()));
     return e.exit_code();
   } catch (const std::bad_alloc&) {
     fmt::print(stderr, "pointsurf {}: error: out of memory\n", name);

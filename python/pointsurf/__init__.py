@@ -17,8 +17,8 @@ from ._pointsurf import (CancelledError, ComputeError, Error, InputError, PointC
                          UsageError, __version__)
 from ._interop import from_numpy, from_open3d, to_numpy, to_open3d
 
-#: The registry as plain data: one dict per stage (name, summary, description, consumes,
-#: produces, methods, default_method, params: [{name, type, default, unit, range, doc, ...}]).
+#: The registry as plain data: one dict per stage (name, summary, description, shape, measures,
+#: consumes, produces, methods, default_method, params: [{name, type, default, unit, range, doc, ...}]).
 STAGES = _core.stages()
 
 __all__ = ["PointCloud", "TriangleMesh", "Error", "UsageError", "InputError", "ComputeError",
@@ -78,8 +78,9 @@ def _doc(spec):
 def _make_stage(spec):
     name = spec["name"]
     slots = [slot for slot, _ in spec["consumes"]]
-    many = slots == ["clouds"]
-    takes_file = any(p["name"] == "filename" for p in spec["params"])
+    many = spec["shape"] == "merge"  # any number of clouds, given as a list or one by one
+    # read's file in, write's and render's file out (register's T.json stays a keyword)
+    takes_file = spec["shape"] in ("read", "write", "picture")
 
     def stage(*args, progress=None, **params):
         data, rest = [], list(args)

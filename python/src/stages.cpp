@@ -13,6 +13,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <array>
 #include <exception>
 #include <mutex>
 #include <optional>
@@ -81,7 +82,8 @@ py::list stage_list() {
     d["methods"] = s.methods;
     d["default_method"] = s.default_method;
     d["method_list"] = s.method_list;
-    d["measures"] = s.measures;
+    d["shape"] = command_shape_name(s.shape);
+    d["measures"] = s.measures();
     d["writes_param"] = s.writes_param;
     d["examples"] = s.examples;
     py::list params;
@@ -180,8 +182,9 @@ public:
       if (why_ == Why::Callback) {
         try {
           std::rethrow_exception(failure);
-        } catch (const ComputeError& e) {
-          throw CancelledError(e.what());  // the library names the stage; keep the kind
+        } catch (ComputeError& e) {
+          if (e.kind() == ErrorKind::Cancelled) throw;
+          throw CancelledError(e.message(), e.place());  // a stage that reworded its cancel
         }
       }
       std::rethrow_exception(failure);
@@ -205,25 +208,41 @@ private:
   std::optional<py::error_already_set> error_;
 };
 
-/// "ORIGIN: stage N (TYPE): rest" or "stage N (TYPE): rest" -> "TYPE: rest".
-std::string rename_stage(const std::string& message, const std::string& origin, std::size_t index, const std::string& type) {
-  for (const std::string& prefix : {fmt::format("{}: stage {} ({}): ", origin, index, type), fmt::format("stage {} ({}): ", index, type)})
-    if (message.rfind(prefix, 0) == 0) return type + ": " + message.substr(prefix.size());
-  return message;
+// Python's classes for the library's errors, by kind (bind_stages creates them).
+std::array<PyObject*, 4> error_classes{};
+py::handle error_class(ErrorKind kind) { return error_classes[static_cast<std::size_t>(kind)]; }
+
+/// Raises `e` in Python as its kind's class with message `text` and the error's data as
+/// attributes, None where unknown: kind, stage, stage_index, key, file, offset, message (see
+/// core/error.h). `place` is the place as the caller should see it.
+[[noreturn]] void raise_python(const Error& e, const ErrorPlace& place, const std::string& text) {
+  const py::handle cls = error_class(e.kind());
+  py::object instance = cls(text);
+  const auto text_or_none = [](const std::string& s) -> py::object { return s.empty() ? py::object(py::none()) : py::object(py::str(s)); };
+  instance.attr("kind") = error_kind_name(e.kind());
+  instance.attr("stage") = text_or_none(place.stage);
+  instance.attr("stage_index") = place.stage_index == 0 ? py::object(py::none()) : py::object(py::int_(place.stage_index));
+  instance.attr("key") = text_or_none(place.key);
+  instance.attr("file") = text_or_none(place.file);
+  instance.attr("offset") = text_or_none(place.offset);
+  instance.attr("message") = e.message();
+  PyErr_SetObject(cls.ptr(), instance.ptr());
+  throw py::error_already_set();
 }
 
+/// Runs `f`; an error of the one-stage pipeline is raised in the function's words:
+/// "TYPE: MESSAGE" (the stage's position and the pipeline's origin mean nothing to the caller).
 template <class F>
-void with_stage_messages(const std::string& origin, std::size_t index, const std::string& type, F&& f) {
+void with_stage_messages(const std::string& type, F&& f) {
   try {
     f();
-  } catch (const CancelledError& e) {
-    throw CancelledError(rename_stage(e.what(), origin, index, type));
-  } catch (const UsageError& e) {
-    throw UsageError(rename_stage(e.what(), origin, index, type));
-  } catch (const InputError& e) {
-    throw InputError(rename_stage(e.what(), origin, index, type));
-  } catch (const ComputeError& e) {
-    throw ComputeError(rename_stage(e.what(), origin, index, type));
+  } catch (const Error& e) {
+    py::gil_scoped_acquire gil;
+    ErrorPlace place = e.place();
+    place.origin.clear();
+    place.stage_index = 0;
+    if (!place.stage.empty()) place.stage = type;
+    raise_python(e, place, place.stage.empty() ? e.message() : type + ": " + e.message());
   }
 }
 
@@ -242,12 +261,12 @@ py::tuple run_stage(const std::string& name, const py::list& inputs, const std::
     steps.push_back(StepText{"read", tags.back(), {}, {{"filename", "input.ply"}}});
   }
   steps.push_back(StepText{name, "output", tags, params});
-  const bool ends = spec->name == "write" || spec->measures || !spec->writes_param.empty();
+  const bool ends = spec->shape == CommandShape::Write || spec->measures() || !spec->writes_param.empty();
   if (!ends) steps.push_back(StepText{"write", "", {"output"}, {{"filename", "output.ply"}}});
   const std::size_t index = inputs.size();
 
   Pipeline pipeline;
-  with_stage_messages(origin, index + 1, name, [&] {
+  with_stage_messages(name, [&] {
     Pipeline built = build_pipeline(steps, origin);
     pipeline.origin = origin;
     pipeline.steps.push_back(std::move(built.steps[index]));
@@ -260,7 +279,7 @@ py::tuple run_stage(const std::string& name, const py::list& inputs, const std::
   Watch watch(progress);
   RunOptions options;
   options.progress = [&](const StageRecord&) { return watch.hook(); };
-  with_stage_messages(origin, 1, name, [&] { watch.run([&] { run_pipeline(pipeline, *context, report, options); }); });
+  with_stage_messages(name, [&] { watch.run([&] { run_pipeline(pipeline, *context, report, options); }); });
   py::object product = py::none();
   if (spec->produces && context->has("output")) product = from_item(std::move(context->item("output")));
   return py::make_tuple(product, report_json(report));
@@ -283,25 +302,23 @@ std::string run_json(const std::string& text, const std::string& origin, const s
 }  // namespace
 
 void bind_stages(py::module_& m) {
-  // Python's classes for the library's errors; the most derived is registered last (tried first).
+  // Python's classes for the library's errors, one per kind; an error raised elsewhere (a whole
+  // pipeline, a reader) keeps the pipeline's wording, Error::what().
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
   static py::exception<UsageError> usage(m, "UsageError", error.ptr());
   static py::exception<InputError> input(m, "InputError", error.ptr());
   static py::exception<ComputeError> compute(m, "ComputeError", error.ptr());
   static py::exception<CancelledError> cancelled(m, "CancelledError", compute.ptr());
+  error_classes = {usage.ptr(), input.ptr(), compute.ptr(), cancelled.ptr()};
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const CancelledError& e) {
-      PyErr_SetString(cancelled.ptr(), e.what());
-    } catch (const UsageError& e) {
-      PyErr_SetString(usage.ptr(), e.what());
-    } catch (const InputError& e) {
-      PyErr_SetString(input.ptr(), e.what());
-    } catch (const ComputeError& e) {
-      PyErr_SetString(compute.ptr(), e.what());
     } catch (const Error& e) {
-      PyErr_SetString(error.ptr(), e.what());
+      try {
+        raise_python(e, e.place(), e.what());
+      } catch (py::error_already_set& raised) {
+        raised.restore();
+      }
     }
   });
   m.def("stages", &stage_list, "Every registered stage with its parameters, as plain data.");

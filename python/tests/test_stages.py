@@ -32,7 +32,7 @@ def _inputs(spec, tmp_path, cloud, mesh):
     """Data and file arguments for a stage, chosen from its declared slots."""
     args = []
     for slot, kind in spec["consumes"]:
-        if slot == "clouds":
+        if spec["shape"] == "merge":
             args.append([cloud, cloud.copy()])
         elif kind == "mesh" or slot == "mesh":
             args.append(mesh)
@@ -42,8 +42,8 @@ def _inputs(spec, tmp_path, cloud, mesh):
         path = tmp_path / "in.ply"
         pointsurf.write(cloud, path)
         args.append(path)
-    elif spec["name"] == "write" or spec["writes_param"] == "filename":  # register's T.json (out) is optional
-        args.append(tmp_path / ("out.png" if spec["writes_param"] else "out.ply"))
+    elif spec["shape"] in ("write", "picture"):  # register's T.json (out) is optional
+        args.append(tmp_path / ("out.png" if spec["shape"] == "picture" else "out.ply"))
     return args
 
 
@@ -98,6 +98,25 @@ def test_input_error_names_the_file(tmp_path):
         pointsurf.read(bad)
     with pytest.raises(pointsurf.InputError, match="missing.ply"):
         pointsurf.read(tmp_path / "missing.ply")
+
+
+def test_errors_carry_their_kind_and_place(cloud, tmp_path):
+    with pytest.raises(pointsurf.UsageError) as info:
+        pointsurf.normals(cloud, k=2)
+    e = info.value
+    assert (e.kind, e.stage, e.key, e.file) == ("usage", "normals", "k", None)
+    assert e.stage_index is None  # a stage call is not a pipeline: no position to show
+    assert e.message == "k: 2 is out of range [3, inf)"
+    with pytest.raises(pointsurf.InputError) as info:
+        pointsurf.read(tmp_path / "missing.ply")
+    assert info.value.kind == "input" and info.value.file.endswith("missing.ply")
+    src = tmp_path / "in.ply"
+    pointsurf.write(cloud, src)
+    with pytest.raises(pointsurf.UsageError) as info:
+        pointsurf.run([str(src), {"type": "clean"}, {"type": "normals", "kk": 16}, str(tmp_path / "x.ply")])
+    e = info.value
+    assert (e.stage_index, e.stage, e.key) == (3, "normals", "kk")
+    assert "stage 3 (normals)" in str(e) and "stage 3" not in e.message
 
 
 CLOUD_FORMATS = ["ply", "xyz", "pcd", "las", "laz", "e57"]

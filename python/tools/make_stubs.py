@@ -87,12 +87,11 @@ def stub(spec):
     slots = spec["consumes"]
     args = []
     for name, kind in slots:
-        args.append(f"{name}: Sequence[Data]" if name == "clouds" else
+        args.append(f"{name}: Sequence[Data]" if spec["shape"] == "merge" else
                     f"{name}: {'TriangleMesh' if kind == 'mesh' else 'PointCloud' if kind == 'cloud' else 'Data'}")
     if args:
         args.append("/")
-    names = {p["name"] for p in spec["params"]}
-    if "filename" in names:
+    if spec["shape"] in ("read", "write", "picture"):
         args.append("filename: Path")
     args.append("*")
     doc = [spec["summary"], ""]

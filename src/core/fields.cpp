@@ -42,8 +42,7 @@ Length Length::parse(std::string_view text, std::string_view key) {
     }
   }
   if (!ok || used != t.size() || !std::isfinite(v))
-    throw UsageError(fmt::format("{}: \"{}\" is not a length (expected a number in cloud units, or in mean spacings as \"3sp\")", key,
-                                 text));
+    throw key_error(key, fmt::format("\"{}\" is not a length (expected a number in cloud units, or in mean spacings as \"3sp\")", text));
   return {v, unit};
 }
 
@@ -162,13 +161,13 @@ void check_number(const ParamSpec& spec, double v, const std::string& shown) {
   // A declared range is finite: inf and NaN are refused as the library's checks always did.
   const bool ok = (!spec.has_range() || std::isfinite(v)) && (spec.min_open ? v > spec.min : v >= spec.min) &&
                   (spec.max_open ? v < spec.max : v <= spec.max);
-  if (!ok) throw UsageError(fmt::format("{}: {} is out of range {}", spec.name, shown, spec.range_text()));
+  if (!ok) throw key_error(spec.name, fmt::format("{} is out of range {}", shown, spec.range_text()));
 }
 
 void check_choice(const ParamSpec& spec, const std::string& value) {
   if (std::find(spec.choices.begin(), spec.choices.end(), value) != spec.choices.end()) return;
   const std::string near = closest_name(value, spec.choices);
-  throw UsageError(fmt::format("{}: \"{}\" is not one of {}{}", spec.name, value, choices_text(spec.choices),
+  throw key_error(spec.name, fmt::format("\"{}\" is not one of {}{}", value, choices_text(spec.choices),
                                near.empty() ? "" : fmt::format("; did you mean \"{}\"?", near)));
 }
 
@@ -191,14 +190,14 @@ void check_param_value(const ParamSpec& spec, const ParamValue& value) {
         check_choice(spec, item);
         ++n;
       }
-      if (n == 0) throw UsageError(fmt::format("{}: expected at least one of {}", spec.name, choices_text(spec.choices)));
+      if (n == 0) throw key_error(spec.name, fmt::format("expected at least one of {}", choices_text(spec.choices)));
       break;
     }
     case ParamType::Vector3:
     case ParamType::DoubleList:
       for (double v : std::get<std::vector<double>>(value)) check_number(spec, v, format_value(ParamValue(v)));
       if (spec.type == ParamType::DoubleList && std::get<std::vector<double>>(value).empty())
-        throw UsageError(fmt::format("{}: expected at least one number", spec.name));
+        throw key_error(spec.name, "expected at least one number");
       break;
     case ParamType::Length: {
       const Length& l = std::get<Length>(value);
@@ -218,19 +217,19 @@ ParamValue parse_param_text(const ParamSpec& spec, const std::string& text) {
       std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
       if (t == "true" || t == "1" || t == "yes" || t == "on") value = true;
       else if (t == "false" || t == "0" || t == "no" || t == "off") value = false;
-      else throw UsageError(fmt::format("{}: \"{}\" is not a boolean (expected true or false)", spec.name, text));
+      else throw key_error(spec.name, fmt::format("\"{}\" is not a boolean (expected true or false)", text));
       break;
     }
     case ParamType::Int: {
       double d = 0.0;
       if (!parse_double(text, d) || d != std::floor(d) || std::abs(d) > 9.0e15)
-        throw UsageError(fmt::format("{}: \"{}\" is not an integer", spec.name, text));
+        throw key_error(spec.name, fmt::format("\"{}\" is not an integer", text));
       value = static_cast<std::int64_t>(d);
       break;
     }
     case ParamType::Double: {
       double d = 0.0;
-      if (!parse_double(text, d)) throw UsageError(fmt::format("{}: \"{}\" is not a number", spec.name, text));
+      if (!parse_double(text, d)) throw key_error(spec.name, fmt::format("\"{}\" is not a number", text));
       value = d;
       break;
     }
@@ -246,12 +245,12 @@ ParamValue parse_param_text(const ParamSpec& spec, const std::string& text) {
       while (std::getline(stream, item, ',')) {
         double d = 0.0;
         if (!parse_double(item, d))
-          throw UsageError(fmt::format("{}: \"{}\": \"{}\" is not a number (expected {})", spec.name, text, item,
+          throw key_error(spec.name, fmt::format("\"{}\": \"{}\" is not a number (expected {})", text, item,
                                        param_type_name(spec.type)));
         numbers.push_back(d);
       }
       if (spec.type == ParamType::Vector3 && numbers.size() != 3)
-        throw UsageError(fmt::format("{}: \"{}\": expected 3 numbers X,Y,Z, got {}", spec.name, text, numbers.size()));
+        throw key_error(spec.name, fmt::format("\"{}\": expected 3 numbers X,Y,Z, got {}", text, numbers.size()));
       value = std::move(numbers);
       break;
     }
@@ -292,8 +291,10 @@ std::string range_failure(const ParamSpec& spec, const ParamValue& value) {
 }
 
 namespace detail {
-void throw_field_usage(std::string_view function, const std::string& failure) {
-  throw UsageError(function.empty() ? failure : fmt::format("{}: {}", function, failure));
+void throw_field_usage(std::string_view function, const std::string& failure, const std::string& key) {
+  ErrorPlace place;
+  place.key = key;
+  throw UsageError(function.empty() ? failure : fmt::format("{}: {}", function, failure), std::move(place));
 }
 }  // namespace detail
 

@@ -47,7 +47,7 @@ const char* raw_kind_name(const RawValue& v) {
 ParamValue convert(const ParamSpec& spec, const RawValue& raw) {
   if (raw.kind == RawValue::Kind::Text) return parse_param_text(spec, raw.s);
   auto mismatch = [&] {
-    return UsageError(fmt::format("{}: expected {}, got {}", spec.name,
+    return key_error(spec.name, fmt::format("expected {}, got {}",
                                   spec.type == ParamType::Int ? "an integer" : spec.type == ParamType::Double ? "a number"
                                   : spec.type == ParamType::Bool ? "true or false" : param_type_name(spec.type),
                                   raw_kind_name(raw)));
@@ -98,7 +98,7 @@ ParamValue convert(const ParamSpec& spec, const RawValue& raw) {
         throw mismatch();
       }
       if (spec.type == ParamType::Vector3 && std::get<std::vector<double>>(value).size() != 3)
-        throw UsageError(fmt::format("{}: expected 3 numbers [X, Y, Z], got {}", spec.name, std::get<std::vector<double>>(value).size()));
+        throw key_error(spec.name, fmt::format("expected 3 numbers [X, Y, Z], got {}", std::get<std::vector<double>>(value).size()));
       break;
   }
   check_param_value(spec, value);
@@ -119,8 +119,8 @@ std::string join(const std::vector<std::string>& items, const char* separator = 
   return out;
 }
 
-bool is_writer(const PipelineStep& s) { return s.spec->name == "write"; }
-bool is_reader(const PipelineStep& s) { return s.spec->name == "read"; }
+bool is_writer(const PipelineStep& s) { return s.spec->shape == CommandShape::Write; }
+bool is_reader(const PipelineStep& s) { return s.spec->shape == CommandShape::Read; }
 
 // Resolves the parameters of one method (or, for a method list, of all listed ones, used to
 // check that each given key belongs to one of them).
@@ -168,12 +168,19 @@ public:
     for (std::size_t i = 0; i < raw.size(); ++i) {
       const RawStep& r = raw[i];
       const StageSpec* spec = find_stage(r.type);
-      const std::string where = fmt::format("{}: stage {} ({})", origin_, i + 1, r.type);
+      // Errors of this stage name it (origin, position, type) as data; see core/error.h.
+      auto fail = [&](std::string text, std::string key = {}) {
+        UsageError e(std::move(text));
+        if (!key.empty()) e.set_key(std::move(key));
+        e.set_stage(origin_, i + 1, r.type);
+        return e;
+      };
+      auto name_stage = [&](Error& e) { e.set_stage(origin_, i + 1, r.type); };
       if (spec == nullptr) {
         std::vector<std::string> names;
         for (const StageSpec& s : registered_stages()) names.push_back(s.name);
         const std::string near = closest_name(r.type, names);
-        throw UsageError(fmt::format("{}: unknown stage type \"{}\"{}", where, r.type,
+        throw fail(fmt::format("unknown stage type \"{}\"{}", r.type,
                                      near.empty() ? fmt::format(" (stages: {})", join(names)) : fmt::format("; did you mean \"{}\"?", near)));
       }
       PipelineStep step;
@@ -189,8 +196,9 @@ public:
           m.choices = spec->methods;
           try {
             method = std::get<std::string>(convert(m, value));
-          } catch (const UsageError& e) {
-            throw UsageError(fmt::format("{}: {}", where, e.what()));
+          } catch (UsageError& e) {
+            name_stage(e);
+            throw;
           }
           given["method"] = method;
         }
@@ -216,7 +224,7 @@ public:
               try {
                 d = std::stod(value.s);
               } catch (const std::exception&) {
-                throw UsageError(fmt::format("{}: {}: \"{}\" is not a number", where, key, value.s));
+                throw fail(fmt::format("{}: \"{}\" is not a number", key, value.s), key);
               }
             }
             if (!in_spacings && d == 0.0) continue;
@@ -226,15 +234,14 @@ public:
           }
           key = now->name;
         }
-        if (given.count(key)) throw UsageError(fmt::format("{}: key \"{}\" given twice", where, key));
+        if (given.count(key)) throw fail(fmt::format("key \"{}\" given twice", key), key);
         const std::vector<const ParamSpec*> candidates = spec->params_named(key);
         if (candidates.empty()) {
           std::vector<std::string> keys = {"type", "tag", "inputs"};
           if (!spec->methods.empty()) keys.push_back("method");
           for (const ParamSpec& ps : spec->params) keys.push_back(ps.name);
           const std::string near = closest_name(key, keys);
-          throw UsageError(fmt::format("{}: unknown key \"{}\"{}", where, key,
-                                       near.empty() ? "" : fmt::format("; did you mean \"{}\"?", near)));
+          throw fail(fmt::format("unknown key \"{}\"{}", key, near.empty() ? "" : fmt::format("; did you mean \"{}\"?", near)), key);
         }
         const ParamSpec* applicable = nullptr;
         for (const ParamSpec* c : candidates)
@@ -243,13 +250,13 @@ public:
         if (applicable == nullptr) {
           std::vector<std::string> owners;
           for (const ParamSpec* c : candidates) owners.insert(owners.end(), c->methods.begin(), c->methods.end());
-          throw UsageError(fmt::format("{}: key \"{}\" belongs to method {}, not to method {}", where, key, join(owners, " or "),
-                                       method));
+          throw fail(fmt::format("{} belongs to method {}, not to method {}", key, join(owners, " or "), method), key);
         }
         try {
           given[key] = convert(*applicable, value);
-        } catch (const UsageError& e) {
-          throw UsageError(fmt::format("{}: {}", where, e.what()));
+        } catch (UsageError& e) {
+          name_stage(e);
+          throw;
         }
       }
       step.args = resolve(*spec, methods, method, given);
@@ -260,23 +267,24 @@ public:
       if (spec->check) {
         try {
           for (const StageArgs& a : step.per_method) spec->check(a);
-        } catch (const UsageError& e) {
-          throw UsageError(fmt::format("{}: {}", where, e.what()));
+        } catch (UsageError& e) {
+          name_stage(e);
+          throw;
         }
       }
 
       // Tag and inputs.
       step.tag = r.has_tag ? r.tag : fmt::format("{}{}", r.type, i + 1);
-      if (!tags.insert(step.tag).second) throw UsageError(fmt::format("{}: tag \"{}\" is used twice", where, step.tag));
-      const bool multi = !spec->consumes.empty() && spec->consumes.front().name == "clouds";
+      if (!tags.insert(step.tag).second) throw fail(fmt::format("tag \"{}\" is used twice", step.tag));
+      const bool multi = spec->takes_many();
       if (r.has_inputs && spec->consumes.empty())
-        throw UsageError(fmt::format("{}: takes no \"inputs\" (it reads a file)", where));
+        throw fail("takes no \"inputs\" (it reads a file)");
       if (r.has_inputs) {
         for (const std::string& in : r.inputs)
           if (!known_.count(in)) {
             std::vector<std::string> k(known_.begin(), known_.end());
             const std::string near = closest_name(in, k);
-            throw UsageError(fmt::format("{}: input \"{}\" is not the tag of an earlier stage{}", where, in,
+            throw fail(fmt::format("input \"{}\" is not the tag of an earlier stage{}", in,
                                          near.empty() ? (k.empty() ? "" : fmt::format(" (tags so far: {})", join(k)))
                                                       : fmt::format("; did you mean \"{}\"?", near)));
           }
@@ -285,13 +293,13 @@ public:
         if (multi) step.inputs = open;
         else if (!last.empty()) step.inputs = {last};
       }
-      if (spec->consumes.size() == 2 && spec->consumes[1].name == "reference" && step.inputs.size() == 1) {
+      if (spec->shape == CommandShape::Compare && step.inputs.size() == 1) {
         // The reference: the tag the stage names, else the cloud as read before the chain.
         const std::string named = step.args.has("reference") ? step.args.text("reference") : std::string();
         if (!named.empty() && !known_.count(named)) {
           std::vector<std::string> k(known_.begin(), known_.end());
           const std::string near = closest_name(named, k);
-          throw UsageError(fmt::format("{}: reference \"{}\" is not the tag of an earlier stage{}", where, named,
+          throw fail(fmt::format("reference \"{}\" is not the tag of an earlier stage{}", named,
                                        near.empty() ? fmt::format(" (tags so far: {})", join(k)) : fmt::format("; did you mean \"{}\"?", near)));
         }
         step.inputs.push_back(named.empty() ? origin_of_[step.inputs.front()] : named);
@@ -300,12 +308,11 @@ public:
       else origin_of_[step.tag] = origin_of_[step.inputs.front()];
       if (!spec->consumes.empty()) {
         if (step.inputs.empty())
-          throw UsageError(fmt::format("{}: {} before any data (start the pipeline with a file to read)", where,
-                                       spec->name == "write" ? "a writer" : "a stage"));
+          throw fail(fmt::format("{} before any data (start the pipeline with a file to read)", spec->name == "write" ? "a writer" : "a stage"));
         if (multi && step.inputs.size() < 2)
-          throw UsageError(fmt::format("{}: needs at least 2 inputs, got {} (give \"inputs\": [tags])", where, step.inputs.size()));
+          throw fail(fmt::format("needs at least 2 inputs, got {} (give \"inputs\": [tags])", step.inputs.size()));
         if (!multi && step.inputs.size() != spec->consumes.size())
-          throw UsageError(fmt::format("{}: takes {} input{}, got {}", where, spec->consumes.size(), spec->consumes.size() == 1 ? "" : "s",
+          throw fail(fmt::format("takes {} input{}, got {}", spec->consumes.size(), spec->consumes.size() == 1 ? "" : "s",
                                        step.inputs.size()));
       }
       for (const std::string& in : step.inputs) open.erase(std::remove(open.begin(), open.end(), in), open.end());
@@ -316,7 +323,7 @@ public:
       }
       p.steps.push_back(std::move(step));
     }
-    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s) || s.spec->measures || !s.spec->writes_param.empty(); }))
+    if (std::none_of(p.steps.begin(), p.steps.end(), [](const PipelineStep& s) { return is_writer(s) || s.spec->measures() || !s.spec->writes_param.empty(); }))
       throw UsageError(fmt::format("{}: no output: end the pipeline with a file name to write", origin_));
     return p;
   }
@@ -406,16 +413,25 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
     std::vector<std::string> outputs;
     for (const PipelineStep& s : pipeline.steps) {
       const std::string& file = s.args.has("filename") ? s.args.text("filename") : std::string();
-      if (is_reader(s)) check_input_path(file);
+      // The error keeps the file as data (the report's error.file, Python's e.file).
+      const auto checked = [](const std::string& path, auto&& check) {
+        try {
+          check();
+        } catch (Error& e) {
+          e.set_file(path);
+          throw;
+        }
+      };
+      if (is_reader(s)) checked(file, [&] { check_input_path(file); });
       const std::string& own = s.spec->writes_param.empty() ? std::string() : s.args.text(s.spec->writes_param);
-      if (!own.empty()) check_output_path(own, options.no_clobber, "own");
+      if (!own.empty()) checked(own, [&] { check_output_path(own, options.no_clobber, "own"); });
       for (const std::string& o : outputs)
-        if (!own.empty() && same_path(o, own)) throw UsageError(fmt::format("{}: {} is written twice", pipeline.origin, own));
+        if (!own.empty() && same_path(o, own)) throw UsageError(fmt::format("{} is written twice", own), ErrorPlace{pipeline.origin});
       if (!own.empty()) outputs.push_back(own);
       if (is_writer(s)) {
-        check_output_path(file, options.no_clobber, s.args.text("format"));
+        checked(file, [&] { check_output_path(file, options.no_clobber, s.args.text("format")); });
         for (const std::string& o : outputs)
-          if (same_path(o, file)) throw UsageError(fmt::format("{}: {} is written twice", pipeline.origin, file));
+          if (same_path(o, file)) throw UsageError(fmt::format("{} is written twice", file), ErrorPlace{pipeline.origin});
         outputs.push_back(file);
       }
     }
@@ -442,7 +458,7 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
             if (key != "method") record.parameters.emplace_back(a.method() + "." + key, value);
 
       std::vector<std::string> inputs = step.inputs;
-      const bool in_place = step.spec->produces && step.inputs.size() == 1 && !(step.spec->consumes.front().name == "clouds");
+      const bool in_place = step.spec->produces && step.inputs.size() == 1 && !step.spec->takes_many();
       if (in_place) {
         if (last_use[step.inputs.front()] == i) context.rename(step.inputs.front(), step.tag);
         else context.copy(step.inputs.front(), step.tag);
@@ -455,13 +471,12 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
       StageRun run{context, step.args, inputs, step.tag, record, progress, step.per_method};
       try {
         step.spec->run(run);
-      } catch (const Error& e) {
-        // Name the stage; keep the kind of error (and so the exit code).
-        const std::string message = fmt::format("stage {} ({}): {}", i + 1, step.spec->name, e.what());
+      } catch (Error& e) {
+        // Name the stage and rethrow the same error (its kind, and so the exit code, kept).
+        e.set_stage("", i + 1, step.spec->name);
+        if (step.spec->shape == CommandShape::Read || step.spec->shape == CommandShape::Write) e.set_file(step.args.text("filename"));
         report.stages.push_back(record);
-        if (e.exit_code() == 1) throw UsageError(message);
-        if (e.exit_code() == 2) throw InputError(message);
-        throw ComputeError(message);
+        throw;
       }
       record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
       record.peak_rss_mb = peak_rss_mb();
@@ -478,14 +493,22 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
     }
   } catch (const Error& e) {
     for (const auto& path : written) remove_output(path);
-    report.error = e.what();
-    report.exit_code = e.exit_code();
+    report.fail(e);
     finish();
     throw;
   }
   for (const auto& path : written) report.outputs.push_back(path.string());
   report.ok = true;
   finish();
+}
+
+void RunReport::fail(const Error& e) {
+  ok = false;
+  error = e.what();
+  error_kind = error_kind_name(e.kind());
+  error_place = e.place();
+  error_message = e.message();
+  exit_code = e.exit_code();
 }
 
 }  // namespace pointsurf

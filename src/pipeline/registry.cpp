@@ -85,6 +85,8 @@ std::string stages_markdown() {
   for (const StageSpec& s : registered_stages()) out += fmt::format("- [{}](#{}): {}\n", s.name, s.name, s.summary);
   for (const StageSpec& s : registered_stages()) {
     out += fmt::format("\n## {}\n\n{}\n", s.name, s.summary);
+    const std::string synopsis = command_synopsis(s);
+    if (!synopsis.empty()) out += "\n```\n" + synopsis + "\n```\n";
     if (!s.description.empty()) out += "\n" + s.description + "\n";
     if (!s.methods.empty()) {
       std::string list;

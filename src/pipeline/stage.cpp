@@ -2,6 +2,7 @@
 #include "pointsurf/pipeline/stage.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -9,6 +10,51 @@
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
+
+const char* command_shape_name(CommandShape shape) noexcept {
+  switch (shape) {
+    case CommandShape::Read: return "read";
+    case CommandShape::Write: return "write";
+    case CommandShape::Transform: return "transform";
+    case CommandShape::Merge: return "merge";
+    case CommandShape::Pair: return "pair";
+    case CommandShape::Compare: return "compare";
+    case CommandShape::Measure: return "measure";
+    case CommandShape::Picture: return "picture";
+  }
+  return "transform";
+}
+
+namespace {
+std::string upper(std::string t) {
+  for (char& c : t) c = char(std::toupper(static_cast<unsigned char>(c)));
+  return t;
+}
+std::string dashed_option(std::string key) {
+  for (char& c : key)
+    if (c == '_') c = '-';
+  return "--" + key;
+}
+}  // namespace
+
+std::string command_synopsis(const StageSpec& s) {
+  switch (s.shape) {
+    case CommandShape::Read:
+    case CommandShape::Write: return {};
+    case CommandShape::Transform:
+    case CommandShape::Picture: return fmt::format("pointsurf {} IN OUT [options]", s.name);
+    case CommandShape::Merge:
+      return fmt::format("pointsurf {0} IN1 IN2 [IN...] OUT [options]\n   or: pointsurf {0} IN1 IN2 [IN...] --out OUT [options]", s.name);
+    case CommandShape::Pair: {
+      const ParamSpec* own = s.writes_param.empty() ? nullptr : s.find_param(s.writes_param);
+      const std::string file = own == nullptr ? std::string() : fmt::format(" [{} {}]", dashed_option(own->name), own->meta.empty() ? "FILE" : own->meta);
+      return fmt::format("pointsurf {} {} {}{} [--apply OUT] [options]", s.name, upper(s.consumes.at(0).name), upper(s.consumes.at(1).name), file);
+    }
+    case CommandShape::Compare: return fmt::format("pointsurf {} IN --reference FILE [--out FILE] [options]", s.name);
+    case CommandShape::Measure: return fmt::format("pointsurf {} IN [--out FILE] [options]", s.name);
+  }
+  return {};
+}
 
 void StageRecord::set_used(const std::string& name, ParamValue value) {
   for (auto& [key, v] : parameters)

@@ -307,6 +307,7 @@ ParamSpec& param(std::vector<ParamSpec>& params, const std::string& name) {
 StageSpec evaluate_stage() {
   StageSpec s;
   s.name = "evaluate";
+  s.shape = CommandShape::Compare;
   s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
   s.description = "Every reference point gets its exact distance to the mesh's triangles, positive outside (where the normals point). "
                   "In a pipeline the reference is the cloud as read, unless reference names another tag. The output is the reference "
@@ -315,7 +316,6 @@ StageSpec evaluate_stage() {
   s.order = 130;
   s.consumes = {Slot{"mesh", DataKind::Mesh}, Slot{"reference", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
-  s.measures = true;
   s.params = {P::text("reference", "", "Tag of the cloud to measure (pipeline); the command line takes a file. Default: the cloud as read").meta("TAG")};
   append(s.params, params_of(DeviationParams::fields()));
   append(s.params, params_of(MeshDistanceParams::fields()));
@@ -341,11 +341,11 @@ StageSpec evaluate_stage() {
 StageSpec quality_stage() {
   StageSpec s;
   s.name = "quality";
+  s.shape = CommandShape::Measure;
   s.summary = "Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume";
   s.order = 125;
   s.consumes = {Slot{"mesh", DataKind::Mesh}};
   s.produces = Slot{"mesh", DataKind::Mesh};
-  s.measures = true;
   s.examples = {"pointsurf quality mesh.ply --report quality.json"};
   s.run = run_quality;
   return s;

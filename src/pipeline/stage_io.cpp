@@ -146,6 +146,7 @@ void run_write(StageRun& run) {
 StageSpec read_stage() {
   StageSpec s;
   s.name = "read";
+  s.shape = CommandShape::Read;
   s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)";
   s.description = "A file name at the start of a pipeline is a reader. Mesh files keep their faces.";
   s.order = 0;
@@ -166,9 +167,9 @@ StageSpec read_stage() {
   };
   s.run = run_read;
   s.check = [](const StageArgs& a) {
-    if (a.text("filename").empty()) throw UsageError("filename: missing (the file to read)");
+    if (a.text("filename").empty()) throw key_error("filename", "missing (the file to read)");
     if (const std::size_t n = a.numbers("bounds").size(); n != 0 && n != 6)
-      throw UsageError(fmt::format("bounds: {} numbers given; expected 6 (xmin,ymin,zmin,xmax,ymax,zmax)", n));
+      throw key_error("bounds", fmt::format("{} numbers given; expected 6 (xmin,ymin,zmin,xmax,ymax,zmax)", n));
   };
   return s;
 }
@@ -176,6 +177,7 @@ StageSpec read_stage() {
 StageSpec write_stage() {
   StageSpec s;
   s.name = "write";
+  s.shape = CommandShape::Write;
   s.summary = "Write a cloud or mesh; the format follows the extension";
   s.description = "A file name after a stage is a writer; it writes the latest data (or its \"inputs\").";
   s.order = 1000;
@@ -198,9 +200,9 @@ StageSpec write_stage() {
   };
   s.run = run_write;
   s.check = [](const StageArgs& a) {
-    if (a.text("filename").empty()) throw UsageError("filename: missing (the file to write)");
-    if (a.boolean("float") && a.boolean("double")) throw UsageError("float and double: give only one");
-    if (a.boolean("ascii") && a.boolean("big_endian")) throw UsageError("ascii and big_endian: give only one (big_endian is a binary encoding)");
+    if (a.text("filename").empty()) throw key_error("filename", "missing (the file to write)");
+    if (a.boolean("float") && a.boolean("double")) throw key_error("float", " and double: give only one");
+    if (a.boolean("ascii") && a.boolean("big_endian")) throw key_error("ascii", " and big_endian: give only one (big_endian is a binary encoding)");
   };
   return s;
 }

@@ -31,8 +31,8 @@ NeighborhoodKind neighborhood_kind(const StageArgs& a) {
 
 void check_neighborhood(const StageArgs& a) {
   const NeighborhoodKind kind = neighborhood_kind(a);
-  if (kind == NeighborhoodKind::Knn && a.given("radius")) throw UsageError("radius: ignored with neighborhood knn (use radius or hybrid)");
-  if (kind == NeighborhoodKind::Radius && a.given("k")) throw UsageError("k: ignored with neighborhood radius (use knn or hybrid)");
+  if (kind == NeighborhoodKind::Knn && a.given("radius")) throw key_error("radius", "ignored with neighborhood knn (use radius or hybrid)");
+  if (kind == NeighborhoodKind::Radius && a.given("k")) throw key_error("k", "ignored with neighborhood radius (use knn or hybrid)");
 }
 
 // Below this share of agreement with the input's normals a new orientation is said to
@@ -85,7 +85,7 @@ std::string orientation_used(const StageArgs& a, const PointCloud& cloud) {
 void run_keep_normals(StageRun& run) {
   PointCloud& cloud = run.context.item(run.output).cloud;
   StageRecord& rec = run.record;
-  if (!cloud.has_normals()) throw UsageError("orient keep: the input has no normals to keep (use mst, viewpoint or direction)");
+  if (!cloud.has_normals()) throw key_error("orient", " keep: the input has no normals to keep (use mst, viewpoint or direction)");
   const std::size_t zero = zero_normal_count(cloud);
   rec.set_used("orient", std::string("keep"));
   rec.count("points", as_count(cloud.size()));
@@ -105,7 +105,7 @@ void run_normals(StageRun& run) {
   const std::string orientation = orientation_used(a, cloud);
   if (orientation == "keep") return run_keep_normals(run);
   if (orientation == "input" && !cloud.has_normals())
-    throw UsageError("orient input: the input has no normals to agree with (use mst, viewpoint or direction)");
+    throw key_error("orient", " input: the input has no normals to agree with (use mst, viewpoint or direction)");
   const NormalParams params = normal_params(a);
   OrientParams orient = orient_params(a);
   if (orientation == "input") orient.method = Orientation::None;  // signs come from the input below
@@ -125,7 +125,7 @@ void run_normals(StageRun& run) {
   const bool by_radius = params.neighborhood != NeighborhoodKind::Knn;
   if (estimated.degenerate == cloud.size()) {
     if (by_radius)
-      throw UsageError(fmt::format("radius: every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
+      throw key_error("radius", fmt::format("every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
                                    "neighbourhood (mean spacing {:.4g}): no normal; use a radius of a few mean spacings "
                                    "(--radius 3sp gives {:.4g}) or --k",
                                    cloud.size(), estimated.radius_used, spacing, 3.0 * spacing));
@@ -237,7 +237,7 @@ void run_features(StageRun& run) {
     throw InputError(fmt::format("{}; feature detection with k = {} needs at least {}", plural(cloud.size(), "point"), params.k, params.k + 1));
   const std::string& truth_name = a.text("truth_field");
   if (!truth_name.empty() && !cloud.fields.contains(truth_name))
-    throw UsageError(fmt::format("truth_field: the input has no field \"{}\"", truth_name));
+    throw key_error("truth_field", fmt::format("the input has no field \"{}\"", truth_name));
   bool estimated = false;
   if (params.normals == FeatureNormals::Input && !cloud.has_normals()) {
     estimate_missing_normals_impl(run, params.k, sub_progress(run.progress, 0.0, 0.3));
@@ -324,13 +324,13 @@ StageSpec normals_stage() {
   s.check = [](const StageArgs& a) {
     check_neighborhood(a);
     const std::string& orient = a.text("orient");
-    if (a.given("viewpoint") && orient != "viewpoint") throw UsageError("viewpoint: ignored unless orient is viewpoint");
-    if (a.given("direction") && orient != "direction") throw UsageError("direction: ignored unless orient is direction");
-    if (a.given("orient_k") && orient != "mst") throw UsageError("orient_k: ignored unless orient is mst");
+    if (a.given("viewpoint") && orient != "viewpoint") throw key_error("viewpoint", "ignored unless orient is viewpoint");
+    if (a.given("direction") && orient != "direction") throw key_error("direction", "ignored unless orient is direction");
+    if (a.given("orient_k") && orient != "mst") throw key_error("orient_k", "ignored unless orient is mst");
     if (orient == "keep")
       for (const char* name : {"neighborhood", "k", "radius"})
         if (a.given(name)) throw UsageError(fmt::format("{}: ignored with orient keep (no estimation)", name));
-    if (orient == "viewpoint" && !a.given("viewpoint")) throw UsageError("orient viewpoint needs viewpoint X,Y,Z (the scanner position)");
+    if (orient == "viewpoint" && !a.given("viewpoint")) throw key_error("orient", " viewpoint needs viewpoint X,Y,Z (the scanner position)");
     normal_params(a).validate();
     orient_params(a).validate();
   };
@@ -354,7 +354,7 @@ StageSpec curvature_stage() {
     check_neighborhood(a);
     const int min_k = a.integer("degree") == 2 ? 6 : 10;
     if (a.integer("k") != 0 && a.integer("k") < min_k)
-      throw UsageError(fmt::format("k: {} must be at least {} for degree {} (or 0: the default)", a.integer("k"), min_k, a.integer("degree")));
+      throw key_error("k", fmt::format("{} must be at least {} for degree {} (or 0: the default)", a.integer("k"), min_k, a.integer("degree")));
     curvature_params(a).validate();
   };
   return s;
@@ -375,7 +375,7 @@ StageSpec features_stage() {
   s.run = run_features;
   s.check = [](const StageArgs& a) {
     if (a.integer("min_cluster_points") > a.integer("k"))
-      throw UsageError(fmt::format("min_cluster_points: {} must be at most k = {}", a.integer("min_cluster_points"), a.integer("k")));
+      throw key_error("min_cluster_points", fmt::format("{} must be at most k = {}", a.integer("min_cluster_points"), a.integer("k")));
     feature_params(a).validate();
   };
   return s;

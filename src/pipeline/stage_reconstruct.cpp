@@ -219,7 +219,7 @@ StageSpec reconstruct_stage() {
                 "pointsurf reconstruct scan.ply mesh.ply --method poisson --trim-depth 7"};
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
-    if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw UsageError("radii and radii_in_spacings: give only one");
+    if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw key_error("radii", " and radii_in_spacings: give only one");
     read_params<SmallComponentParams>(a).validate();
     read_params<FlatRegionParams>(a).validate();
     if (a.method() == "triangulate") read_params<TriangulateParams>(a).validate();

@@ -138,6 +138,7 @@ void run_register_many(StageRun& run) {
 StageSpec register_stage() {
   StageSpec s;
   s.name = "register";
+  s.shape = CommandShape::Pair;
   s.summary = "Register a source cloud onto a target (descriptors, RANSAC, ICP): the moved source and T.json";
   s.description =
       "Finds the rigid transform taking SOURCE onto TARGET from their points alone: PFH or FPFH descriptors of a voxel downsample, "
@@ -162,6 +163,7 @@ StageSpec register_stage() {
 StageSpec register_many_stage() {
   StageSpec s;
   s.name = "register-many";
+  s.shape = CommandShape::Merge;
   s.summary = "Register several scans into the first one's frame and merge them (field scan)";
   s.description =
       "Registers each scan to the first (--mode first) or to the one before it (--mode chain) as `register` does, then registers "

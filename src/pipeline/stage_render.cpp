@@ -76,6 +76,7 @@ StageSpec render_stage() {
   const Camera c;
   StageSpec s;
   s.name = "render";
+  s.shape = CommandShape::Picture;
   s.summary = "Draw a PNG picture of a cloud or mesh: shaded, coloured by a field with its legend, auto-framed views";
   s.description = "A software rasterizer (no display or GPU): z-buffer, supersampled anti-aliasing, Blinn-Phong lighting of meshes, "
                   "point splats with eye-dome lighting. A field named deviation or distance* gets a diverging map symmetric about 0; "
@@ -101,16 +102,16 @@ StageSpec render_stage() {
   s.run = run_render;
   s.check = [](const StageArgs& a) {
     const std::string& file = a.text("filename");
-    if (file.empty()) throw UsageError("filename: missing (the PNG file to write)");
+    if (file.empty()) throw key_error("filename", "missing (the PNG file to write)");
     std::string ext = std::filesystem::path(file).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".png") throw UsageError(fmt::format("filename: {}: expected a .png file name", file));
+    if (ext != ".png") throw key_error("filename", fmt::format("{}: expected a .png file name", file));
     parse_picture_size(a.text("size"));
     if (a.numbers("range").size() != 0 && a.numbers("range").size() != 2)
-      throw UsageError(fmt::format("range: expected MIN,MAX, got {} numbers", a.numbers("range").size()));
+      throw key_error("range", fmt::format("expected MIN,MAX, got {} numbers", a.numbers("range").size()));
     if (a.numbers("range").size() == 2 && !(a.numbers("range")[0] < a.numbers("range")[1]))
-      throw UsageError("range: MIN must be below MAX");
-    if (a.numbers("target").size() == 3 && a.numbers("eye").size() != 3) throw UsageError("target: give eye too (the camera position)");
+      throw key_error("range", "MIN must be below MAX");
+    if (a.numbers("target").size() == 3 && a.numbers("eye").size() != 3) throw key_error("target", "give eye too (the camera position)");
   };
   return s;
 }

@@ -135,7 +135,7 @@ StageSpec simplify_stage() {
   s.run = run_simplify;
   s.check = [](const StageArgs& a) {
     const int given = int(a.given("ratio")) + int(a.given("count")) + int(a.has("cell") && a.given("cell"));
-    if (given > 1) throw UsageError("ratio, count and cell: give only one of them");
+    if (given > 1) throw key_error("ratio", ", count and cell: give only one of them");
     const std::string& m = a.method();
     if (m == "grid") grid_params(a).validate();
     else if (m == "random") random_params(a).validate();

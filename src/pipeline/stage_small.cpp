@@ -57,7 +57,7 @@ void run_range(StageRun& run) {
     for (const ScalarField& f : c.fields) names.push_back(f.name);
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw UsageError(fmt::format("field: the data has no field \"{}\" (it has {})", name, list));
+    throw key_error("field", fmt::format("the data has no field \"{}\" (it has {})", name, list));
   }
   std::vector<std::size_t> kept;
   for (std::size_t i = 0; i < c.size(); ++i) {
@@ -124,7 +124,7 @@ StageSpec crop_stage() {
     const auto& hi = a.numbers("max");
     for (int i = 0; i < 3; ++i)
       if (lo[std::size_t(i)] > hi[std::size_t(i)])
-        throw UsageError(fmt::format("min, max: min {} exceeds max {} along {}", format_value(lo[std::size_t(i)]), format_value(hi[std::size_t(i)]),
+        throw key_error("min", fmt::format(", max: min {} exceeds max {} along {}", format_value(lo[std::size_t(i)]), format_value(hi[std::size_t(i)]),
                                      "xyz"[i]));
   };
   return s;
@@ -144,7 +144,7 @@ StageSpec range_stage() {
   s.run = run_range;
   s.check = [](const StageArgs& a) {
     if (a.number("min") > a.number("max"))
-      throw UsageError(fmt::format("min {} exceeds max {}", format_value(a.number("min")), format_value(a.number("max"))));
+      throw key_error("min", fmt::format(" {} exceeds max {}", format_value(a.number("min")), format_value(a.number("max"))));
   };
   return s;
 }
@@ -166,16 +166,16 @@ StageSpec transform_stage() {
                 "pointsurf transform scan2.ply scan2_aligned.ply --file T.json"};
   s.run = run_transform;
   s.check = [](const StageArgs& a) {
-    if (a.given("matrix") && !a.text("file").empty()) throw UsageError("matrix, file: give one of them, not both");
+    if (a.given("matrix") && !a.text("file").empty()) throw key_error("matrix", ", file: give one of them, not both");
     const auto& m = a.numbers("matrix");
-    if (m.size() != 16) throw UsageError(fmt::format("matrix: expected 16 numbers (4x4, row by row), got {}", m.size()));
+    if (m.size() != 16) throw key_error("matrix", fmt::format("expected 16 numbers (4x4, row by row), got {}", m.size()));
     Eigen::Matrix3d r;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) r(i, j) = m[std::size_t(4 * i + j)];
     const double err = (r * r.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     if (err > 1e-6 || r.determinant() < 0.0)
-      throw UsageError("matrix: the upper-left 3x3 block is not a rotation (orthonormal with determinant +1): the transform must be rigid");
-    if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0) throw UsageError("matrix: the last row must be 0,0,0,1");
+      throw key_error("matrix", "the upper-left 3x3 block is not a rotation (orthonormal with determinant +1): the transform must be rigid");
+    if (m[12] != 0.0 || m[13] != 0.0 || m[14] != 0.0 || m[15] != 1.0) throw key_error("matrix", "the last row must be 0,0,0,1");
   };
   return s;
 }
@@ -183,6 +183,7 @@ StageSpec transform_stage() {
 StageSpec merge_stage() {
   StageSpec s;
   s.name = "merge";
+  s.shape = CommandShape::Merge;
   s.summary = "Merge several clouds into one (attributes present in only some are zero-filled)";
   s.order = 13;
   s.consumes = {Slot{"clouds", DataKind::Any}};

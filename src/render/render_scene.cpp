@@ -42,10 +42,10 @@ PictureSize parse_picture_size(std::string_view text) {
   static const std::regex form(R"(^(\d{1,5})x(\d{1,5})$)");
   const std::string t(text);
   std::smatch m;
-  if (!std::regex_match(t, m, form)) throw UsageError(fmt::format("size: \"{}\" is not WIDTHxHEIGHT (e.g. 1024x768)", t));
+  if (!std::regex_match(t, m, form)) throw key_error("size", fmt::format("\"{}\" is not WIDTHxHEIGHT (e.g. 1024x768)", t));
   const PictureSize size{std::stoi(m[1].str()), std::stoi(m[2].str())};
   if (size.width < 8 || size.height < 8 || size.width > 16384 || size.height > 16384)
-    throw UsageError(fmt::format("size: {} is outside 8x8 .. 16384x16384", t));
+    throw key_error("size", fmt::format("{} is outside 8x8 .. 16384x16384", t));
   return size;
 }
 
@@ -109,7 +109,7 @@ Basis basis_of(const Vector3d& forward_in, const Vector3d& up_in) {
   Basis b;
   b.forward = forward_in.normalized();
   b.right = b.forward.cross(up_in);
-  if (b.right.norm() < 1e-9) throw UsageError("camera: the up vector is parallel to the viewing direction");
+  if (b.right.norm() < 1e-9) throw key_error("camera", "the up vector is parallel to the viewing direction");
   b.right.normalize();
   b.up = b.right.cross(b.forward);
   return b;
@@ -525,18 +525,18 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   Projection proj;
   if (p.camera) {
     const Camera& c = *p.camera;
-    if ((c.target - c.eye).norm() <= 0.0) throw UsageError("camera: eye and target coincide");
+    if ((c.target - c.eye).norm() <= 0.0) throw key_error("camera", "eye and target coincide");
     proj.basis = basis_of(c.target - c.eye, c.up);
     proj.eye = c.eye - centre;
     proj.cx = 0.5 * s * lay.plot_w;
     proj.cy = s * lay.plot_y0 + 0.5 * s * lay.plot_h;
     if (c.fov_deg > 0.0) {
-      if (c.fov_deg >= 179.0) throw UsageError(fmt::format("camera: field of view {} degrees is not below 179", c.fov_deg));
+      if (c.fov_deg >= 179.0) throw key_error("camera", fmt::format("field of view {} degrees is not below 179", c.fov_deg));
       proj.perspective = true;
       proj.scale = 0.5 * s * lay.plot_h / std::tan(0.5 * c.fov_deg * M_PI / 180.0);
       proj.near = 1e-6 * diagonal;
     } else {
-      if (!(c.ortho_height > 0.0)) throw UsageError("camera: ortho_height must be positive for an orthographic camera");
+      if (!(c.ortho_height > 0.0)) throw key_error("camera", "ortho_height must be positive for an orthographic camera");
       proj.scale = s * lay.plot_h / c.ortho_height;
       proj.eye = Vector3d::Zero();
       // Centre the picture on the target.

@@ -61,6 +61,60 @@ TEST(Registry, StagesAreUniqueAndEveryParameterIsDocumented) {
     EXPECT_NE(find_stage(stage), nullptr) << stage;
 }
 
+// The command shape is declared, not inferred; it must agree with what the stage takes and
+// gives, since the CLI and Python build the command line from it.
+TEST(Registry, EachStagesCommandShapeAgreesWithItsSlots) {
+  std::set<CommandShape> seen;
+  for (const StageSpec& s : registered_stages()) {
+    seen.insert(s.shape);
+    const std::size_t n = s.consumes.size();
+    switch (s.shape) {
+      case CommandShape::Read:
+        EXPECT_EQ(n, 0u) << s.name;
+        EXPECT_TRUE(s.produces.has_value()) << s.name;
+        break;
+      case CommandShape::Write:
+        EXPECT_EQ(n, 1u) << s.name;
+        EXPECT_FALSE(s.produces.has_value()) << s.name;
+        break;
+      case CommandShape::Transform:
+        EXPECT_EQ(n, 1u) << s.name;
+        EXPECT_TRUE(s.produces.has_value()) << s.name;
+        EXPECT_TRUE(s.writes_param.empty()) << s.name;
+        break;
+      case CommandShape::Merge:
+        ASSERT_EQ(n, 1u) << s.name;
+        EXPECT_EQ(s.consumes[0].name, "clouds") << s.name;
+        EXPECT_TRUE(s.produces.has_value()) << s.name;
+        break;
+      case CommandShape::Pair:
+        ASSERT_EQ(n, 2u) << s.name;
+        EXPECT_EQ(s.consumes[0].name, "source") << s.name;
+        EXPECT_EQ(s.consumes[1].name, "target") << s.name;
+        break;
+      case CommandShape::Compare:
+        ASSERT_EQ(n, 2u) << s.name;
+        EXPECT_EQ(s.consumes[1].name, "reference") << s.name;
+        EXPECT_TRUE(s.measures()) << s.name;
+        break;
+      case CommandShape::Measure:
+        EXPECT_EQ(n, 1u) << s.name;
+        EXPECT_TRUE(s.measures()) << s.name;
+        break;
+      case CommandShape::Picture:
+        EXPECT_EQ(n, 1u) << s.name;
+        EXPECT_FALSE(s.writes_param.empty()) << s.name;
+        break;
+    }
+    // Only the shapes say "several inputs" and "a measure"; no stage is both.
+    EXPECT_EQ(s.takes_many(), s.shape == CommandShape::Merge) << s.name;
+    EXPECT_FALSE(s.takes_many() && s.measures()) << s.name;
+  }
+  for (CommandShape shape : {CommandShape::Read, CommandShape::Write, CommandShape::Transform, CommandShape::Merge, CommandShape::Pair,
+                             CommandShape::Compare, CommandShape::Measure, CommandShape::Picture})
+    EXPECT_TRUE(seen.count(shape)) << "no stage has shape " << command_shape_name(shape);
+}
+
 // The library's defaults, read from default-constructed Params structs: the registry must
 // show exactly these in --help (a default typed a second time would drift).
 struct Expected {

@@ -54,7 +54,7 @@ TEST_F(RunCli, MalformedPipelinesFailBeforeAnyWorkNamingStageAndKey) {
       {"bad_choice", "[" + in + ", {\"type\": \"normals\", \"orient\": \"sideways\"}, " + out + "]", "",
        "stage 2 (normals): orient: \"sideways\" is not one of mst, viewpoint, direction, none, input or keep"},
       {"other_method", "[" + in + ", {\"type\": \"simplify\", \"method\": \"grid\", \"region_angle_deg\": 20}, " + out + "]", "",
-       "stage 2 (simplify): key \"region_angle_deg\" belongs to method regional, not to method grid"},
+       "stage 2 (simplify): region_angle_deg belongs to method regional, not to method grid"},
       {"ignored_option", "[" + in + ", {\"type\": \"normals\", \"viewpoint\": [0, 0, 5]}, " + out + "]", "",
        "stage 2 (normals): viewpoint: ignored unless orient is viewpoint"},
       {"missing_input", "[" + in + ", {\"type\": \"normals\", \"inputs\": \"scan\"}, " + out + "]", "",
@@ -119,10 +119,10 @@ TEST_F(RunCli, EveryStageGivesTheSameBytesAsCommandAndAsPipelineWhateverTheThrea
   write_point_cloud(path("in2.ply"), test::sample_sphere(1000, 0.5, Vector3d(-1, 0, 0), 7));
   std::size_t checked = 0;
   for (const StageSpec& s : registered_stages()) {
-    if (s.name == "read" || s.name == "write" || s.measures) continue;  // evaluations: tests/evaluate/evaluate_cli_test.cpp
-    if (!s.writes_param.empty()) continue;                              // render: tests/render/render_cli_test.cpp
-    if (s.name == "register-many") continue;                            // tests/pipeline/register_cli_test.cpp
-    const bool multi = s.consumes.front().name == "clouds";
+    if (s.shape == CommandShape::Read || s.shape == CommandShape::Write || s.measures()) continue;  // evaluations: tests/evaluate/evaluate_cli_test.cpp
+    if (s.shape == CommandShape::Picture) continue;                     // render: tests/render/render_cli_test.cpp
+    if (s.shape == CommandShape::Pair || s.name == "register-many") continue;  // tests/pipeline/register_cli_test.cpp
+    const bool multi = s.takes_many();
     const std::string inputs = multi ? path("in.ply") + " " + path("in2.ply") : path("in.ply");
     const test::CliResult cli = test::run_cli(s.name + " " + inputs + " " + path("cli.ply") + " " + options_for(s.name, false) + " --threads 1", dir_);
     ASSERT_EQ(cli.exit_code, 0) << s.name << ": " << cli.err;
@@ -164,7 +164,7 @@ TEST_F(RunCli, CommandLineFindsOutputProblemsBeforeTheWorkAndRefusesIgnoredOptio
   EXPECT_TRUE(test::contains(r.err, "--threads: 100000 exceeds the")) << r.err;
   r = test::run_cli("convert " + in + " " + path("o.las") + " --las-scale 0", dir_);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_TRUE(test::contains(r.err, "las_scale: 0 is out of range (0, inf)")) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--las-scale: 0 is out of range (0, inf)")) << r.err;
   r = test::run_cli("nromals " + in + " " + path("o.ply"), dir_);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(test::contains(r.err, "unknown command \"nromals\"; did you mean \"normals\"?")) << r.err;
@@ -238,6 +238,40 @@ TEST_F(RunCli, AFailedRunStillWritesItsReport) {
   EXPECT_EQ(report["error"]["exit_code"], 2);
   ASSERT_EQ(report["stages"].size(), 2u);  // the read, and the stage that failed
   EXPECT_EQ(report["stages"][1]["type"], "crop");
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+  // The error as data: kind and place apart from the words.
+  const nlohmann::json& error = report["error"];
+  EXPECT_EQ(error["kind"], "input");
+  EXPECT_EQ(error["stage_index"], 2);
+  EXPECT_EQ(error["stage"], "crop");
+  EXPECT_TRUE(test::contains(error["text"].get<std::string>(), "no point is left")) << error;
+  EXPECT_FALSE(test::contains(error["text"].get<std::string>(), "stage 2")) << error;
+  EXPECT_FALSE(error.contains("key")) << error;
+
+  // A usage error found before any work names its key; a missing input names its file.
+  const std::string bad_key = write_pipeline("k.json", "[\"" + path("in.ply") + "\", {\"type\": \"normals\", \"k\": 2}, \"" + path("o.ply") + "\"]");
+  EXPECT_EQ(test::run_cli("run " + bad_key + " --report " + path("r2.json"), dir_).exit_code, 1);
+  const nlohmann::json usage = nlohmann::json::parse(test::read_bytes(path("r2.json")))["error"];
+  EXPECT_EQ(usage["kind"], "usage");
+  EXPECT_EQ(usage["key"], "k");
+  EXPECT_EQ(usage["stage"], "normals");
+  EXPECT_EQ(usage["exit_code"], 1);
+  const std::string missing = write_pipeline("m.json", "[\"" + path("nowhere.ply") + "\", {\"type\": \"normals\"}, \"" + path("o.ply") + "\"]");
+  EXPECT_EQ(test::run_cli("run " + missing + " --report " + path("r3.json"), dir_).exit_code, 2);
+  const nlohmann::json input = nlohmann::json::parse(test::read_bytes(path("r3.json")))["error"];
+  EXPECT_EQ(input["kind"], "input");
+  EXPECT_EQ(input["file"], path("nowhere.ply"));
+}
+
+// The command line words a key as its option; the pipeline and the library keep the key.
+TEST_F(RunCli, TheCommandLineNamesKeysAsOptions) {
+  test::CliResult r = test::run_cli("simplify " + path("in.ply") + " " + path("o.ply") + " --method grid --region-angle-deg 20", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--region-angle-deg belongs to method regional, not to method grid")) << r.err;
+  EXPECT_FALSE(test::contains(r.err, "stage ")) << r.err;  // a command is not a pipeline
+  r = test::run_cli("transform " + path("in.ply") + " " + path("o.ply") + " --matrix 1,2,3", dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(test::contains(r.err, "--matrix: expected 16 numbers")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
 }
 

@@ -290,7 +290,7 @@ public:
     for (const Field<P>& f : fields_) {
       if (f.applies && !f.applies(p)) continue;
       const std::string failure = range_failure(f.spec, f.get(p));
-      if (!failure.empty()) throw_usage(function, failure);
+      if (!failure.empty()) throw_usage(function, failure, f.spec.name);
     }
   }
 
@@ -300,7 +300,7 @@ private:
     for (const std::string& s : c) out += (out.empty() ? "" : "|") + s;
     return out;
   }
-  [[noreturn]] static void throw_usage(std::string_view function, const std::string& failure);
+  [[noreturn]] static void throw_usage(std::string_view function, const std::string& failure, const std::string& key);
 
   template <class M>
   Field<P>& add(std::string key, ParamType type, M P::*m, std::string doc, std::function<ParamValue(const P&)> get,
@@ -320,12 +320,12 @@ private:
 };
 
 namespace detail {
-[[noreturn]] void throw_field_usage(std::string_view function, const std::string& failure);
+[[noreturn]] void throw_field_usage(std::string_view function, const std::string& failure, const std::string& key);
 }
 
 template <class P>
-void FieldTable<P>::throw_usage(std::string_view function, const std::string& failure) {
-  detail::throw_field_usage(function, failure);
+void FieldTable<P>::throw_usage(std::string_view function, const std::string& failure, const std::string& key) {
+  detail::throw_field_usage(function, failure, key);
 }
 
 /// Number of members of an aggregate P (the completeness test of field tables compares it with

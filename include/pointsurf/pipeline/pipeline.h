@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "pointsurf/core/error.h"
 #include "pointsurf/pipeline/context.h"
 #include "pointsurf/pipeline/stage.h"
 
@@ -70,8 +71,14 @@ struct RunReport {
   double peak_rss_mb = 0.0;
   std::size_t tree_builds = 0;
   bool ok = false;
-  std::string error;                 // the failure's message when !ok
+  std::string error;                 // the failure's message when !ok (Error::what())
+  std::string error_kind;            // "usage", "input", "compute" or "cancelled" when !ok
+  ErrorPlace error_place;            // where it happened, as far as known
+  std::string error_message;         // the message without the stage prefix
   int exit_code = 0;
+
+  /// Records `e` as the run's failure (ok false, the error's words, kind, place and exit code).
+  void fail(const Error& e);
 };
 
 /// Checks the output paths (writable directory, known extension, no_clobber), then runs the

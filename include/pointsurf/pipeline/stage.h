@@ -95,6 +95,23 @@ struct StageRun {
   const std::vector<StageArgs>& per_method;
 };
 
+/// How a stage takes its data on the command line and in Python; declared with the stage, and
+/// the front ends follow it (apps/pointsurf/cmd_stage.cpp, python/pointsurf/__init__.py).
+enum class CommandShape {
+  Read,       // a pipeline's reader: no command of its own (pointsurf convert reads)
+  Write,      // a pipeline's writer: no command of its own
+  Transform,  // STAGE IN OUT: one cloud or mesh in, one out
+  Merge,      // STAGE IN1 IN2 [IN...] OUT, or --out OUT: several in (slot "clouds"), one out
+  Pair,       // STAGE SOURCE TARGET [--OWN FILE] [--apply OUT]: two inputs of equal standing,
+              // the stage's own file (writes_param) and its product
+  Compare,    // STAGE IN --reference FILE [--out FILE]: a measure of IN against a reference
+  Measure,    // STAGE IN [--out FILE]: a measure of one input
+  Picture,    // STAGE IN OUT: OUT is the stage's own file (writes_param), e.g. render's PNG
+};
+
+/// "transform", "merge", ... (the Python description and docs/stages.md).
+const char* command_shape_name(CommandShape shape) noexcept;
+
 struct StageSpec {
   std::string name;                  // "normals", "clean", ...
   std::string summary;               // one line for the command list
@@ -107,24 +124,34 @@ struct StageSpec {
   std::vector<ParamSpec> params;     // "method" is implied by `methods`
   std::vector<std::string> examples; // command lines for --help
   int order = 0;                     // place in the command list (data flow)
-  /// An evaluation (evaluate, quality): its report is its product, so its command takes IN and
-  /// an optional --out FILE, and a pipeline that ends with it needs no writer. A second consumed
-  /// slot named "reference" defaults to the cloud as read at the start of the first input's
-  /// chain, or to the tag given by the stage's "reference" parameter.
-  bool measures = false;
-  /// A stage that writes a file of its own kind (render: a PNG): the parameter naming it. The
-  /// file is checked and cleaned up like a writer's, a pipeline may end with the stage, and its
-  /// command takes IN OUT with OUT that file.
+  /// How the command line and Python take its data (the registry checks that it agrees with
+  /// consumes and produces).
+  CommandShape shape = CommandShape::Transform;
+  /// A stage that writes a file of its own kind (render: a PNG; register: T.json): the parameter
+  /// naming it. The file is checked and cleaned up like a writer's and a pipeline may end with
+  /// the stage.
   std::string writes_param;
   std::function<void(StageRun&)> run;
   /// Checks across parameters made before any work (e.g. a viewpoint given without
   /// orient = viewpoint); throws UsageError. May be empty.
   std::function<void(const StageArgs&)> check;
 
+  /// An evaluation (Compare, Measure): its report is its product, so a pipeline that ends with
+  /// it needs no writer. A Compare's second slot, "reference", defaults to the cloud as read at
+  /// the start of the first input's chain, or to the tag given by its "reference" parameter.
+  bool measures() const noexcept { return shape == CommandShape::Compare || shape == CommandShape::Measure; }
+  /// Takes any number of inputs (Merge: the slot "clouds").
+  bool takes_many() const noexcept { return shape == CommandShape::Merge; }
+
   const ParamSpec* find_param(const std::string& name) const;          // any method
   std::vector<const ParamSpec*> params_named(const std::string& name) const;
   /// The parameters that name `old_key` among their former keys.
   std::vector<const ParamSpec*> params_formerly(const std::string& old_key) const;
 };
+
+/// The stage's command line, from its shape (`pointsurf normals IN OUT [options]`; a Merge gives
+/// its two forms on two lines, the second starting "   or: "). Empty for Read and Write, which
+/// have no command of their own. `pointsurf STAGE --help` and docs/stages.md show it.
+std::string command_synopsis(const StageSpec& s);
 
 }  // namespace pointsurf

@@ -59,12 +59,15 @@ std::vector<RawStep> parse_raw_pipeline(const std::string& text, const std::stri
         ++column;
       }
     }
-    throw UsageError(fmt::format("{}: not valid JSON at line {}, column {}", origin, line, column));
+    ErrorPlace at;
+    at.origin = origin;
+    at.offset = fmt::format("line {}, column {}", line, column);
+    throw UsageError(fmt::format("not valid JSON at {}", at.offset), at);
   }
   // PDAL also accepts {"pipeline": [...]}.
   if (j.is_object() && j.contains("pipeline")) j = j["pipeline"];
-  if (!j.is_array()) throw UsageError(fmt::format("{}: a pipeline is a JSON list of stages (file names and objects)", origin));
-  if (j.empty()) throw UsageError(fmt::format("{}: the pipeline is empty", origin));
+  if (!j.is_array()) throw UsageError("a pipeline is a JSON list of stages (file names and objects)", ErrorPlace{origin});
+  if (j.empty()) throw UsageError("the pipeline is empty", ErrorPlace{origin});
   std::vector<RawStep> steps;
   for (std::size_t i = 0; i < j.size(); ++i) {
     const nlohmann::json& e = j[i];
@@ -75,16 +78,16 @@ std::vector<RawStep> parse_raw_pipeline(const std::string& text, const std::stri
       steps.push_back(std::move(step));
       continue;
     }
-    if (!e.is_object()) throw UsageError(fmt::format("{}: stage {}: expected a file name or an object with \"type\"", origin, i + 1));
+    if (!e.is_object()) throw UsageError(fmt::format("stage {}: expected a file name or an object with \"type\"", i + 1), ErrorPlace{origin});
     if (!e.contains("type") || !e["type"].is_string())
-      throw UsageError(fmt::format("{}: stage {}: missing \"type\" (a string naming the stage)", origin, i + 1));
+      throw UsageError(fmt::format("stage {}: missing \"type\" (a string naming the stage)", i + 1), ErrorPlace{origin});
     step.type = e["type"].get<std::string>();
     for (auto it = e.begin(); it != e.end(); ++it) {
       const std::string& key = it.key();
       if (key == "type") continue;
       if (key == "tag") {
         if (!it->is_string() || it->get<std::string>().empty())
-          throw UsageError(fmt::format("{}: stage {} ({}): \"tag\" must be a non-empty string", origin, i + 1, step.type));
+          throw UsageError("\"tag\" must be a non-empty string", ErrorPlace{origin, i + 1, step.type});
         step.tag = it->get<std::string>();
         step.has_tag = true;
       } else if (key == "inputs") {
@@ -94,7 +97,7 @@ std::vector<RawStep> parse_raw_pipeline(const std::string& text, const std::stri
         } else if (it->is_array() && std::all_of(it->begin(), it->end(), [](const auto& x) { return x.is_string(); })) {
           for (const auto& x : *it) step.inputs.push_back(x.get<std::string>());
         } else {
-          throw UsageError(fmt::format("{}: stage {} ({}): \"inputs\" must be a tag or a list of tags", origin, i + 1, step.type));
+          throw UsageError("\"inputs\" must be a tag or a list of tags", ErrorPlace{origin, i + 1, step.type});
         }
       } else {
         step.params.emplace_back(key, raw_value(*it));
@@ -172,7 +175,21 @@ std::string report_json(const RunReport& report) {
               {"kdtree_builds", report.tree_builds},
               {"total_seconds", report.total_seconds},
               {"peak_rss_mb", report.peak_rss_mb}};
-  if (!report.ok) out["error"] = {{"message", report.error}, {"exit_code", report.exit_code}};
+  if (!report.ok) {
+    json error = {{"message", report.error}, {"exit_code", report.exit_code}};
+    // The error as data (core/error.h): its kind and, where known, the stage, key, file and place.
+    if (!report.error_kind.empty()) error["kind"] = report.error_kind;
+    const ErrorPlace& at = report.error_place;
+    if (at.stage_index > 0) {
+      error["stage_index"] = at.stage_index;
+      error["stage"] = at.stage;
+    }
+    if (!at.key.empty()) error["key"] = at.key;
+    if (!at.file.empty()) error["file"] = at.file;
+    if (!at.offset.empty()) error["offset"] = at.offset;
+    if (!report.error_message.empty()) error["text"] = report.error_message;
+    out["error"] = std::move(error);
+  }
   return out.dump(2) + "\n";
 }
 
