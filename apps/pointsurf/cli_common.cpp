@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/pipeline/registry.h"
 
@@ -152,26 +153,7 @@ void ProgressBar::update(double fraction) {
   std::fflush(stderr);
 }
 
-void write_text_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  const std::filesystem::path tmp = dir / fmt::format(".{}.tmp-{}", path.filename().string(), ::getpid());
-  {
-    std::ofstream out(tmp);
-    out << text;
-    out.close();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw Error(fmt::format("{}: cannot write", path.string()));
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Error(fmt::format("{}: cannot write: {}", path.string(), ec.message()));
-  }
-}
+void write_text_atomically(const std::filesystem::path& path, const std::string& text) { write_file_atomically(path, text); }
 
 void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command, std::string* report_text) {
   Context context;

@@ -5,6 +5,7 @@
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/pipeline/registry.h"
 
 namespace pointsurf::cli {
@@ -12,6 +13,7 @@ namespace {
 
 std::string convert_help() {
   std::string out = "pointsurf convert IN OUT [options]\nConvert between formats; the output format follows OUT's extension.\n\n";
+  out += "Formats: " + known_format_names(", ") + " (input detected from the content).\nOutput extensions: " + known_extensions(" ") + "\n\n";
   out += "Input and output options: those of 'pointsurf normals --help' (--columns, --input-format, --strict, --ascii, --float, --double,\n"
          "--big-endian, --compressed, --las-offset, --las-scale, --output-format).\n\n";
   out += common_options_help();

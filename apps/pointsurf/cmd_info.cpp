@@ -9,6 +9,7 @@
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -20,7 +21,7 @@ std::string info_help() {
          "Options:\n"
          "  --json                         Print the description as JSON on stdout\n"
          "  --columns SPEC                 Column meaning of XYZ/TXT/CSV input (see pointsurf normals --help)\n"
-         "  --input-format FORMAT          Read as this format instead of detecting it\n"
+         "  --input-format FORMAT          Read as this format instead of detecting it: " + known_format_names(", ") + "\n"
          "  --strict                       Points with NaN/Inf coordinates are an error\n\n" +
          common_options_help() + "\nExample:\n  pointsurf info scan.las --json\n";
 }
@@ -51,7 +52,7 @@ int run_info(const std::vector<std::string>& args) {
   check_input_path(input);
   const auto start = std::chrono::steady_clock::now();
   const std::string format = options.format.empty() ? detect_format(input) : options.format;
-  const bool mesh_format = format == "ply" || format == "off" || format == "obj" || format == "stl";
+  const bool mesh_format = file_format(format).holds_faces;
   options.format = format;
 
   PointCloud cloud;

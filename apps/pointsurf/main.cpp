@@ -14,6 +14,7 @@
 
 #include "cli_common.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/pipeline/registry.h"
 
 namespace {
@@ -31,7 +32,9 @@ std::vector<pointsurf::cli::Command> all_commands() {
 std::string main_help(const std::vector<pointsurf::cli::Command>& commands) {
   std::string out = "pointsurf " POINTSURF_VERSION
                     ": from a raw 3D scan (point cloud) to a verified surface.\n"
-                    "Formats (detected from content): PLY, XYZ/PTS/TXT/CSV, PCD, LAS 1.0-1.4, OFF, OBJ, STL.\n"
+                    "Formats (detected from content): " +
+                    pointsurf::known_format_names(", ") +
+                    " (see docs/formats.md).\n"
                     "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 failure while computing.\n\n"
                     "Usage: pointsurf COMMAND [ARGS] [options]    (pointsurf COMMAND --help for its options and defaults)\n\n"
                     "Commands:\n";

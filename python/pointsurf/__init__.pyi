@@ -60,7 +60,7 @@ def to_open3d(data: Data) -> Any: ...
 def from_open3d(geometry: Any) -> Data: ...
 
 def read(filename: Path, *, format: Literal['', 'ply', 'xyz', 'pcd', 'las', 'laz', 'off', 'obj', 'stl', 'e57'] = ..., keep_poses: bool = ..., columns: str = ..., strict: bool = ..., copc_level: int = ..., bounds: Sequence[float] = ..., progress: Progress = None) -> Data:
-    """Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)
+    """Read a cloud or mesh (PLY, XYZ, PCD, LAS, LAZ, OFF, OBJ, STL, E57; format from the content)
 
     format = '': Read as this format instead of detecting it from the content
     keep_poses = False: E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose

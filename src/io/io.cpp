@@ -2,6 +2,7 @@
 // Format detection, dispatch to the per-format readers and writers, and the post-processing
 // every reader shares: non-finite points, polygon triangulation, atomic output files.
 #include "pointsurf/io/io.h"
+#include "pointsurf/io/formats.h"
 
 #include <algorithm>
 #include <cmath>
@@ -93,88 +94,47 @@ void check_input_path(const std::filesystem::path& path) {
   if (::access(path.c_str(), R_OK) != 0) throw InputError(fmt::format("{}: cannot read (permission denied)", path.string()));
 }
 
-std::string format_from_extension(const std::filesystem::path& path) {
-  const std::string ext = lower(path.extension().string());
-  if (ext == ".ply") return "ply";
-  if (ext == ".xyz" || ext == ".txt" || ext == ".pts" || ext == ".csv" || ext == ".xyzn" || ext == ".xyzrgb" || ext == ".asc") return "xyz";
-  if (ext == ".pcd") return "pcd";
-  if (ext == ".e57") return "e57";
-  if (ext == ".las") return "las";
-  if (ext == ".off") return "off";
-  if (ext == ".obj") return "obj";
-  if (ext == ".stl") return "stl";
-  if (ext == ".laz") return "laz";
-  throw UsageError(fmt::format("{}: unknown output format '{}': expected .ply, .xyz, .txt, .pts, .csv, .pcd, .las, .off, .obj or .stl",
-                               display_name(path), ext.empty() ? std::string("(no extension)") : ext));
-}
+std::string format_from_extension(const std::filesystem::path& path) { return format_for_extension(path).name; }
 
 std::string detect_format(const std::filesystem::path& path) {
   std::uintmax_t size = 0;
   const std::string head = read_head(path, 4096, size);
   if (size == 0 || head.empty()) throw InputError(fmt::format("{}: file is empty", display_name(path)));
-  if (head.rfind("ASTM-E57", 0) == 0) return "e57";
-  if (head.rfind("ply", 0) == 0 && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return "ply";
-  if (head.rfind("LASF", 0) == 0) {
-    const bool compressed_format = head.size() > 104 && (static_cast<unsigned char>(head[104]) & 0xC0) != 0;
-    return compressed_format ? "laz" : "las";
-  }
-  // Binary STL: 80-byte header, triangle count, 50 bytes per triangle. Checked before the
-  // text formats because many exporters start the binary header with "solid".
-  if (size >= 84 && head.size() >= 84) {
-    const auto count = io::detail::load_value<std::uint32_t>(head.data() + 80);
-    if (84 + 50 * static_cast<std::uintmax_t>(count) == size) return "stl";
-  }
-  if (lower(std::string_view(head).substr(0, 6)) == "# .pcd" || head.rfind("VERSION", 0) == 0 || head.rfind("FIELDS", 0) == 0) return "pcd";
-  const std::string_view first = first_content_line(head, '#');
-  if (first.rfind("solid", 0) == 0 && head.find("facet") != std::string::npos) return "stl";
-  if (first.rfind("solid", 0) == 0 && size < 200) return "stl";
-  {
-    std::string_view word = first.substr(0, first.find_first_of(" \t"));
-    if (word.size() >= 3 && word.substr(word.size() - 3) == "OFF" && word.size() <= 6) return "off";
-  }
+  const FileHead h{head, size, first_content_line(head, '#')};
+  // The sniffers in their order (formats.cpp): magic bytes first, then text headers.
+  std::vector<const FileFormat*> order;
+  for (const FileFormat& f : file_formats())
+    if (f.sniff) order.push_back(&f);
+  std::stable_sort(order.begin(), order.end(), [](const FileFormat* a, const FileFormat* b) { return a->detect_order < b->detect_order; });
+  for (const FileFormat* f : order)
+    if (!f->after_binary_check && f->sniff(h)) return f->name;
+  const FileFormat* by_extension = find_format_for_extension(path);
   if (looks_binary(head)) {
-    const std::string ext = lower(path.extension().string());
-    // A binary .stl whose size disagrees with its count: the STL reader says where it ends.
-    if (ext == ".stl" && size >= 84) return "stl";
-    if (ext == ".stl") throw InputError(fmt::format("{}: binary STL shorter than its 84-byte header ({} bytes)", display_name(path), size));
-    throw InputError(fmt::format("{}: unknown format: binary content that is none of PLY, PCD, LAS or STL", display_name(path)));
+    // E.g. a binary .stl whose size disagrees with its count: its reader says where it ends.
+    if (by_extension && by_extension->binary_by_extension) return by_extension->name;
+    std::string names;
+    for (const FileFormat* f : order)
+      if (!f->after_binary_check) names += (names.empty() ? "" : ", ") + f->title;
+    throw InputError(fmt::format("{}: unknown format: binary content that is none of {}", display_name(path), names));
   }
-  // OBJ: keyword lines.
-  {
-    io::detail::TextCursor cursor(head);
-    std::string_view line;
-    while (cursor.next_line(line)) {
-      std::size_t i = line.find_first_not_of(" \t");
-      if (i == std::string_view::npos) continue;
-      line.remove_prefix(i);
-      if (line.front() == '#') continue;
-      const std::string_view word = line.substr(0, line.find_first_of(" \t"));
-      if (word == "v" || word == "vn" || word == "vt" || word == "f" || word == "o" || word == "g" || word == "mtllib" ||
-          word == "usemtl" || word == "s")
-        return "obj";
-      break;
-    }
-  }
-  const std::string ext = lower(path.extension().string());
-  if (ext == ".off" || ext == ".obj" || ext == ".ply" || ext == ".pcd" || ext == ".stl")
-    throw InputError(fmt::format("{}: not a valid {} file: the header is missing", display_name(path), ext.substr(1)));
-  return "xyz";
+  for (const FileFormat* f : order)
+    if (f->after_binary_check && f->sniff(h)) return f->name;
+  if (by_extension && by_extension->header_required)
+    throw InputError(fmt::format("{}: not a valid {} file: the header is missing", display_name(path), lower(path.extension().string()).substr(1)));
+  for (const FileFormat& f : file_formats())
+    if (f.text_fallback) return f.name;
+  throw InputError(fmt::format("{}: unknown format: text that is none of {}", display_name(path), known_format_names()));
 }
 
 namespace {
 
 io::detail::RawData read_raw(const std::filesystem::path& path, const ReadOptions& options, std::string& format) {
-  format = options.format.empty() ? detect_format(path) : lower(options.format);
-  if (format == "ply") return io::detail::read_ply(path, options);
-  if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") { format = "xyz"; return io::detail::read_xyz(path, options); }
-  if (format == "pcd") return io::detail::read_pcd(path, options);
-  if (format == "las") return io::detail::read_las(path, options);
-  if (format == "laz") return io::detail::read_laz(path, options);
-  if (format == "off") return io::detail::read_off(path, options);
-  if (format == "obj") return io::detail::read_obj(path, options);
-  if (format == "stl") return io::detail::read_stl(path, options);
-  if (format == "e57") return io::detail::read_e57(path, options);
-  throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
+  const std::string name = options.format.empty() ? detect_format(path) : lower(options.format);
+  const FileFormat* f = find_file_format(name);
+  if (f == nullptr || f->read == nullptr)
+    throw UsageError(fmt::format("{}: unknown format '{}': expected {}", display_name(path), name, known_format_names(", ")));
+  format = f->name;
+  return f->read(path, options);
 }
 
 bool finite(const Vector3d& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
@@ -232,7 +192,7 @@ CloudReadResult read_point_cloud(const std::filesystem::path& path, const ReadOp
     throw InputError(fmt::format("{}: {} points with NaN coordinates (organized cloud); without --strict they are dropped and counted",
                                  display_name(path), raw.dropped_nonfinite));
   drop_nonfinite(raw.cloud, path, options.strict, result.dropped_nonfinite, false);
-  if (options.copc_level >= 0 && result.format != "laz")
+  if (options.copc_level >= 0 && !file_format(result.format).reads_octree_levels)
     throw UsageError(fmt::format("{}: an octree level is a COPC (LAZ) option; this file is {}", display_name(path), result.format));
   if (options.bounds) keep_inside(raw.cloud, *options.bounds);
   raw.cloud.validate();
@@ -299,28 +259,11 @@ WriteResult write_any(const std::filesystem::path& path, const PointCloud& cloud
                       const FieldSet& face_fields, const WriteOptions& options) {
   WriteResult result;
   cloud.validate();
-  const std::string format = options.format.empty() ? format_from_extension(path) : lower(options.format);
+  const FileFormat* f = options.format.empty() ? &format_for_extension(path) : find_file_format(options.format);
+  if (f == nullptr || f->write == nullptr)
+    throw UsageError(fmt::format("{}: unknown format '{}': expected {}", display_name(path), options.format, known_format_names(", ")));
   TemporaryOutput out(path);
-  if (format == "ply") io::detail::write_ply(out.path(), cloud, triangles, face_fields, options);
-  else if (format == "xyz" || format == "txt" || format == "pts" || format == "csv") {
-    // The XYZ writer needs to know the family member (csv: header + commas, pts: count line).
-    WriteOptions xyz_options = options;
-    if (xyz_options.format.empty()) {
-      const std::string ext = lower(path.extension().string());
-      xyz_options.format = ext == ".csv" ? "csv" : ext == ".pts" ? "pts" : "xyz";
-    }
-    io::detail::write_xyz(out.path(), cloud, xyz_options);
-  }
-  else if (format == "pcd") io::detail::write_pcd(out.path(), cloud, options, result.notes);
-  else if (format == "las") io::detail::write_las(out.path(), cloud, options);
-  else if (format == "laz") io::detail::write_laz(out.path(), cloud, options);
-  else if (format == "off") io::detail::write_off(out.path(), cloud, triangles, options);
-  else if (format == "obj") io::detail::write_obj(out.path(), cloud, triangles, options);
-  else if (format == "stl") io::detail::write_stl(out.path(), cloud, triangles, options);
-  else if (format == "e57") io::detail::write_e57(out.path(), cloud, options, result.notes);
-  else throw UsageError(fmt::format("{}: unknown format '{}': expected ply, xyz, pcd, las, off, obj or stl", display_name(path), format));
-  if ((format == "las" || format == "laz") && cloud.crs.wkt.empty() && !cloud.crs.geokeys.empty())
-    result.notes.push_back("coordinate system written as GeoTIFF keys only: LAS 1.4 point format 6/7 expects WKT, which the input did not give");
+  f->write(out.path(), path, cloud, triangles, face_fields, options, result.notes);
   out.commit();
   return result;
 }

@@ -6,20 +6,38 @@
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/pipeline/context.h"
 
 namespace pointsurf::detail {
 namespace {
 
-const std::vector<std::string> kFormats = {"", "ply", "xyz", "pcd", "las", "laz", "off", "obj", "stl", "e57"};
-
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
 }
 
-bool holds_faces(const std::string& format) { return format == "ply" || format == "off" || format == "obj" || format == "stl"; }
+std::string upper(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return s;
+}
+
+// The --format choices: "" (detect / from the extension) and every format of the table.
+std::vector<std::string> format_choices() {
+  std::vector<std::string> choices = {""};
+  for (const std::string& name : format_names()) choices.push_back(name);
+  return choices;
+}
+
+// "PLY, XYZ, PCD, ...": every format of the table.
+std::string format_titles() {
+  std::string out;
+  for (const FileFormat& f : file_formats()) out += (out.empty() ? "" : ", ") + upper(f.name);
+  return out;
+}
+
+bool holds_faces(const std::string& format) { return format_holds_faces(format); }
 
 void run_read(StageRun& run) {
   const std::string& file = run.args.text("filename");
@@ -91,15 +109,15 @@ std::vector<std::string> lost_attributes(const std::string& path, const std::str
   if (!item.triangles.empty() && !holds_faces(format)) lost.push_back(plural(item.triangles.size(), "face"));
   // Only PLY has per-face properties; a format that holds faces but no face properties loses
   // the face fields (a format without faces loses them with the faces, said above).
-  if (!item.triangles.empty() && holds_faces(format) && format != "ply")
+  const FileFormat& ff = file_format(format);
+  if (!item.triangles.empty() && ff.holds_faces && !ff.holds_face_fields)
     for (const ScalarField& f : item.face_fields) lost.push_back(fmt::format("face field '{}'", f.name));
-  if (format == "stl") {
-    if (c.has_normals()) lost.push_back("normals");
-    if (c.has_colors()) lost.push_back("colours");
-  }
+  if (!ff.holds_normals && c.has_normals()) lost.push_back("normals");
+  if (!ff.holds_colors && c.has_colors()) lost.push_back("colours");
   const std::string ext = lower(std::filesystem::path(path).extension().string());
-  if (format == "xyz" && ext == ".pts" && !c.fields.empty()) lost.push_back("field names (values are kept as columns)");
-  if (format == "off" || format == "obj" || format == "stl")
+  for (const std::string& e : ff.extensions_without_field_names)
+    if (ext == e && !c.fields.empty()) lost.push_back("field names (values are kept as columns)");
+  if (!ff.holds_fields)
     for (const ScalarField& f : c.fields) lost.push_back(fmt::format("field '{}'", f.name));
   return lost;
 }
@@ -147,13 +165,13 @@ StageSpec read_stage() {
   StageSpec s;
   s.name = "read";
   s.shape = CommandShape::Read;
-  s.summary = "Read a cloud or mesh (PLY, XYZ/TXT/CSV, PCD, LAS, LAZ, OFF, OBJ, STL; format from the content)";
+  s.summary = "Read a cloud or mesh (" + format_titles() + "; format from the content)";
   s.description = "A file name at the start of a pipeline is a reader. Mesh files keep their faces.";
   s.order = 0;
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = {
       P::text("filename", "", "File to read").meta("FILE"),
-      P::choice("format", "", kFormats, "Read as this format instead of detecting it from the content").meta("FORMAT"),
+      P::choice("format", "", format_choices(), "Read as this format instead of detecting it from the content").meta("FORMAT"),
       P::boolean("keep_poses", !ReadOptions{}.apply_poses,
                  "E57: keep each scan in its own frame (field scan numbers them; an E57 output gets the poses back) instead of applying its pose"),
       P::text("columns", ReadOptions{}.columns,
@@ -184,8 +202,8 @@ StageSpec write_stage() {
   s.consumes = {Slot{"data", DataKind::Any}};
   const WriteOptions w;
   s.params = {
-      P::text("filename", "", "File to write (.ply .xyz .txt .pts .csv .pcd .las .off .obj .stl)").meta("FILE"),
-      P::choice("format", w.format, kFormats, "Write this format whatever the extension").meta("FORMAT"),
+      P::text("filename", "", "File to write (" + known_extensions(" ") + ")").meta("FILE"),
+      P::choice("format", w.format, format_choices(), "Write this format whatever the extension").meta("FORMAT"),
       P::boolean("ascii", w.ascii, "Write ascii PLY/PCD/STL instead of binary"),
       P::boolean("float", w.single_precision, "Write float32 positions (PLY, PCD); refused where float32 loses precision"),
       P::boolean("double", w.double_precision, "Write double PCD positions even where float32 keeps them (PCL and Open3D 0.16 read them as zeros)"),

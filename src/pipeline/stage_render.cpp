@@ -4,11 +4,11 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/formats.h"
 #include "pointsurf/pipeline/context.h"
 #include "pointsurf/render/render_scene.h"
 
@@ -52,9 +52,7 @@ void run_render(StageRun& run) {
   RenderResult r = render_scene(item.cloud, item.triangles, p);
   const std::string& file = a.text("filename");
   const std::vector<std::uint8_t> png = encode_png(r.image);
-  std::ofstream out(file, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
-  if (!out) throw InputError(fmt::format("{}: cannot write the picture", file));
+  write_file_atomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   for (const std::string& w : r.warnings) run.record.warnings.push_back(w);
   run.record.count("points_drawn", as_count(r.points_drawn));
   run.record.count("triangles_drawn", as_count(r.triangles_drawn));
