@@ -25,7 +25,9 @@ it exits non-zero, runs past --timeout, or names an input (its first file argume
 
 Commands meant to fail: end the line in the doc with a comment `# fails: WHY`; it must then exit
 non-zero (1, 2 or 3), and exiting 0 is the failure. Commands that cannot run are listed in
-PLACEHOLDERS below with the reason; heavy ones in SLOW (run only with --all).
+PLACEHOLDERS below with the reason; heavy ones in SLOW (run only with --all). docs/stages.md's
+examples are the --help examples (StagesDoc.CommittedFileIsTheRegistrys keeps the file equal to
+`pointsurf stages --markdown`), so they run once, from --help, unless --all.
 """
 import argparse
 import os
@@ -194,8 +196,6 @@ def main():
     cli = str(Path(args.cli).resolve())
 
     sources = []  # (name, [(line, command, comment)])
-    for md in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
-        sources.append((str(md.relative_to(root)), doc_commands(root, md)))
     top = help_text(cli)
     sources.append(("pointsurf --help", help_examples(top)))
     threaded = set()
@@ -204,9 +204,12 @@ def main():
         if "--threads" in text:
             threaded.add(name)
         sources.append((f"pointsurf {name} --help", help_examples(text)))
+    from_help = {command for _, commands in sources for _, command, _ in commands}
+    for md in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
+        sources.append((str(md.relative_to(root)), doc_commands(root, md)))
 
     counts = {"found": 0, "ran": 0, "passed": 0, "expected-fail": 0, "placeholder": 0, "slow": 0,
-              "synopsis": 0, "output": 0}
+              "synopsis": 0, "output": 0, "same": 0}
     failures = []
     started = time.monotonic()
     for source, commands in sources:
@@ -226,6 +229,9 @@ def main():
                 counts["synopsis"] += 1
                 continue
             counts["found"] += 1
+            if source == "docs/stages.md" and command in from_help and not args.all:
+                counts["same"] += 1
+                continue
             key = next((k for k in PLACEHOLDERS if k[0] == source and command.startswith(k[1])), None)
             if key:
                 counts["placeholder"] += 1
@@ -283,7 +289,7 @@ def main():
     total = time.monotonic() - started
     print(f"\n{counts['found']} documented commands: {counts['ran']} ran ({counts['passed']} passed, "
           f"{counts['expected-fail']} failed as documented), {counts['placeholder']} placeholders, "
-          f"{counts['slow']} slow (--all); not commands: {counts['synopsis']} synopsis lines, "
+          f"{counts['slow']} slow (--all), {counts['same']} in docs/stages.md the same as --help (--all runs them); not commands: {counts['synopsis']} synopsis lines, "
           f"{counts['output']} output lines; {total:.1f} s")
     if failures:
         print(f"\n{len(failures)} failed:")
