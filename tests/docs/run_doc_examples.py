@@ -71,7 +71,7 @@ def strip_comment(line):
     return line.rstrip(), ""
 
 
-def doc_commands(root, path):
+def doc_commands(path):
     """(line number, command, comment) of every pointsurf call in a markdown file's shell blocks."""
     found = []
     fence = None
@@ -177,7 +177,7 @@ def shell_line(part, tokens, cli, threaded):
     return text
 
 
-def prepare(scratch, root, tokens):
+def prepare(scratch, tokens):
     for t in tokens:
         if "/" in t and not t.startswith(("/", "-")) and t.split("/")[0] not in LINKS:
             (scratch / t).parent.mkdir(parents=True, exist_ok=True)
@@ -206,7 +206,7 @@ def main():
         sources.append((f"pointsurf {name} --help", help_examples(text)))
     from_help = {command for _, commands in sources for _, command, _ in commands}
     for md in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
-        sources.append((str(md.relative_to(root)), doc_commands(root, md)))
+        sources.append((str(md.relative_to(root)), doc_commands(md)))
 
     counts = {"found": 0, "ran": 0, "passed": 0, "expected-fail": 0, "placeholder": 0, "slow": 0,
               "synopsis": 0, "output": 0, "same": 0}
@@ -246,9 +246,8 @@ def main():
             if args.list:
                 print(f"  list  {place}: {command}{'   (expected to fail)' if expect_fail else ''}")
                 continue
-            missing = []
             for part, tokens in parts:
-                prepare(scratch, root, tokens)
+                prepare(scratch, tokens)
             first_tokens = parts[0][1]
             missing = [] if expect_fail else [f for f in needed_inputs(first_tokens) if not (scratch / f).exists()]
             if missing:
@@ -284,7 +283,7 @@ def main():
         if not args.keep:
             subprocess.run(["rm", "-rf", str(scratch)], check=False)
         else:
-            print(f"  (kept {scratch})")
+            print(f"  (kept {scratch}: {source})")
 
     total = time.monotonic() - started
     print(f"\n{counts['found']} documented commands: {counts['ran']} ran ({counts['passed']} passed, "
