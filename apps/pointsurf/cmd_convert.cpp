@@ -17,7 +17,7 @@ std::string convert_help() {
   out += "Input and output options: those of 'pointsurf normals --help' (--columns, --input-format, --strict, --ascii, --float, --double,\n"
          "--big-endian, --compressed, --las-offset, --las-scale, --output-format).\n\n";
   out += common_options_help();
-  out += "\nExample:\n  pointsurf convert scan.pcd scan.ply --ascii\n";
+  out += "\nExample:\n  pointsurf convert data/kitten.xyz kitten.ply --ascii\n";
   return out;
 }
 

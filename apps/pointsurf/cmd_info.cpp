@@ -23,7 +23,7 @@ std::string info_help() {
          "  --columns SPEC                 Column meaning of XYZ/TXT/CSV input (see pointsurf normals --help)\n"
          "  --input-format FORMAT          Read as this format instead of detecting it: " + known_format_names(", ") + "\n"
          "  --strict                       Points with NaN/Inf coordinates are an error\n\n" +
-         common_options_help() + "\nExample:\n  pointsurf info scan.las --json\n";
+         common_options_help() + "\nExample:\n  pointsurf info data/b9_training.ply --json\n";
 }
 
 int run_info(const std::vector<std::string>& args) {

@@ -40,8 +40,8 @@ std::string main_help(const std::vector<pointsurf::cli::Command>& commands) {
                     "Commands:\n";
   for (const auto& c : commands) out += fmt::format("  {:<12} {}\n", c.name, c.summary);
   out += "\nExamples:\n"
-         "  pointsurf info scan.las --json\n"
-         "  pointsurf normals scan.xyz oriented.ply --k 30 --orient mst --report run.json\n"
+         "  pointsurf info data/b9_training.ply --json\n"
+         "  pointsurf normals data/kitten.xyz oriented.ply --k 30 --orient mst --report run.json\n"
          "  pointsurf run examples/kitten_mesh.json --set normals.k=20\n";
   return out;
 }

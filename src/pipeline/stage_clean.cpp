@@ -135,7 +135,7 @@ StageSpec clean_stage() {
   append(s.params, params_of(BilateralParams::fields(), smooth));
   append(s.params, trilateral_only_params());
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only(smooth));
-  s.examples = {"pointsurf clean scan.ply clean.ply --method sor,duplicates", "pointsurf clean part.ply smooth.ply --method trilateral --iterations 3"};
+  s.examples = {"pointsurf clean data/b9_training.ply clean.ply --method sor,duplicates", "pointsurf clean data/kitten.xyz smooth.ply --method trilateral --iterations 3"};
   s.run = run_clean;
   s.check = [](const StageArgs& a) {  // called once per listed method
     if (a.method() == "local") local_params(a).validate();

@@ -332,8 +332,9 @@ StageSpec evaluate_stage() {
   s.params.push_back(P::boolean(
       "align", false, "Best fit first: move the reference onto the mesh by point-to-plane ICP against the mesh samples; the transform is reported"));
   append(s.params, params_of(MeshAlignParams::fields()));
-  s.examples = {"pointsurf evaluate mesh.ply --reference scan.ply --tolerance 0.5 --out deviation.ply",
-                "pointsurf evaluate part.stl --reference scan.ply --align --report fit.json"};
+  s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply",
+                "pointsurf evaluate mesh.ply --reference data/kitten.xyz --tolerance 0.001 --out deviation.ply",
+                "pointsurf evaluate mesh.ply --reference data/kitten.xyz --align --report fit.json"};
   s.run = run_evaluate;
   return s;
 }
@@ -346,7 +347,7 @@ StageSpec quality_stage() {
   s.order = 125;
   s.consumes = {Slot{"mesh", DataKind::Mesh}};
   s.produces = Slot{"mesh", DataKind::Mesh};
-  s.examples = {"pointsurf quality mesh.ply --report quality.json"};
+  s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf quality mesh.ply --report quality.json"};
   s.run = run_quality;
   return s;
 }

@@ -318,8 +318,8 @@ StageSpec normals_stage() {
       p.doc = "Orientation: mst (consistent, Hoppe 1992), viewpoint, direction, none, input (each new normal on the side of the "
               "input's) or keep (the input's normals, no estimation); default: input when the input has normals, else mst";
     }
-  s.examples = {"pointsurf normals scan.xyz oriented.ply --k 30 --orient mst",
-                "pointsurf normals scan.las oriented.ply --orient viewpoint --viewpoint 0,0,1.8"};
+  s.examples = {"pointsurf normals data/kitten.xyz oriented.ply --k 30 --orient mst",
+                "pointsurf normals data/b9_training.ply b9_oriented.ply --orient viewpoint --viewpoint 596693,243676,300"};
   s.run = run_normals;
   s.check = [](const StageArgs& a) {
     check_neighborhood(a);
@@ -348,7 +348,7 @@ StageSpec curvature_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = params_of(CurvatureParams::fields());
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3));
-  s.examples = {"pointsurf curvature part.ply part_curvature.ply --degree 3"};
+  s.examples = {"pointsurf curvature data/kitten.xyz kitten_curvature.ply --degree 3"};
   s.run = run_curvature;
   s.check = [](const StageArgs& a) {
     check_neighborhood(a);
@@ -371,7 +371,7 @@ StageSpec features_stage() {
   s.produces = Slot{"cloud", DataKind::Any};
   s.params = params_of(FeatureParams::fields());
   s.params.push_back(P::text("truth_field", "", "Field marking true feature points (non-zero): report precision and recall").meta("NAME"));
-  s.examples = {"pointsurf features part.ply part_features.ply --report features.json"};
+  s.examples = {"pointsurf features data/b9_training.ply b9_features.ply --report features.json"};
   s.run = run_features;
   s.check = [](const StageArgs& a) {
     if (a.integer("min_cluster_points") > a.integer("k"))

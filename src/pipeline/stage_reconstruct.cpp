@@ -215,8 +215,8 @@ StageSpec reconstruct_stage() {
   append(s.params, params_of(PoissonParams::fields(), {"poisson"}));
   append(s.params, params_of(SmallComponentParams::fields()));
   append(s.params, params_of(FlatRegionParams::fields()));
-  s.examples = {"pointsurf reconstruct oriented.ply mesh.ply", "pointsurf reconstruct scan.ply mesh.ply --method ball-pivot --radii-in-spacings 2,4",
-                "pointsurf reconstruct scan.ply mesh.ply --method poisson --trim-depth 7"};
+  s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf reconstruct data/kitten.xyz mesh_bp.ply --method ball-pivot --radii-in-spacings 2,4",
+                "pointsurf reconstruct data/kitten.xyz mesh_poisson.ply --method poisson --trim-depth 5"};
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw key_error("radii", " and radii_in_spacings: give only one");

@@ -152,9 +152,10 @@ StageSpec register_stage() {
   s.params = params_of(RegisterPairParams::fields());
   s.params.push_back(P::text("out", "", "Write the transform as a T.json file (empty: none; the record holds it too)").meta("T.json"));
   s.writes_param = "out";
-  s.examples = {"pointsurf register scan2.ply scan1.ply --out T.json",
-                "pointsurf register scan2.ply scan1.ply --out T.json --apply scan2_on_1.ply --descriptor pfh --icp point",
-                "pointsurf transform scan2.ply scan2_on_1.ply --file T.json"};
+  s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 0.8660254037844387,-0.5,0,0.05,0.5,0.8660254037844387,0,0.02,0,0,1,-0.03,0,0,0,1",
+                "pointsurf register moved.ply data/kitten.xyz --out T.json",
+                "pointsurf register moved.ply data/kitten.xyz --out T.json --apply back.ply --descriptor pfh --icp point",
+                "pointsurf transform moved.ply back2.ply --file T.json"};
   s.run = run_register;
   s.check = [](const StageArgs& a) { pair_params(a).validate(); };
   return s;
@@ -174,8 +175,9 @@ StageSpec register_many_stage() {
   s.consumes = {Slot{"clouds", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
   s.params = params_of(RegisterScansParams::fields());
-  s.examples = {"pointsurf register-many scan1.ply scan2.ply scan3.ply --out merged.ply",
-                "pointsurf register-many a.ply b.ply c.ply d.ply merged.ply --mode first --icp point"};
+  s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 0.8660254037844387,-0.5,0,0.05,0.5,0.8660254037844387,0,0.02,0,0,1,-0.03,0,0,0,1",
+                "pointsurf register-many data/kitten.xyz moved.ply --out merged.ply",
+                "pointsurf register-many data/kitten.xyz moved.ply merged_first.ply --mode first --icp point"};
   s.run = run_register_many;
   s.check = [](const StageArgs& a) { multi_params(a).validate(); };
   return s;

@@ -95,8 +95,9 @@ StageSpec render_stage() {
   s.params.push_back(P::number("fov_deg", c.fov_deg, "Vertical field of view of the camera; 0: orthographic, as high as the eye is far from the target")
                          .unit("degrees")
                          .range(0, 179, false, true));
-  s.examples = {"pointsurf render mesh.ply mesh.png --view front --size 1600x1200",
-                "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.5 --unit mm"};
+  s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf render mesh.ply mesh.png --view front --size 1600x1200",
+                "pointsurf evaluate mesh.ply --reference data/kitten.xyz --out deviation.ply",
+                "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.001 --unit m"};
   s.run = run_render;
   s.check = [](const StageArgs& a) {
     const std::string& file = a.text("filename");

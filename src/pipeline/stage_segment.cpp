@@ -148,7 +148,8 @@ StageSpec boundary_stage() {
   append(s.params, params_of(OutlineParams::fields()));
   s.params.push_back(P::text("outlines", "", "Write the outlines to this file (.ply, .obj, .geojson)").meta("FILE"));
   s.params.push_back(P::text("crs", "", "GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)").meta("CRS"));
-  s.examples = {"pointsurf boundary roofs.ply roofs_boundary.ply --outlines roofs.geojson --crs EPSG:25832"};
+  s.examples = {"pointsurf segment data/b9_training.ply roofs.ply --method ransac --types plane",
+                "pointsurf boundary roofs.ply roofs_boundary.ply --outlines roofs.geojson --crs EPSG:25832"};
   s.run = run_boundary;
   s.check = [](const StageArgs& a) {
     read_params<BoundaryParams>(a).validate();
@@ -175,8 +176,8 @@ StageSpec segment_stage() {
   append(s.params, params_of(SurfaceTypeParams::fields(), {"hk"}));
   append(s.params, params_of(PrimitiveParams::fields(), {"ransac"}));
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"region", "ransac"}));
-  s.examples = {"pointsurf segment part.ply part_segments.ply --method region --max-angle-deg 5",
-                "pointsurf segment scene.ply primitives.ply --method ransac --report primitives.json"};
+  s.examples = {"pointsurf segment data/kitten.xyz kitten_segments.ply --method region --max-angle-deg 5",
+                "pointsurf segment data/b9_training.ply primitives.ply --method ransac --report primitives.json"};
   s.run = run_segment;
   s.check = [](const StageArgs& a) {
     if (a.method() == "region") read_params<RegionGrowingParams>(a).validate();

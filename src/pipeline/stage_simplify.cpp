@@ -130,8 +130,8 @@ StageSpec simplify_stage() {
   append(s.params, method_params<RegionalParams>("regional"));
   append(s.params, method_params<CurvatureDistanceParams>("curvature-distance"));
   append(s.params, method_params<LfsParams>("lfs"));
-  s.examples = {"pointsurf simplify scan.ply small.ply --method grid --cell 0.05",
-                "pointsurf simplify part.ply part_small.ply --method regional --ratio 0.25"};
+  s.examples = {"pointsurf simplify data/b9_training.ply small.ply --method grid --cell 2",
+                "pointsurf simplify data/kitten.xyz kitten_small.ply --method regional --ratio 0.25"};
   s.run = run_simplify;
   s.check = [](const StageArgs& a) {
     const int given = int(a.given("ratio")) + int(a.given("count")) + int(a.has("cell") && a.given("cell"));

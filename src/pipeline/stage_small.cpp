@@ -117,7 +117,7 @@ StageSpec crop_stage() {
   s.params = {P::vector3("min", {-kInf, -kInf, -kInf}, "Box corner with the smallest coordinates (bounds included)").unit("cloud units"),
               P::vector3("max", {kInf, kInf, kInf}, "Box corner with the largest coordinates (bounds included)").unit("cloud units"),
               P::boolean("outside", false, "Keep the points outside the box instead")};
-  s.examples = {"pointsurf crop scan.ply part.ply --min 0,0,0 --max 10,10,5"};
+  s.examples = {"pointsurf crop data/b9_training.ply part.ply --min 596680,243650,0 --max 596710,243700,100"};
   s.run = run_crop;
   s.check = [](const StageArgs& a) {
     const auto& lo = a.numbers("min");
@@ -140,7 +140,7 @@ StageSpec range_stage() {
   s.params = {P::text("field", "z", "Field to test: x, y, z or a scalar field of the input (classification, intensity, ...)").meta("NAME"),
               P::number("min", -kInf, "Smallest value kept (included)"),
               P::number("max", kInf, "Largest value kept (included)")};
-  s.examples = {"pointsurf range scan.las ground.ply --field classification --min 2 --max 2"};
+  s.examples = {"pointsurf range data/b9_training.ply label2.ply --field label --min 2 --max 2"};
   s.run = run_range;
   s.check = [](const StageArgs& a) {
     if (a.number("min") > a.number("max"))
@@ -162,8 +162,8 @@ StageSpec transform_stage() {
               P::text("file", "", "Read the matrix from a T.json file (as `pointsurf register --out` writes it) instead of --matrix")
                   .meta("T.json"),
               P::boolean("invert", false, "Apply the inverse transform (a T.json maps the source onto the target: this maps back)")};
-  s.examples = {"pointsurf transform a.ply b.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1",
-                "pointsurf transform scan2.ply scan2_aligned.ply --file T.json"};
+  s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1",
+                "pointsurf transform moved.ply back.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1 --invert"};
   s.run = run_transform;
   s.check = [](const StageArgs& a) {
     if (a.given("matrix") && !a.text("file").empty()) throw key_error("matrix", ", file: give one of them, not both");
@@ -188,7 +188,7 @@ StageSpec merge_stage() {
   s.order = 13;
   s.consumes = {Slot{"clouds", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
-  s.examples = {"pointsurf merge a.ply b.ply both.ply"};
+  s.examples = {"pointsurf merge data/kitten.xyz data/b9_training.ply both.ply"};
   s.run = run_merge;
   return s;
 }

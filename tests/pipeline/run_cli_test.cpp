@@ -190,8 +190,8 @@ TEST_F(RunCli, StageHelpShowsItsOwnExamplesAndDefaults) {
   EXPECT_TRUE(test::contains(normals.out, "--k N")) << normals.out;
   EXPECT_TRUE(test::contains(normals.out, "default 30")) << normals.out;
   EXPECT_TRUE(test::contains(clean.out, "--std-ratio X")) << clean.out;
-  EXPECT_TRUE(test::contains(clean.out, "pointsurf clean scan.ply")) << clean.out;
-  EXPECT_FALSE(test::contains(normals.out, "pointsurf clean scan.ply")) << normals.out;
+  EXPECT_TRUE(test::contains(clean.out, "pointsurf clean data/b9_training.ply")) << clean.out;
+  EXPECT_FALSE(test::contains(normals.out, "pointsurf clean data/b9_training.ply")) << normals.out;
 }
 
 }  // namespace
