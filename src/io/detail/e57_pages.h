@@ -70,7 +70,7 @@ public:
   std::uint64_t size() const noexcept { return bytes_.size(); }
   void append(const void* data, std::size_t size);
   template <typename T>
-  void append_value(T value) { append(&value, sizeof(T)); }  // little endian hosts only (checked in e57.cpp)
+  void append_value(T value) { append(&value, sizeof(T)); }  // little endian hosts only (checked in io/detail/e57_format.h)
   void pad_to(std::size_t alignment);
   /// Overwrites bytes already written at `logical`.
   void patch(std::uint64_t logical, const void* data, std::size_t size);
