@@ -85,6 +85,17 @@ py::list stage_list() {
     d["shape"] = command_shape_name(s.shape);
     d["measures"] = s.measures();
     d["writes_param"] = s.writes_param;
+    py::list results;  // the declared report metrics (core/results.h)
+    for (const ResultSpec& r : s.results) {
+      py::dict m;
+      m["key"] = r.key;
+      m["type"] = result_type_name(r.type);
+      m["unit"] = r.unit;
+      m["better"] = better_name(r.better);
+      m["doc"] = r.doc;
+      results.append(m);
+    }
+    d["results"] = results;
     d["examples"] = s.examples;
     py::list params;
     for (const ParamSpec& p : s.params) params.append(param_dict(p));

@@ -158,3 +158,11 @@ def test_run_a_pipeline_list_and_file(tmp_path, cloud):
     assert pointsurf.run(path, overrides=["normals.k=20"])["stages"][1]["parameters"]["k"] == 20
     with pytest.raises(pointsurf.UsageError, match=r'unknown key "kk"'):
         pointsurf.run([str(src), {"type": "normals", "kk": 16}, str(tmp_path / "x.ply")])
+
+
+def test_declared_report_metrics_are_in_the_registry():
+    evaluate = next(s for s in pointsurf.STAGES if s["name"] == "evaluate")
+    rms = next(r for r in evaluate["results"] if r["key"] == "deviation/rms")
+    assert (rms["type"], rms["unit"], rms["better"]) == ("number", "cloud units", "lower")
+    quality = next(s for s in pointsurf.STAGES if s["name"] == "quality")
+    assert {"quality/watertight", "quality/genus", "quality/angles_deg/p50"} <= {r["key"] for r in quality["results"]}

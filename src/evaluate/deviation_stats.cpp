@@ -159,4 +159,60 @@ std::vector<RegionDeviation> summarize_deviation_by_region(std::span<const doubl
   return out;
 }
 
+const ResultTable<DeviationStats>& DeviationStats::results() {
+  static const ResultTable<DeviationStats> table = [] {
+    using D = DeviationStats;
+    const std::string u = "cloud units";
+    ResultTable<D> t;
+    t.count("count", &D::count, "Finite deviations summarised");
+    t.number("max_positive", &D::max_positive, "Largest deviation above the surface (0 when none)").with_unit(u).lower_is_better();
+    t.number("max_negative", &D::max_negative, "Most negative deviation, below the surface (0 when none)").with_unit(u).higher_is_better();
+    t.number("mean_positive", &D::mean_positive, "Mean of the deviations above the surface").with_unit(u).lower_is_better();
+    t.number("mean_negative", &D::mean_negative, "Mean of the deviations below the surface").with_unit(u).higher_is_better();
+    t.number("mean", &D::mean, "Signed mean deviation").with_unit(u);
+    t.number("mean_absolute", &D::mean_absolute, "Mean absolute deviation").with_unit(u).lower_is_better();
+    t.number("rms", &D::rms, "Root mean square deviation").with_unit(u).lower_is_better();
+    t.number("std", &D::std, "Standard deviation about the mean").with_unit(u).lower_is_better();
+    t.number("tolerance", &D::tolerance, "The tolerance band, as given").with_unit(u);
+    t.number("within_tolerance", &D::within_tolerance, "Share (0..1) of deviations within the tolerance").higher_is_better();
+    t.count("positive", &D::positive, "Deviations above the surface");
+    t.count("negative", &D::negative, "Deviations below the surface");
+    t.count("ignored", &D::ignored, "Non-finite deviations left out (beyond a distance limit)").lower_is_better();
+    t.family(
+         "percentiles/p*", ResultType::Number,
+         [](const D& d) {
+           std::vector<std::pair<std::string, ResultValue>> out;
+           for (std::size_t i = 0; i < d.percentile_ranks.size() && i < d.percentile_values.size(); ++i) {
+             std::string rank = format_value(d.percentile_ranks[i]);
+             std::replace(rank.begin(), rank.end(), '.', '_');
+             out.emplace_back(rank, d.percentile_values[i]);
+           }
+           return out;
+         },
+         "Nearest-rank percentile of the deviations, one per rank asked (p99_9: 99.9 %)")
+        .with_unit(u);
+    t.numbers("histogram/edges", &D::histogram_edges, "Histogram bin edges (bins + 1)").with_unit(u);
+    t.numbers("histogram/counts", &D::histogram_counts, "Deviations per bin; values outside the edges in the end bins");
+    return t;
+  }();
+  return table;
+}
+
+const ResultTable<ValueDistribution>& ValueDistribution::results() {
+  static const ResultTable<ValueDistribution> table = [] {
+    using V = ValueDistribution;
+    ResultTable<V> t;
+    t.number("min", &V::min, "Smallest value");
+    t.number("max", &V::max, "Largest value");
+    t.number("mean", &V::mean, "Mean value");
+    t.number("p05", &V::p05, "5th percentile (nearest rank)");
+    t.number("p50", &V::p50, "Median (nearest rank)");
+    t.number("p95", &V::p95, "95th percentile (nearest rank)");
+    t.numbers("histogram/edges", &V::edges, "Histogram bin edges (bins + 1)");
+    t.numbers("histogram/counts", &V::counts, "Values per bin; values outside the edges in the end bins");
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

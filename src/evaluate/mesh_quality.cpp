@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include <Eigen/Geometry>
@@ -134,6 +135,59 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
     q.self_intersections = count_self_intersections(mesh, *bvh);
   }
   return q;
+}
+
+const ResultTable<MeshQuality>& MeshQuality::results() {
+  static const ResultTable<MeshQuality> table = [] {
+    using Q = MeshQuality;
+    ResultTable<Q> t;
+    const auto topo = [&t](const char* key, std::size_t MeshTopology::*member, const char* doc) -> ResultSpec& {
+      return t.computed(key, ResultType::Integer, [member](const Q& q) { return ResultValue(static_cast<std::int64_t>(q.topology.*member)); }, doc);
+    };
+    topo("vertices", &MeshTopology::vertices, "Vertices used by at least one triangle");
+    topo("isolated_vertices", &MeshTopology::isolated_vertices, "Vertices used by no triangle").lower_is_better();
+    topo("triangles", &MeshTopology::triangles, "Non-degenerate triangles");
+    topo("edges", &MeshTopology::edges, "Distinct undirected edges");
+    topo("boundary_edges", &MeshTopology::boundary_edges, "Edges with exactly one triangle").lower_is_better();
+    topo("non_manifold_edges", &MeshTopology::non_manifold_edges, "Edges with three or more triangles").lower_is_better();
+    topo("non_manifold_vertices", &MeshTopology::non_manifold_vertices, "Vertices whose fan is not one disc or half-disc").lower_is_better();
+    topo("inconsistent_edges", &MeshTopology::inconsistent_edges, "Edges traversed the same way by both triangles").lower_is_better();
+    t.flag("edge_manifold", &Q::edge_manifold, "No edge with three or more triangles").higher_is_better();
+    t.flag("vertex_manifold", &Q::vertex_manifold, "Every vertex fan one disc or half-disc").higher_is_better();
+    t.flag("oriented", &Q::oriented, "Neighbours traverse shared edges oppositely").higher_is_better();
+    t.flag("closed", &Q::closed, "No boundary edge");
+    t.flag("watertight", &Q::watertight, "Closed, manifold and oriented").higher_is_better();
+    topo("components", &MeshTopology::components, "Connected components (triangles sharing edges)");
+    t.computed("euler_characteristic", ResultType::Integer,
+               [](const Q& q) { return ResultValue(static_cast<std::int64_t>(q.topology.euler_characteristic)); }, "V - E + F");
+    t.computed("genus", ResultType::Integer,
+               [](const Q& q) {
+                 return q.genus >= 0 ? ResultValue(static_cast<std::int64_t>(q.genus)) : ResultValue(std::numeric_limits<double>::quiet_NaN());
+               },
+               "Genus (handles) of one connected, oriented, manifold surface; NaN (null) otherwise");
+    t.computed("boundary_loops", ResultType::Integer,
+               [](const Q& q) { return ResultValue(static_cast<std::int64_t>(q.topology.boundary_loops.size())); }, "Boundary loops (holes and borders)");
+    t.computed("boundary_loop_lengths", ResultType::Numbers,
+               [](const Q& q) {
+                 std::vector<double> lengths;
+                 for (const BoundaryLoop& l : q.topology.boundary_loops) lengths.push_back(l.length);
+                 return ResultValue(std::move(lengths));
+               },
+               "Length of each boundary loop, longest first")
+        .with_unit("cloud units");
+    t.count("degenerate_faces", &Q::degenerate_faces, "Faces with a repeated vertex or zero area").lower_is_better();
+    t.count("duplicate_faces", &Q::duplicate_faces, "Faces over the same three vertices as an earlier one").lower_is_better();
+    t.count("self_intersections", &Q::self_intersections, "Pairs of triangles sharing no vertex that cross").lower_is_better();
+    t.number("area", &Q::area, "Surface area").with_unit("square cloud units");
+    t.computed("volume", ResultType::Number,
+               [](const Q& q) { return ResultValue(q.has_volume ? q.volume : std::numeric_limits<double>::quiet_NaN()); },
+               "Enclosed volume when closed and oriented; NaN (null) otherwise")
+        .with_unit("cubic cloud units");
+    t.nested("angles_deg/", &Q::angles_deg, ValueDistribution::results());
+    t.nested("aspect_ratios/", &Q::aspect_ratios, ValueDistribution::results());
+    return t;
+  }();
+  return table;
 }
 
 }  // namespace pointsurf

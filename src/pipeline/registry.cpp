@@ -98,6 +98,12 @@ std::string stages_markdown() {
       out += "\n| key | type | unit | default | range or choices | methods | doc |\n|---|---|---|---|---|---|---|\n";
       for (const ParamSpec& p : s.params) out += param_row(p);
     }
+    if (!s.results.empty()) {
+      out += "\nReport metrics (`metrics` of the stage's record; `*` stands for a rank or a region):\n";
+      out += "\n| key | type | unit | better | doc |\n|---|---|---|---|---|\n";
+      for (const ResultSpec& r : s.results)
+        out += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.key, result_type_name(r.type), cell(r.unit), better_name(r.better), cell(r.doc));
+    }
     if (!s.examples.empty()) {
       out += "\n```bash\n";
       for (const std::string& e : s.examples) out += e + "\n";

@@ -22,80 +22,99 @@
 namespace pointsurf::detail {
 namespace {
 
-// "p50", "p99_9": a percentile's key in the report.
-std::string percentile_key(double rank) {
-  std::string text = format_value(rank);
-  std::replace(text.begin(), text.end(), '.', '_');
-  return "p" + text;
-}
-
-std::vector<double> as_numbers(const std::vector<std::size_t>& counts) { return {counts.begin(), counts.end()}; }
-
 // The deviation block, under `prefix` ("deviation/"): the same keys in every report.
-void record_deviation(StageRecord& rec, const std::string& prefix, const DeviationStats& s) {
-  rec.metric(prefix + "count", static_cast<std::int64_t>(s.count));
-  rec.metric(prefix + "max_positive", s.max_positive);
-  rec.metric(prefix + "max_negative", s.max_negative);
-  rec.metric(prefix + "mean_positive", s.mean_positive);
-  rec.metric(prefix + "mean_negative", s.mean_negative);
-  rec.metric(prefix + "mean", s.mean);
-  rec.metric(prefix + "mean_absolute", s.mean_absolute);
-  rec.metric(prefix + "rms", s.rms);
-  rec.metric(prefix + "std", s.std);
-  rec.metric(prefix + "tolerance", s.tolerance);
-  rec.metric(prefix + "within_tolerance", s.within_tolerance);
-  rec.metric(prefix + "positive", static_cast<std::int64_t>(s.positive));
-  rec.metric(prefix + "negative", static_cast<std::int64_t>(s.negative));
-  rec.metric(prefix + "ignored", static_cast<std::int64_t>(s.ignored));
-  for (std::size_t i = 0; i < s.percentile_ranks.size(); ++i)
-    rec.metric(prefix + "percentiles/" + percentile_key(s.percentile_ranks[i]), s.percentile_values[i]);
-  rec.metric(prefix + "histogram/edges", s.histogram_edges);
-  rec.metric(prefix + "histogram/counts", as_numbers(s.histogram_counts));
-}
-
-void record_distribution(StageRecord& rec, const std::string& prefix, const ValueDistribution& d) {
-  rec.metric(prefix + "min", d.min);
-  rec.metric(prefix + "max", d.max);
-  rec.metric(prefix + "mean", d.mean);
-  rec.metric(prefix + "p05", d.p05);
-  rec.metric(prefix + "p50", d.p50);
-  rec.metric(prefix + "p95", d.p95);
-  rec.metric(prefix + "histogram/edges", d.edges);
-  rec.metric(prefix + "histogram/counts", as_numbers(d.counts));
-}
+void record_deviation(StageRecord& rec, const std::string& prefix, const DeviationStats& s) { rec.add(DeviationStats::results(), s, prefix); }
 
 // The quality block: the same keys from the quality and the evaluate stage.
-void record_quality(StageRecord& rec, const MeshQuality& q) {
-  const std::string p = "quality/";
-  const MeshTopology& t = q.topology;
-  rec.metric(p + "vertices", as_count(t.vertices));
-  rec.metric(p + "isolated_vertices", as_count(t.isolated_vertices));
-  rec.metric(p + "triangles", as_count(t.triangles));
-  rec.metric(p + "edges", as_count(t.edges));
-  rec.metric(p + "boundary_edges", as_count(t.boundary_edges));
-  rec.metric(p + "non_manifold_edges", as_count(t.non_manifold_edges));
-  rec.metric(p + "non_manifold_vertices", as_count(t.non_manifold_vertices));
-  rec.metric(p + "inconsistent_edges", as_count(t.inconsistent_edges));
-  rec.metric(p + "edge_manifold", q.edge_manifold);
-  rec.metric(p + "vertex_manifold", q.vertex_manifold);
-  rec.metric(p + "oriented", q.oriented);
-  rec.metric(p + "closed", q.closed);
-  rec.metric(p + "watertight", q.watertight);
-  rec.metric(p + "components", as_count(t.components));
-  rec.metric(p + "euler_characteristic", static_cast<std::int64_t>(t.euler_characteristic));
-  if (q.genus >= 0) rec.metric(p + "genus", static_cast<std::int64_t>(q.genus));
-  else rec.metric(p + "genus", std::numeric_limits<double>::quiet_NaN());
-  rec.metric(p + "boundary_loops", as_count(t.boundary_loops.size()));
-  std::vector<double> lengths;
-  for (const BoundaryLoop& l : t.boundary_loops) lengths.push_back(l.length);
-  rec.metric(p + "boundary_loop_lengths", lengths);
-  rec.metric(p + "degenerate_faces", as_count(q.degenerate_faces));
-  rec.metric(p + "duplicate_faces", as_count(q.duplicate_faces));
-  rec.metric(p + "self_intersections", as_count(q.self_intersections));
-  rec.metric(p + "area", q.area);
-  rec.metric(p + "volume", q.has_volume ? q.volume : std::numeric_limits<double>::quiet_NaN());
-  record_distribution(rec, p + "angles_deg/", q.angles_deg);
-  record_distribution(rec, p + "aspect_ratios/", q.aspect_ratios);
+void record_quality(StageRecord& rec, const MeshQuality& q) { rec.add(MeshQuality::results(), q, "quality/"); }
+
+// The best fit of the reference (evaluate --align), reported under align/.
+const ResultTable<RegistrationResult>& align_results() {
+  static const ResultTable<RegistrationResult> table = [] {
+    using R = RegistrationResult;
+    ResultTable<R> t;
+    t.computed("matrix", ResultType::Numbers,
+               [](const R& r) {
+                 const Eigen::Matrix4d m = r.transform.matrix();
+                 std::vector<double> matrix;
+                 for (int i = 0; i < 4; ++i)
+                   for (int j = 0; j < 4; ++j) matrix.push_back(m(i, j));
+                 return ResultValue(std::move(matrix));
+               },
+               "4x4 row by row: maps the reference as read onto the mesh");
+    t.computed("rotation_deg", ResultType::Number, [](const R& r) { return ResultValue(r.transform.angle_degrees()); }, "Rotation angle of the fit")
+        .with_unit("degrees");
+    t.computed("translation", ResultType::Numbers,
+               [](const R& r) {
+                 const Eigen::Matrix4d m = r.transform.matrix();
+                 return ResultValue(std::vector<double>{m(0, 3), m(1, 3), m(2, 3)});
+               },
+               "Translation of the fit")
+        .with_unit("cloud units");
+    t.number("fitness", &R::fitness, "Share of reference points within the fit's distance").higher_is_better();
+    t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
+    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(as_count(r.iterations)); }, "ICP iterations");
+    t.flag("converged", &R::converged, "The fit converged").higher_is_better();
+    t.text("message", &R::message, "How the fit ended");
+    return t;
+  }();
+  return table;
+}
+
+// Chamfer and Hausdorff between the reference and the mesh, reported under distance/.
+struct TwoWayDistance {
+  double reference_to_mesh_mean = 0.0, reference_to_mesh_max = 0.0;
+  double mesh_to_reference_mean = 0.0, mesh_to_reference_max = 0.0;
+  double chamfer = 0.0, hausdorff = 0.0;
+  std::size_t mesh_samples = 0;
+};
+
+const ResultTable<TwoWayDistance>& distance_results() {
+  static const ResultTable<TwoWayDistance> table = [] {
+    using D = TwoWayDistance;
+    const std::string u = "cloud units";
+    ResultTable<D> t;
+    t.number("reference_to_mesh_mean", &D::reference_to_mesh_mean, "Mean unsigned distance, reference to mesh").with_unit(u).lower_is_better();
+    t.number("reference_to_mesh_max", &D::reference_to_mesh_max, "Largest distance, reference to mesh").with_unit(u).lower_is_better();
+    t.number("mesh_to_reference_mean", &D::mesh_to_reference_mean, "Mean distance, mesh samples to reference").with_unit(u).lower_is_better();
+    t.number("mesh_to_reference_max", &D::mesh_to_reference_max, "Largest distance, mesh samples to reference").with_unit(u).lower_is_better();
+    t.number("chamfer", &D::chamfer, "Chamfer distance: the mean of both means").with_unit(u).lower_is_better();
+    t.number("hausdorff", &D::hausdorff, "Hausdorff distance: the larger of both maxima").with_unit(u).lower_is_better();
+    t.count("mesh_samples", &D::mesh_samples, "Area-uniform samples of the mesh");
+    return t;
+  }();
+  return table;
+}
+
+// What evaluate reports besides its blocks.
+struct EvaluateTexts {
+  std::string reference, sign, region_field;
+};
+const ResultTable<EvaluateTexts>& evaluate_text_results() {
+  static const ResultTable<EvaluateTexts> table = [] {
+    ResultTable<EvaluateTexts> t;
+    t.text("reference", &EvaluateTexts::reference, "Tag of the reference measured");
+    t.text("sign", &EvaluateTexts::sign, "How the deviation's sign was decided (normals, winding, unsigned)");
+    return t;
+  }();
+  return table;
+}
+
+// Every metric evaluate and quality report, for their declarations.
+std::vector<ResultSpec> quality_specs() { return prefixed(MeshQuality::results().specs(), "quality/"); }
+std::vector<ResultSpec> evaluate_specs() {
+  std::vector<ResultSpec> out = prefixed(align_results().specs(), "align/");
+  for (const ResultSpec& s : evaluate_text_results().specs()) out.push_back(s);
+  ResultSpec region;
+  region.key = "region_field";
+  region.type = ResultType::Text;
+  region.doc = "The label field of the per-region deviations (segment or region when present)";
+  out.push_back(region);
+  for (const char* block : {"deviation/", "deviation_not_vertices/", "deviation_by_region/*/"})
+    for (const ResultSpec& s : prefixed(DeviationStats::results().specs(), block)) out.push_back(s);
+  for (const ResultSpec& s : prefixed(distance_results().specs(), "distance/")) out.push_back(s);
+  for (const ResultSpec& s : quality_specs()) out.push_back(s);
+  return out;
 }
 
 void quality_warnings(StageRecord& rec, const MeshQuality& q) {
@@ -150,18 +169,7 @@ RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const st
   p.max_distance = Length::cloud(p.max_distance.resolve(p.max_distance.in_spacings() ? run.context.mean_spacing(ref_tag) : 0.0));
   rec.set_used("align_max_distance_used", p.max_distance.value);
   const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud.positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
-  const Eigen::Matrix4d m = r.transform.matrix();
-  std::vector<double> matrix;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) matrix.push_back(m(i, j));
-  rec.metric("align/matrix", matrix);  // row-major, maps the reference as read onto the mesh
-  rec.metric("align/rotation_deg", r.transform.angle_degrees());
-  rec.metric("align/translation", std::vector<double>{m(0, 3), m(1, 3), m(2, 3)});
-  rec.metric("align/fitness", r.fitness);
-  rec.metric("align/inlier_rmse", r.inlier_rmse);
-  rec.metric("align/iterations", as_count(r.iterations));
-  rec.metric("align/converged", r.converged);
-  rec.metric("align/message", r.message);
+  rec.add(align_results(), r, "align/");
   if (!r.converged) rec.warnings.push_back("align: " + r.message + "; measured as aligned so far");
   return r.transform;
 }
@@ -219,9 +227,8 @@ void run_evaluate(StageRun& run) {
   const DeviationStats stats = summarize_deviation(dist.distances, sp);
   rec.count("reference_points", as_count(ref.cloud.size()));
   rec.count("mesh_triangles", as_count(mesh.triangles.size()));
-  rec.metric("reference", ref_tag);
+  rec.add(evaluate_text_results(), EvaluateTexts{ref_tag, distance_sign_names().name(dist.sign_used), ""});
   rec.set_used("reference", ref_tag);
-  rec.metric("sign", distance_sign_names().name(dist.sign_used));
   record_deviation(rec, "deviation/", stats);
 
   // The points that did not become vertices of the mesh (removed by cleaning or
@@ -269,13 +276,15 @@ void run_evaluate(StageRun& run) {
   const double forward_max = std::max(stats.max_positive, -stats.max_negative);
   const double back_mean = back.empty() ? 0.0 : back_sum / static_cast<double>(back.size());
   rec.count("mesh_samples", as_count(on_mesh.size()));
-  rec.metric("distance/reference_to_mesh_mean", stats.mean_absolute);
-  rec.metric("distance/reference_to_mesh_max", forward_max);
-  rec.metric("distance/mesh_to_reference_mean", back_mean);
-  rec.metric("distance/mesh_to_reference_max", back_max);
-  rec.metric("distance/chamfer", 0.5 * (stats.mean_absolute + back_mean));
-  rec.metric("distance/hausdorff", std::max(forward_max, back_max));
-  rec.metric("distance/mesh_samples", static_cast<std::int64_t>(on_mesh.size()));
+  TwoWayDistance two_way;
+  two_way.reference_to_mesh_mean = stats.mean_absolute;
+  two_way.reference_to_mesh_max = forward_max;
+  two_way.mesh_to_reference_mean = back_mean;
+  two_way.mesh_to_reference_max = back_max;
+  two_way.chamfer = 0.5 * (stats.mean_absolute + back_mean);
+  two_way.hausdorff = std::max(forward_max, back_max);
+  two_way.mesh_samples = on_mesh.size();
+  rec.add(distance_results(), two_way, "distance/");
 
   record_quality(rec, q);
 
@@ -307,6 +316,7 @@ ParamSpec& param(std::vector<ParamSpec>& params, const std::string& name) {
 StageSpec evaluate_stage() {
   StageSpec s;
   s.name = "evaluate";
+  s.results = evaluate_specs();
   s.shape = CommandShape::Compare;
   s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
   s.description = "Every reference point gets its exact distance to the mesh's triangles, positive outside (where the normals point). "
@@ -342,6 +352,7 @@ StageSpec evaluate_stage() {
 StageSpec quality_stage() {
   StageSpec s;
   s.name = "quality";
+  s.results = quality_specs();
   s.shape = CommandShape::Measure;
   s.summary = "Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume";
   s.order = 125;

@@ -3,7 +3,9 @@
 // ranges and choices enforced, "did you mean" on typos.
 #include "pointsurf/pipeline/registry.h"
 
+#include <cctype>
 #include <map>
+#include <regex>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -13,6 +15,8 @@
 #include "pointsurf/clean/remove_outliers.h"
 #include "pointsurf/clean/smooth_points.h"
 #include "pointsurf/core/error.h"
+#include "pointsurf/io/io.h"
+#include "pointsurf/pipeline/pipeline.h"
 #include "pointsurf/evaluate/deviation_stats.h"
 #include "pointsurf/evaluate/mesh_distance.h"
 #include "pointsurf/evaluate/surface_distance.h"
@@ -113,6 +117,64 @@ TEST(Registry, EachStagesCommandShapeAgreesWithItsSlots) {
   for (CommandShape shape : {CommandShape::Read, CommandShape::Write, CommandShape::Transform, CommandShape::Merge, CommandShape::Pair,
                              CommandShape::Compare, CommandShape::Measure, CommandShape::Picture})
     EXPECT_TRUE(seen.count(shape)) << "no stage has shape " << command_shape_name(shape);
+}
+
+// A recorded key matches a declared one: equal, or equal but for one "*" standing for one
+// path segment each ("deviation_by_region/*/rms", "percentiles/p*").
+bool key_matches(const std::string& declared, const std::string& key) {
+  std::string pattern;
+  for (char c : declared) {
+    if (c == '*') pattern += "[^/]+";
+    else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/') pattern += c;
+    else pattern += std::string("\\") + c;
+  }
+  return std::regex_match(key, std::regex(pattern));
+}
+
+bool type_matches(ResultType declared, const ResultValue& v) {
+  switch (declared) {
+    case ResultType::Integer: return std::holds_alternative<std::int64_t>(v) || std::holds_alternative<double>(v);  // NaN: undefined
+    case ResultType::Number: return std::holds_alternative<double>(v);
+    case ResultType::Text: return std::holds_alternative<std::string>(v);
+    case ResultType::Flag: return std::holds_alternative<bool>(v);
+    case ResultType::Numbers: return std::holds_alternative<std::vector<double>>(v);
+  }
+  return false;
+}
+
+// A stage that declares its report metrics records no other, each of its declared type, and
+// every block it declares shows up when the run has what the block needs (a fit, labels).
+TEST(Registry, DeclaredMetricsAreExactlyWhatTheStagesReport) {
+  const std::filesystem::path dir = test::temp_dir("registry_results");
+  PointCloud sphere = test::sample_sphere(3000, 1.0, Vector3d(0.5, -0.2, 0.1), 3);
+  ScalarField& segment = sphere.fields.add("segment", sphere.size());
+  for (std::size_t i = 0; i < sphere.size(); ++i) segment.values[i] = sphere.positions[i].z() > 0.1 ? 1.0 : 2.0;
+  write_point_cloud(dir / "sphere.ply", sphere);
+  const std::string json = "[\"" + (dir / "sphere.ply").string() +
+                           "\", {\"type\": \"normals\"}, {\"type\": \"reconstruct\", \"tag\": \"mesh\"},"
+                           " {\"type\": \"evaluate\", \"align\": true, \"percentiles\": [50, 99.9]}, {\"type\": \"quality\", \"inputs\": \"mesh\"}]";
+  Context ctx;
+  RunReport report;
+  run_pipeline(parse_pipeline(json, "results.json"), ctx, report);
+  ASSERT_TRUE(report.ok) << report.error;
+  std::set<std::string> checked;
+  for (const StageRecord& r : report.stages) {
+    const StageSpec* spec = find_stage(r.type);
+    ASSERT_NE(spec, nullptr);
+    if (spec->results.empty()) continue;
+    std::set<std::string> seen_specs;
+    for (const auto& [key, value] : r.metrics) {
+      const auto it = std::find_if(spec->results.begin(), spec->results.end(), [&](const ResultSpec& d) { return key_matches(d.key, key); });
+      ASSERT_NE(it, spec->results.end()) << r.type << ": metric " << key << " is recorded but not declared";
+      EXPECT_TRUE(type_matches(it->type, value)) << r.type << ": " << key << " is not of its declared type " << result_type_name(it->type);
+      seen_specs.insert(it->key);
+    }
+    for (const ResultSpec& d : spec->results) EXPECT_TRUE(seen_specs.count(d.key)) << r.type << ": declared " << d.key << " was not recorded";
+    checked.insert(r.type);
+  }
+  EXPECT_EQ(checked, (std::set<std::string>{"evaluate", "quality"}));
+  EXPECT_TRUE(key_matches("deviation_by_region/*/rms", "deviation_by_region/segment_1/rms"));
+  EXPECT_FALSE(key_matches("deviation_by_region/*/rms", "deviation_by_region/a/b/rms"));
 }
 
 // The library's defaults, read from default-constructed Params structs: the registry must

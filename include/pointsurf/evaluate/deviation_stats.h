@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pointsurf/core/fields.h"
+#include "pointsurf/core/results.h"
 
 namespace pointsurf {
 
@@ -42,6 +43,9 @@ struct DeviationStats {
   std::vector<double> percentile_values;  // nearest-rank percentiles, cloud units
   std::vector<double> histogram_edges;    // bins + 1
   std::vector<std::size_t> histogram_counts;  // bins; values outside the edges go to the end bins
+
+  /// The reported members: key, unit, which way is better, doc (core/results.h).
+  static const ResultTable<DeviationStats>& results();
 };
 
 struct RegionDeviation {
@@ -55,6 +59,9 @@ struct ValueDistribution {
   double p05 = 0.0, p50 = 0.0, p95 = 0.0;  // percentiles (nearest rank)
   std::vector<double> edges;               // histogram bin edges (bins + 1)
   std::vector<std::size_t> counts;         // values per bin (bins); values outside go to the end bins
+
+  /// The reported members (core/results.h); `unit` is the values' unit.
+  static const ResultTable<ValueDistribution>& results();
 };
 
 /// Summary of `values` (any order) with `bins` equal bins over [lo, hi]; lo == hi: over the

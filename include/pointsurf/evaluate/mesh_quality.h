@@ -29,6 +29,9 @@ struct MeshQuality {
   bool has_volume = false;                 // volume is defined (closed and oriented)
   ValueDistribution angles_deg;            // inner angles of the non-degenerate faces, 18 bins of 10 degrees
   ValueDistribution aspect_ratios;         // longest edge x perimeter / (4 sqrt 3 area): 1 equilateral, larger worse
+
+  /// The reported members: key, unit, which way is better, doc (core/results.h).
+  static const ResultTable<MeshQuality>& results();
 };
 
 /// The quality of `mesh`. Throws InputError when an index is out of range or a vertex used by a

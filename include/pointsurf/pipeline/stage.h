@@ -16,6 +16,7 @@
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 
 namespace pointsurf {
 
@@ -28,10 +29,6 @@ struct Slot {
   std::string name;  // "cloud", "mesh", "reference", "source", "target"
   DataKind kind = DataKind::Cloud;
 };
-
-/// Key-value results of one stage run: counts (integers) and metrics (numbers or text).
-using ResultValue = std::variant<std::int64_t, double, std::string, bool, std::vector<double>>;
-using ResultList = std::vector<std::pair<std::string, ResultValue>>;
 
 /// What one stage did: the values it used, its counts, metrics, warnings, time and memory.
 struct StageRecord {
@@ -51,6 +48,11 @@ struct StageRecord {
   void set_used(const std::string& name, ParamValue value);
   void count(std::string name, std::int64_t value) { counts.emplace_back(std::move(name), value); }
   void metric(std::string name, ResultValue value) { metrics.emplace_back(std::move(name), std::move(value)); }
+  /// Records every member of `r` that its table declares, as metrics under `prefix`.
+  template <class R>
+  void add(const ResultTable<R>& table, const R& r, const std::string& prefix = "") {
+    table.record(r, [this](std::string key, ResultValue value) { metrics.emplace_back(std::move(key), std::move(value)); }, prefix);
+  }
 };
 
 /// The parameters of one stage run, resolved: every parameter of the chosen method, given or
@@ -131,6 +133,10 @@ struct StageSpec {
   /// naming it. The file is checked and cleaned up like a writer's and a pipeline may end with
   /// the stage.
   std::string writes_param;
+  /// The metrics its report holds, declared by the library's Result tables (core/results.h),
+  /// with their blocks' prefixes ("deviation/rms"): docs/stages.md and Python show them, and a
+  /// test checks that a run records no other metric. Empty: not declared yet.
+  std::vector<ResultSpec> results;
   std::function<void(StageRun&)> run;
   /// Checks across parameters made before any work (e.g. a viewpoint given without
   /// orient = viewpoint); throws UsageError. May be empty.
