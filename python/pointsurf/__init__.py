@@ -75,6 +75,13 @@ def _doc(spec):
     return "\n".join(lines)
 
 
+def _usage_error(stage, message):
+    """A UsageError raised here, with the attributes the library's errors carry."""
+    e = UsageError(f"{stage}: {message}")
+    e.kind, e.stage, e.stage_index, e.key, e.file, e.offset, e.message = "usage", stage, None, None, None, None, message
+    return e
+
+
 def _make_stage(spec):
     name = spec["name"]
     slots = [slot for slot, _ in spec["consumes"]]
@@ -96,9 +103,9 @@ def _make_stage(spec):
         if rest and takes_file and "filename" not in params:
             params["filename"] = rest.pop(0)
         if rest:
-            raise UsageError(f"{name}: unexpected positional argument {rest[0]!r}")
+            raise _usage_error(name, f"unexpected positional argument {rest[0]!r}")
         if not many and len(data) != len(slots):
-            raise UsageError(f"{name}: expected {len(slots)} data argument(s) ({', '.join(slots)}), got {len(data)}")
+            raise _usage_error(name, f"expected {len(slots)} data argument(s) ({', '.join(slots)}), got {len(data)}")
         given = [(key, _text(value)) for key, value in params.items() if value is not None]
         product, report = _core.run_stage(name, data, given, progress)
         report = _json.loads(report)["stages"][0]

@@ -117,6 +117,9 @@ def test_errors_carry_their_kind_and_place(cloud, tmp_path):
     e = info.value
     assert (e.stage_index, e.stage, e.key) == (3, "normals", "kk")
     assert "stage 3 (normals)" in str(e) and "stage 3" not in e.message
+    with pytest.raises(pointsurf.UsageError) as info:  # raised by the Python side: the same attributes
+        pointsurf.normals(cloud, cloud)
+    assert (info.value.kind, info.value.stage, info.value.key) == ("usage", "normals", None)
 
 
 CLOUD_FORMATS = ["ply", "xyz", "pcd", "las", "laz", "e57"]
