@@ -183,6 +183,6 @@ int run_info(const std::vector<std::string>& args) {
 
 }  // namespace
 
-Command info_command() { return {"info", "Describe a cloud or mesh: format, counts, bounding box, mean spacing, fields", run_info, info_help}; }
+Command info_command() { return {"info", "Describe a cloud or mesh: format, counts, bounding box, mean spacing, fields", run_info, info_help, {}}; }
 
 }  // namespace pointsurf::cli

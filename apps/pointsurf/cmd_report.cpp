@@ -114,7 +114,7 @@ void write_html_report(const std::string& run_json, const std::string& origin, c
 }
 
 Command report_command() {
-  return {"report", "Write the offline HTML report of a run: pointsurf report RUN.json OUT.html", run_report, report_help};
+  return {"report", "Write the offline HTML report of a run: pointsurf report RUN.json OUT.html", run_report, report_help, {}};
 }
 
 }  // namespace pointsurf::cli

@@ -76,6 +76,6 @@ int run_run(const std::vector<std::string>& args) {
 
 }  // namespace
 
-Command run_command() { return {"run", "Run a pipeline (JSON list of stages): pointsurf run PIPELINE.json", run_run, run_help}; }
+Command run_command() { return {"run", "Run a pipeline (JSON list of stages): pointsurf run PIPELINE.json", run_run, run_help, {}}; }
 
 }  // namespace pointsurf::cli

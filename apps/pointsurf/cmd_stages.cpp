@@ -35,6 +35,6 @@ int run_stages(const std::vector<std::string>& args) {
 
 }  // namespace
 
-Command stages_command() { return {"stages", "List the stages (--markdown: docs/stages.md)", run_stages, stages_help}; }
+Command stages_command() { return {"stages", "List the stages (--markdown: docs/stages.md)", run_stages, stages_help, {}}; }
 
 }  // namespace pointsurf::cli

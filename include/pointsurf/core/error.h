@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace pointsurf {
 
@@ -40,6 +41,11 @@ struct ErrorPlace {
                                 // way where the message starts with it)
   std::string file;             // the data file being read or written
   std::string offset;           // the place in that file ("line 12", "byte 4096", "vertex 1532")
+
+  ErrorPlace() = default;
+  /// The pipeline `origin`, and the stage at 1-based `index` of type `type` when given.
+  ErrorPlace(std::string origin_, std::size_t index = 0, std::string type = {})
+      : origin(std::move(origin_)), stage_index(index), stage(std::move(type)) {}
 };
 
 /// Base of every exception pointsurf throws on purpose.
