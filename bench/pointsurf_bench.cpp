@@ -47,7 +47,7 @@ int sample(const std::string& mesh_path, std::size_t n, const std::string& out, 
   double total = 0.0;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& f = mesh.triangles[t];
-    total += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
+    total += 0.5 * (mesh.vertices.positions[f[1]] - mesh.vertices.positions[f[0]]).cross(mesh.vertices.positions[f[2]] - mesh.vertices.positions[f[0]]).norm();
     cumulative[t] = total;
   }
   std::mt19937_64 rng(seed);
@@ -59,7 +59,7 @@ int sample(const std::string& mesh_path, std::size_t n, const std::string& out, 
     const double r = u(rng) * total;
     const std::size_t t = static_cast<std::size_t>(std::lower_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin());
     const Triangle& f = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
-    const Vector3d &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
+    const Vector3d &a = mesh.vertices.positions[f[0]], &b = mesh.vertices.positions[f[1]], &c = mesh.vertices.positions[f[2]];
     const Vector3d normal = (b - a).cross(c - a);
     if (normal.norm() == 0.0) continue;
     const double s = std::sqrt(u(rng));

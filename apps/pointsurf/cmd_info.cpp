@@ -68,11 +68,7 @@ int run_info(const std::vector<std::string>& args) {
     info["dropped_faces"] = r.dropped_faces;
     info["polygons_triangulated"] = r.polygons_triangulated;
     warnings = std::move(r.warnings);
-    cloud.positions = std::move(r.mesh.vertices);
-    cloud.normals = std::move(r.mesh.vertex_normals);
-    cloud.colors = std::move(r.mesh.vertex_colors);
-    cloud.fields = std::move(r.mesh.vertex_fields);
-    cloud.crs = std::move(r.mesh.crs);
+    cloud = std::move(r.mesh.vertices);
     face_fields = std::move(r.mesh.face_fields);
   } else {
     CloudReadResult r = read_point_cloud(input, options);

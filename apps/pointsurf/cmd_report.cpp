@@ -97,7 +97,7 @@ void write_html_report(const std::string& run_json, const std::string& origin, c
   const std::filesystem::path dir = std::filesystem::path(origin).parent_path();
   if (!sources.mesh_file.empty()) {
     MeshReadResult m = read_mesh(locate(sources.mesh_file, dir));
-    in.mesh_vertices.positions = std::move(m.mesh.vertices);
+    in.mesh_vertices.positions = std::move(m.mesh.vertices.positions);
     in.mesh_triangles = std::move(m.mesh.triangles);
   }
   if (!sources.cloud_file.empty()) in.cloud = read_point_cloud(locate(sources.cloud_file, dir)).cloud;

@@ -33,14 +33,14 @@ using namespace pointsurf;
 
 TriangleMesh split_in_four(const TriangleMesh& m) {
   TriangleMesh out;
-  out.vertices = m.vertices;
+  out.vertices.positions = m.vertices.positions;
   std::map<std::pair<int, int>, int> mid;
   auto midpoint = [&](int a, int b) {
     const auto key = std::make_pair(std::min(a, b), std::max(a, b));
     const auto it = mid.find(key);
     if (it != mid.end()) return it->second;
-    out.vertices.push_back(0.5 * (m.vertices[std::size_t(a)] + m.vertices[std::size_t(b)]));
-    return mid[key] = static_cast<int>(out.vertices.size() - 1);
+    out.vertices.positions.push_back(0.5 * (m.vertices.positions[std::size_t(a)] + m.vertices.positions[std::size_t(b)]));
+    return mid[key] = static_cast<int>(out.vertices.positions.size() - 1);
   };
   for (const Triangle& t : m.triangles) {
     const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
@@ -60,7 +60,7 @@ int prepare(char** argv) {
   const std::size_t n = std::stoul(argv[5]);
   const std::uint64_t seed = std::stoull(argv[7]);
   const std::vector<Vector3d> samples = sample_mesh_surface(mesh, n, seed);
-  const double diagonal = bounding_box(mesh.vertices).diagonal();
+  const double diagonal = bounding_box(mesh.vertices.positions).diagonal();
   // The face normal at each sample, through the hierarchy (the sample lies on its triangle).
   const TriangleBvh bvh(mesh);
   PointCloud cloud;
@@ -72,12 +72,12 @@ int prepare(char** argv) {
   tbb::parallel_for(std::size_t(0), samples.size(), [&](std::size_t i) {
     const ClosestPoint c = bvh.closest(samples[i]);
     const Triangle& t = mesh.triangles[std::size_t(c.triangle)];
-    const Vector3d& a = mesh.vertices[std::size_t(t[0])];
-    const Vector3d normal = (mesh.vertices[std::size_t(t[1])] - a).cross(mesh.vertices[std::size_t(t[2])] - a).normalized();
+    const Vector3d& a = mesh.vertices.positions[std::size_t(t[0])];
+    const Vector3d normal = (mesh.vertices.positions[std::size_t(t[1])] - a).cross(mesh.vertices.positions[std::size_t(t[2])] - a).normalized();
     cloud.positions[i] = samples[i] + offsets[i] * normal;
   });
   write_point_cloud(argv[6], cloud);
-  fmt::print("{{\"triangles\": {}, \"vertices\": {}, \"points\": {}, \"diagonal\": {}}}\n", mesh.triangles.size(), mesh.vertices.size(),
+  fmt::print("{{\"triangles\": {}, \"vertices\": {}, \"points\": {}, \"diagonal\": {}}}\n", mesh.triangles.size(), mesh.vertices.positions.size(),
              cloud.size(), diagonal);
   return 0;
 }
@@ -93,7 +93,7 @@ int time_mode(char** argv) {
   std::vector<double> d(points.size());
   std::string sign = "unsigned";
   if (mode == "unsigned") {
-    const std::vector<double> u = nearest_surface_distances(points, SurfaceView{mesh.vertices, mesh.triangles}, true, 0, 0, &bvh);
+    const std::vector<double> u = nearest_surface_distances(points, SurfaceView{mesh.vertices.positions, mesh.triangles}, true, 0, 0, &bvh);
     d = u;
   } else if (mode == "signed" || mode == "winding") {
     MeshDistanceParams p;

@@ -165,7 +165,7 @@ int run(const PointCloud& cloud, const std::string& out_path, const TriangulateP
   for (std::size_t i = 0; i < t.boundary_loops.size() && i < 20; ++i) {
     const BoundaryLoop& loop = t.boundary_loops[i];
     Vector3d centroid = Vector3d::Zero();
-    for (int v : loop.vertices) centroid += result.mesh.vertices[std::size_t(v)];
+    for (int v : loop.vertices) centroid += result.mesh.vertices.positions[std::size_t(v)];
     centroid /= double(loop.vertices.size());
     loops.push_back({{"corners", loop.vertices.size()},
                      {"perimeter_in_spacings", loop.length / result.mean_spacing},

@@ -5,6 +5,7 @@
 // valid; an assignment that changes the size reallocates, and views taken before it must not be
 // used (documented in docs/python.md).
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -64,12 +65,13 @@ void assign_values(std::vector<double>& values, const py::object& value, const s
   if (!values.empty()) std::memcpy(values.data(), a.data(), values.size() * sizeof(double));
 }
 
-/// A read-write property `name` over the member vector of rows: a view going out, a copy coming in.
-template <class Owner, class Vec>
-void def_rows(py::class_<Owner>& cls, const char* name, std::vector<Vec> Owner::*rows, const char* doc) {
+/// A read-write property `name` over a vector of rows of the owner (a member pointer, or a
+/// function of the owner that returns the vector): a view going out, a copy coming in.
+template <class Owner, class Rows>
+void def_rows(py::class_<Owner>& cls, const char* name, Rows rows, const char* doc) {
   cls.def_property(
-      name, [rows](py::object self) { return view_rows(self.cast<Owner&>().*rows, self); },
-      [rows, name](Owner& o, const py::object& v) { assign_rows(o.*rows, v, name); }, doc);
+      name, [rows](py::object self) { return view_rows(std::invoke(rows, self.cast<Owner&>()), self); },
+      [rows, name](Owner& o, const py::object& v) { assign_rows(std::invoke(rows, o), v, name); }, doc);
 }
 
 py::dict field_views(FieldSet& fields, py::handle owner) {
@@ -129,28 +131,29 @@ void bind_data(py::module_& m) {
                            "normals, colours, vertex and face fields; numpy views of the C++ memory.");
   mesh.def(py::init([](const py::object& vertices, const py::object& triangles, const py::object& normals, const py::object& colors) {
              TriangleMesh t;
-             assign_rows(t.vertices, vertices, "vertices");
+             assign_rows(t.vertices.positions, vertices, "vertices");
              assign_rows(t.triangles, triangles, "triangles");
-             assign_rows(t.vertex_normals, normals, "vertex_normals");
-             assign_rows(t.vertex_colors, colors, "vertex_colors");
+             assign_rows(t.vertices.normals, normals, "vertex_normals");
+             assign_rows(t.vertices.colors, colors, "vertex_colors");
              t.validate();
              return t;
            }),
            py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("vertex_normals") = py::none(),
            py::arg("vertex_colors") = py::none());
-  def_rows(mesh, "vertices", &TriangleMesh::vertices, "V x 3 float64");
-  def_rows(mesh, "positions", &TriangleMesh::vertices, "the vertices");
+  const auto positions = [](TriangleMesh& t) -> std::vector<Vector3d>& { return t.vertices.positions; };
+  def_rows(mesh, "vertices", positions, "V x 3 float64");
+  def_rows(mesh, "positions", positions, "the vertices");
   def_rows(mesh, "triangles", &TriangleMesh::triangles, "F x 3 int32");
-  def_rows(mesh, "vertex_normals", &TriangleMesh::vertex_normals, "V x 3 float64, or 0 x 3");
-  def_rows(mesh, "vertex_colors", &TriangleMesh::vertex_colors, "V x 3 float32 in [0, 1], or 0 x 3");
+  def_rows(mesh, "vertex_normals", [](TriangleMesh& t) -> std::vector<Vector3d>& { return t.vertices.normals; }, "V x 3 float64, or 0 x 3");
+  def_rows(mesh, "vertex_colors", [](TriangleMesh& t) -> std::vector<Vector3f>& { return t.vertices.colors; }, "V x 3 float32 in [0, 1], or 0 x 3");
   mesh
-      .def_property_readonly("vertex_fields", [](py::object self) { return field_views(self.cast<TriangleMesh&>().vertex_fields, self); })
+      .def_property_readonly("vertex_fields", [](py::object self) { return field_views(self.cast<TriangleMesh&>().vertices.fields, self); })
       .def_property_readonly("face_fields", [](py::object self) { return field_views(self.cast<TriangleMesh&>().face_fields, self); })
-      .def("set_vertex_field", [](TriangleMesh& t, const std::string& name, const py::object& v) { set_field(t.vertex_fields, name, v, t.vertex_count(), "vertices"); },
+      .def("set_vertex_field", [](TriangleMesh& t, const std::string& name, const py::object& v) { set_field(t.vertices.fields, name, v, t.vertex_count(), "vertices"); },
            py::arg("name"), py::arg("values"))
       .def("set_face_field", [](TriangleMesh& t, const std::string& name, const py::object& v) { set_field(t.face_fields, name, v, t.triangle_count(), "triangles"); },
            py::arg("name"), py::arg("values"))
-      .def("vertex_cloud", &TriangleMesh::vertex_cloud, "The vertices with their attributes as a PointCloud (a copy).")
+      .def("vertex_cloud", [](const TriangleMesh& t) { return t.vertices; }, "The vertices with their attributes as a PointCloud (a copy).")
       .def("copy", [](const TriangleMesh& t) { return t; })
       .def("validate", &TriangleMesh::validate)
       .def("__repr__", [](const TriangleMesh& t) {

@@ -108,8 +108,8 @@ py::list stage_list() {
 DataItem to_item(const py::handle& obj) {
   DataItem item;
   if (py::isinstance<PointCloud>(obj)) {
-    item.cloud = obj.cast<const PointCloud&>();
-    item.cloud.validate();
+    item.cloud() = obj.cast<const PointCloud&>();
+    item.cloud().validate();
   } else if (py::isinstance<TriangleMesh>(obj)) {
     TriangleMesh mesh = obj.cast<const TriangleMesh&>();
     mesh.validate();
@@ -121,8 +121,8 @@ DataItem to_item(const py::handle& obj) {
 }
 
 py::object from_item(DataItem&& item) {
-  if (!item.is_mesh) return py::cast(std::move(item.cloud));
-  return py::cast(TriangleMesh::from_cloud(std::move(item.cloud), std::move(item.triangles), std::move(item.face_fields)));
+  if (!item.is_mesh) return py::cast(std::move(item.cloud()));
+  return py::cast(std::move(item.mesh));
 }
 
 /// Progress and cancellation shared by the worker, the library's threads and the waiting caller.

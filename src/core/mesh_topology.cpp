@@ -33,7 +33,7 @@ struct Spoke {
 // (counting sort by vertex), where the spokes of one vertex are few; no global sort.
 MeshTopology analyze_topology(const TriangleMesh& mesh) {
   MeshTopology topo;
-  const std::size_t nv = mesh.vertices.size();
+  const std::size_t nv = mesh.vertices.positions.size();
   std::vector<int> kept;  // indices of non-degenerate triangles
   kept.reserve(mesh.triangles.size());
   std::vector<std::size_t> offsets(nv + 1, 0);
@@ -139,7 +139,7 @@ MeshTopology analyze_topology(const TriangleMesh& mesh) {
       while (e >= 0 && !visited[e]) {
         visited[e] = 1;
         loop.vertices.push_back(sorted[e].first);
-        loop.length += (mesh.vertices[sorted[e].second] - mesh.vertices[sorted[e].first]).norm();
+        loop.length += (mesh.vertices.positions[sorted[e].second] - mesh.vertices.positions[sorted[e].first]).norm();
         if (sorted[e].second == loop.vertices.front()) {
           closed = true;
           break;

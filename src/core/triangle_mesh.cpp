@@ -9,11 +9,11 @@ namespace pointsurf {
 
 void TriangleMesh::validate() const {
   const std::size_t n = vertices.size();
-  if (!vertex_normals.empty() && vertex_normals.size() != n)
-    throw InputError(fmt::format("mesh: {} vertex normals for {} vertices", vertex_normals.size(), n));
-  if (!vertex_colors.empty() && vertex_colors.size() != n)
-    throw InputError(fmt::format("mesh: {} vertex colours for {} vertices", vertex_colors.size(), n));
-  for (const ScalarField& f : vertex_fields)
+  if (!vertices.normals.empty() && vertices.normals.size() != n)
+    throw InputError(fmt::format("mesh: {} vertex normals for {} vertices", vertices.normals.size(), n));
+  if (!vertices.colors.empty() && vertices.colors.size() != n)
+    throw InputError(fmt::format("mesh: {} vertex colours for {} vertices", vertices.colors.size(), n));
+  for (const ScalarField& f : vertices.fields)
     if (f.values.size() != n)
       throw InputError(fmt::format("mesh: field '{}' has {} values for {} vertices", f.name, f.values.size(), n));
   for (const ScalarField& f : face_fields)
@@ -23,28 +23,6 @@ void TriangleMesh::validate() const {
     for (int c = 0; c < 3; ++c)
       if (triangles[t][c] < 0 || static_cast<std::size_t>(triangles[t][c]) >= n)
         throw InputError(fmt::format("mesh: triangle {}: vertex index {} out of range [0, {})", t, triangles[t][c], n));
-}
-
-PointCloud TriangleMesh::vertex_cloud() const {
-  PointCloud cloud;
-  cloud.positions = vertices;
-  cloud.normals = vertex_normals;
-  cloud.colors = vertex_colors;
-  cloud.fields = vertex_fields;
-  cloud.crs = crs;
-  return cloud;
-}
-
-TriangleMesh TriangleMesh::from_cloud(PointCloud cloud, std::vector<Triangle> triangles, FieldSet face_fields) {
-  TriangleMesh mesh;
-  mesh.vertices = std::move(cloud.positions);
-  mesh.vertex_normals = std::move(cloud.normals);
-  mesh.vertex_colors = std::move(cloud.colors);
-  mesh.vertex_fields = std::move(cloud.fields);
-  mesh.crs = std::move(cloud.crs);
-  mesh.triangles = std::move(triangles);
-  mesh.face_fields = std::move(face_fields);
-  return mesh;
 }
 
 }  // namespace pointsurf

@@ -16,8 +16,8 @@ namespace pointsurf {
 namespace {
 
 Vector3d face_normal(const TriangleMesh& mesh, const Triangle& t) {
-  const Vector3d& a = mesh.vertices[static_cast<std::size_t>(t[0])];
-  return (mesh.vertices[static_cast<std::size_t>(t[1])] - a).cross(mesh.vertices[static_cast<std::size_t>(t[2])] - a);
+  const Vector3d& a = mesh.vertices.positions[static_cast<std::size_t>(t[0])];
+  return (mesh.vertices.positions[static_cast<std::size_t>(t[1])] - a).cross(mesh.vertices.positions[static_cast<std::size_t>(t[2])] - a);
 }
 
 // ICP's target: samples with their triangle's normal, or the vertices with area-weighted normals.
@@ -25,13 +25,13 @@ PointCloud mesh_target(const TriangleMesh& mesh, std::size_t samples, std::uint6
   PointCloud target;
   if (samples > 0) {
     std::vector<std::uint32_t> triangle_of;
-    target.positions = sample_mesh_surface(mesh.vertices, mesh.triangles, samples, seed, &triangle_of);
+    target.positions = sample_mesh_surface(mesh.vertices.positions, mesh.triangles, samples, seed, &triangle_of);
     target.normals.resize(target.positions.size());
     for (std::size_t i = 0; i < triangle_of.size(); ++i) target.normals[i] = face_normal(mesh, mesh.triangles[triangle_of[i]]).normalized();
     return target;
   }
-  std::vector<Vector3d> normals(mesh.vertices.size(), Vector3d::Zero());
-  std::vector<char> used(mesh.vertices.size(), 0);
+  std::vector<Vector3d> normals(mesh.vertices.positions.size(), Vector3d::Zero());
+  std::vector<char> used(mesh.vertices.positions.size(), 0);
   for (const Triangle& t : mesh.triangles) {
     const Vector3d n = face_normal(mesh, t);  // |n| = twice the area: area weighting for free
     for (int c = 0; c < 3; ++c) {
@@ -39,9 +39,9 @@ PointCloud mesh_target(const TriangleMesh& mesh, std::size_t samples, std::uint6
       used[static_cast<std::size_t>(t[c])] = 1;
     }
   }
-  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+  for (std::size_t v = 0; v < mesh.vertices.positions.size(); ++v)
     if (used[v]) {
-      target.positions.push_back(mesh.vertices[v]);
+      target.positions.push_back(mesh.vertices.positions[v]);
       target.normals.push_back(normals[v].norm() > 0.0 ? Vector3d(normals[v].normalized()) : Vector3d::Zero());
     }
   return target;

@@ -50,14 +50,14 @@ void MeshDistanceParams::validate() const { fields().validate(*this, "mesh_dista
 
 void check_measurable_mesh(const TriangleMesh& mesh, const std::string& what) {
   if (mesh.triangles.empty())
-    throw InputError(fmt::format("{}: the mesh has no faces ({} vertices); a distance needs triangles", what, mesh.vertices.size()));
+    throw InputError(fmt::format("{}: the mesh has no faces ({} vertices); a distance needs triangles", what, mesh.vertices.positions.size()));
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.triangles[t][c];
-      if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.size())
+      if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.positions.size())
         throw InputError(fmt::format("{}: triangle {}: vertex index {} out of range (the mesh has {} vertices)", what, t, v,
-                                     mesh.vertices.size()));
-      if (!mesh.vertices[static_cast<std::size_t>(v)].allFinite())
+                                     mesh.vertices.positions.size()));
+      if (!mesh.vertices.positions[static_cast<std::size_t>(v)].allFinite())
         throw InputError(fmt::format("{}: vertex {} (of triangle {}) is not finite", what, v, t));
     }
 }
@@ -65,7 +65,7 @@ void check_measurable_mesh(const TriangleMesh& mesh, const std::string& what) {
 PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
   const std::size_t f = mesh.triangles.size();
   PseudoNormals n;
-  n.vertex.assign(mesh.vertices.size(), Vector3d::Zero());
+  n.vertex.assign(mesh.vertices.positions.size(), Vector3d::Zero());
   n.across.assign(3 * f, -1);
   n.face.assign(f, Vector3d::Zero());
   // Undirected edges as (smaller, larger) keys with their use 3t + i, sorted so that the uses of
@@ -74,8 +74,8 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
   edges.reserve(3 * f);
   for (std::size_t t = 0; t < f; ++t) {
     const Triangle& tri = mesh.triangles[t];
-    const Vector3d& a = mesh.vertices[static_cast<std::size_t>(tri[0])];
-    const Vector3d cross = (mesh.vertices[static_cast<std::size_t>(tri[1])] - a).cross(mesh.vertices[static_cast<std::size_t>(tri[2])] - a);
+    const Vector3d& a = mesh.vertices.positions[static_cast<std::size_t>(tri[0])];
+    const Vector3d cross = (mesh.vertices.positions[static_cast<std::size_t>(tri[1])] - a).cross(mesh.vertices.positions[static_cast<std::size_t>(tri[2])] - a);
     const double len = cross.norm();
     if (len > 0.0) n.face[t] = cross / len;
     for (int i = 0; i < 3; ++i) {
@@ -83,8 +83,8 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
       const auto lo = static_cast<std::uint64_t>(std::min(u, v)), hi = static_cast<std::uint64_t>(std::max(u, v));
       edges.emplace_back((lo << 32) | hi, 3 * t + std::size_t(i));
       // The angle of the corner at vertex tri[i].
-      const Vector3d e1 = mesh.vertices[static_cast<std::size_t>(tri[(i + 1) % 3])] - mesh.vertices[static_cast<std::size_t>(tri[i])];
-      const Vector3d e2 = mesh.vertices[static_cast<std::size_t>(tri[(i + 2) % 3])] - mesh.vertices[static_cast<std::size_t>(tri[i])];
+      const Vector3d e1 = mesh.vertices.positions[static_cast<std::size_t>(tri[(i + 1) % 3])] - mesh.vertices.positions[static_cast<std::size_t>(tri[i])];
+      const Vector3d e2 = mesh.vertices.positions[static_cast<std::size_t>(tri[(i + 2) % 3])] - mesh.vertices.positions[static_cast<std::size_t>(tri[i])];
       const double angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       n.vertex[static_cast<std::size_t>(tri[i])] += angle * n.face[t];
     }

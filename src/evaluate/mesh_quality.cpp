@@ -77,9 +77,9 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int c = 0; c < 3; ++c) {
       const int v = mesh.triangles[t][c];
-      if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.size())
-        throw InputError(fmt::format("triangle {}: vertex index {} out of range (the mesh has {} vertices)", t, v, mesh.vertices.size()));
-      if (!mesh.vertices[static_cast<std::size_t>(v)].allFinite())
+      if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.positions.size())
+        throw InputError(fmt::format("triangle {}: vertex index {} out of range (the mesh has {} vertices)", t, v, mesh.vertices.positions.size()));
+      if (!mesh.vertices.positions[static_cast<std::size_t>(v)].allFinite())
         throw InputError(fmt::format("vertex {} (of triangle {}) is not finite", v, t));
     }
   MeshQuality q;
@@ -95,14 +95,14 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
   // Geometry about the centre of the vertices, so 1e6 m offsets lose nothing.
   BoundingBox box;
   for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.positions[static_cast<std::size_t>(t[c])]);
   const Vector3d origin = box.center();
   std::vector<std::array<int, 3>> sorted_faces;
   std::vector<double> angles, aspects;
   double volume6 = 0.0;
   for (const Triangle& t : mesh.triangles) {
-    const Vector3d a = mesh.vertices[static_cast<std::size_t>(t[0])] - origin, b = mesh.vertices[static_cast<std::size_t>(t[1])] - origin,
-                   c = mesh.vertices[static_cast<std::size_t>(t[2])] - origin;
+    const Vector3d a = mesh.vertices.positions[static_cast<std::size_t>(t[0])] - origin, b = mesh.vertices.positions[static_cast<std::size_t>(t[1])] - origin,
+                   c = mesh.vertices.positions[static_cast<std::size_t>(t[2])] - origin;
     std::array<int, 3> key = {t[0], t[1], t[2]};
     std::sort(key.begin(), key.end());
     sorted_faces.push_back(key);

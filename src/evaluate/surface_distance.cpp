@@ -49,7 +49,7 @@ std::vector<Vector3d> sample_mesh_surface(std::span<const Vector3d> vertices, st
 }
 
 std::vector<Vector3d> sample_mesh_surface(const TriangleMesh& mesh, std::size_t n, std::uint64_t seed) {
-  return sample_mesh_surface(mesh.vertices, mesh.triangles, n, seed);
+  return sample_mesh_surface(mesh.vertices.positions, mesh.triangles, n, seed);
 }
 
 std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, const SurfaceView& to, bool exact, std::size_t samples,

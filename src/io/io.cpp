@@ -248,7 +248,7 @@ MeshReadResult read_mesh(const std::filesystem::path& path, const ReadOptions& o
     ScalarField& out = fields.add(in.name, source_face.size(), in.type);
     for (std::size_t t = 0; t < source_face.size(); ++t) out.values[t] = in.values[source_face[t]];
   }
-  result.mesh = TriangleMesh::from_cloud(std::move(raw.cloud), std::move(triangles), std::move(fields));
+  result.mesh = TriangleMesh{std::move(raw.cloud), std::move(triangles), std::move(fields)};
   return result;
 }
 
@@ -278,7 +278,7 @@ WriteResult write_mesh(const std::filesystem::path& path, const TriangleMesh& me
   mesh.validate();
   // The vertex attributes travel as a cloud; this copies the vertices once, which is small
   // next to the file I/O.
-  return write_any(path, mesh.vertex_cloud(), mesh.triangles, mesh.face_fields, options);
+  return write_any(path, mesh.vertices, mesh.triangles, mesh.face_fields, options);
 }
 
 }  // namespace pointsurf

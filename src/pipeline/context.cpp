@@ -29,18 +29,14 @@ void Context::set(const std::string& tag, DataItem item) {
 
 void Context::set_cloud(const std::string& tag, PointCloud cloud, std::string source) {
   DataItem item;
-  item.cloud = std::move(cloud);
+  item.mesh.vertices = std::move(cloud);
   item.source = std::move(source);
   set(tag, std::move(item));
 }
 
-void DataItem::assign_mesh(TriangleMesh mesh, std::string mesh_source) {
-  cloud.positions = std::move(mesh.vertices);
-  cloud.normals = std::move(mesh.vertex_normals);
-  cloud.colors = std::move(mesh.vertex_colors);
-  cloud.fields = std::move(mesh.vertex_fields);
-  triangles = std::move(mesh.triangles);
-  face_fields = std::move(mesh.face_fields);
+void DataItem::assign_mesh(TriangleMesh m, std::string mesh_source) {
+  if (m.vertices.crs.empty()) m.vertices.crs = std::move(mesh.vertices.crs);  // built from this item's cloud: its CRS stays
+  mesh = std::move(m);
   is_mesh = true;
   source = std::move(mesh_source);
 }
@@ -90,7 +86,7 @@ std::vector<std::string> Context::tags() const {
 }
 
 Context::Cache& Context::fresh_cache(Entry& e) {
-  const std::vector<Vector3d>& positions = e.item.cloud.positions;
+  const std::vector<Vector3d>& positions = e.item.cloud().positions;
   const std::uint64_t checksum = positions_checksum(positions);
   if (!e.cache) e.cache = std::make_shared<Cache>();
   if (e.cache->tree && (e.cache->size != positions.size() || e.cache->checksum != checksum)) e.cache = std::make_shared<Cache>();

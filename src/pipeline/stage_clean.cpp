@@ -39,13 +39,13 @@ std::vector<ParamSpec> trilateral_only_params() {
 void run_clean(StageRun& run) {
   DataItem& item = run.context.item(run.output);
   StageRecord& rec = run.record;
-  const std::size_t input_points = item.cloud.size();
+  const std::size_t input_points = item.cloud().size();
   std::string steps;
   const double share = 1.0 / double(run.per_method.size());
   for (std::size_t m = 0; m < run.per_method.size(); ++m) {
     const StageArgs& a = run.per_method[m];
     const std::string& name = a.method();
-    PointCloud& cloud = item.cloud;
+    PointCloud& cloud = item.cloud();
     if (cloud.size() < 4) throw InputError(fmt::format("{} left before {}; cleaning needs at least 4", plural(cloud.size(), "point"), name));
     const ProgressCallback progress = sub_progress(run.progress, share * double(m), share * double(m + 1));
     const bool smoothing = name == "bilateral" || name == "trilateral";
@@ -85,7 +85,7 @@ void run_clean(StageRun& run) {
       removal(r, "distance_used");
     } else if (name == "duplicates") {
       const DuplicateParams p = duplicate_params(a);
-      const std::size_t faces = item.triangles.size();
+      const std::size_t faces = item.mesh.triangles.size();
       const DuplicateResult r = find_duplicates(cloud, p, &tree, progress);
       if (r.removed > 0) {
         if (faces > 0) drop_faces(item, rec);
@@ -107,8 +107,8 @@ void run_clean(StageRun& run) {
     }
   }
   rec.count("input", as_count(input_points));
-  rec.count("output", as_count(item.cloud.size()));
-  rec.summary = fmt::format("clean: {} -> {}; {}", plural(input_points, "point"), plural(item.cloud.size(), "point"), steps);
+  rec.count("output", as_count(item.cloud().size()));
+  rec.summary = fmt::format("clean: {} -> {}; {}", plural(input_points, "point"), plural(item.cloud().size(), "point"), steps);
 }
 
 }  // namespace

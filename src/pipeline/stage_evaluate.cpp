@@ -136,12 +136,12 @@ std::string quality_line(const MeshQuality& q) {
 }
 
 TriangleMesh mesh_of(const DataItem& item, const std::string& tag) {
-  if (item.triangles.empty())
-    throw InputError(fmt::format("\"{}\" ({}) has no faces: a mesh is needed ({})", tag, plural(item.cloud.size(), "point"),
-                                 item.cloud.empty() ? "it is empty" : "is it a point cloud?"));
+  if (item.mesh.triangles.empty())
+    throw InputError(fmt::format("\"{}\" ({}) has no faces: a mesh is needed ({})", tag, plural(item.cloud().size(), "point"),
+                                 item.cloud().empty() ? "it is empty" : "is it a point cloud?"));
   TriangleMesh mesh;
-  mesh.vertices = item.cloud.positions;
-  mesh.triangles = item.triangles;
+  mesh.vertices.positions = item.cloud().positions;
+  mesh.triangles = item.mesh.triangles;
   check_measurable_mesh(mesh, fmt::format("mesh \"{}\"", tag));
   return mesh;
 }
@@ -149,7 +149,7 @@ TriangleMesh mesh_of(const DataItem& item, const std::string& tag) {
 BoundingBox used_box(const TriangleMesh& mesh) {
   BoundingBox box;
   for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
+    for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.positions[static_cast<std::size_t>(t[c])]);
   return box;
 }
 
@@ -168,7 +168,7 @@ RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const st
   p.seed = sd.seed;
   p.max_distance = Length::cloud(p.max_distance.resolve(p.max_distance.in_spacings() ? run.context.mean_spacing(ref_tag) : 0.0));
   rec.set_used("align_max_distance_used", p.max_distance.value);
-  const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud.positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
+  const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud().positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
   rec.add(align_results(), r, "align/");
   if (!r.converged) rec.warnings.push_back("align: " + r.message + "; measured as aligned so far");
   return r.transform;
@@ -190,11 +190,11 @@ void run_evaluate(StageRun& run) {
   const std::string& ref_tag = run.inputs.at(1);
   const TriangleMesh mesh = mesh_of(run.context.item(mesh_tag), mesh_tag);
   const DataItem& ref = run.context.item(ref_tag);
-  if (ref.cloud.empty()) throw InputError(fmt::format("the reference \"{}\" has no points", ref_tag));
-  for (std::size_t i = 0; i < ref.cloud.size(); ++i)
-    if (!ref.cloud.positions[i].allFinite()) throw InputError(fmt::format("the reference \"{}\": point {} is not finite", ref_tag, i));
+  if (ref.cloud().empty()) throw InputError(fmt::format("the reference \"{}\" has no points", ref_tag));
+  for (std::size_t i = 0; i < ref.cloud().size(); ++i)
+    if (!ref.cloud().positions[i].allFinite()) throw InputError(fmt::format("the reference \"{}\": point {} is not finite", ref_tag, i));
 
-  const BoundingBox mesh_box = used_box(mesh), ref_box = bounding_box(ref.cloud.positions);
+  const BoundingBox mesh_box = used_box(mesh), ref_box = bounding_box(ref.cloud().positions);
   const double diagonal = std::max(mesh_box.diagonal(), ref_box.diagonal());
   const double gap = box_gap(mesh_box, ref_box);
   if (gap > diagonal && !a.boolean("allow_far"))
@@ -207,10 +207,10 @@ void run_evaluate(StageRun& run) {
   const std::optional<RigidTransform> fit = a.boolean("align") ? std::optional(align_reference(run, mesh, ref_tag)) : std::nullopt;
   std::vector<Vector3d> moved;
   if (fit) {
-    moved = ref.cloud.positions;
+    moved = ref.cloud().positions;
     fit->apply(std::span<Vector3d>(moved));
   }
-  const std::vector<Vector3d>& measured = fit ? moved : ref.cloud.positions;
+  const std::vector<Vector3d>& measured = fit ? moved : ref.cloud().positions;
 
   const TriangleBvh bvh(mesh);
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
@@ -225,7 +225,7 @@ void run_evaluate(StageRun& run) {
     rec.set_used("tolerance", sp.tolerance);
   }
   const DeviationStats stats = summarize_deviation(dist.distances, sp);
-  rec.count("reference_points", as_count(ref.cloud.size()));
+  rec.count("reference_points", as_count(ref.cloud().size()));
   rec.count("mesh_triangles", as_count(mesh.triangles.size()));
   rec.add(evaluate_text_results(), EvaluateTexts{ref_tag, distance_sign_names().name(dist.sign_used), ""});
   rec.set_used("reference", ref_tag);
@@ -235,17 +235,17 @@ void run_evaluate(StageRun& run) {
   // simplification, or left out by the reconstruction): their deviation on its own.
   std::vector<Vector3d> used;
   {
-    std::vector<char> is_used(mesh.vertices.size(), 0);
+    std::vector<char> is_used(mesh.vertices.positions.size(), 0);
     for (const Triangle& t : mesh.triangles)
       for (int c = 0; c < 3; ++c) is_used[static_cast<std::size_t>(t[c])] = 1;
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-      if (is_used[v]) used.push_back(mesh.vertices[v]);
+    for (std::size_t v = 0; v < mesh.vertices.positions.size(); ++v)
+      if (is_used[v]) used.push_back(mesh.vertices.positions[v]);
   }
   const KdTree vertex_tree(used);
   std::vector<double> unused;
   std::vector<Neighbor> nn;
-  for (std::size_t i = 0; i < ref.cloud.size(); ++i) {
-    vertex_tree.knn(ref.cloud.positions[i], 1, nn);
+  for (std::size_t i = 0; i < ref.cloud().size(); ++i) {
+    vertex_tree.knn(ref.cloud().positions[i], 1, nn);
     if (nn.empty() || nn.front().squared_distance > 0.0) unused.push_back(dist.distances[i]);
   }
   rec.count("points_not_vertices", as_count(unused.size()));
@@ -253,12 +253,12 @@ void run_evaluate(StageRun& run) {
 
   // Per region, when the reference carries labels.
   std::string region = a.text("region_field");
-  if (region.empty()) region = ref.cloud.fields.contains("segment") ? "segment" : ref.cloud.fields.contains("region") ? "region" : "";
-  else if (!ref.cloud.fields.contains(region))
+  if (region.empty()) region = ref.cloud().fields.contains("segment") ? "segment" : ref.cloud().fields.contains("region") ? "region" : "";
+  else if (!ref.cloud().fields.contains(region))
     throw InputError(fmt::format("region_field: the reference \"{}\" has no field \"{}\"", ref_tag, region));
   if (!region.empty()) {
     rec.metric("region_field", region);
-    const std::vector<RegionDeviation> regions = summarize_deviation_by_region(dist.distances, ref.cloud.fields.find(region)->values, sp);
+    const std::vector<RegionDeviation> regions = summarize_deviation_by_region(dist.distances, ref.cloud().fields.find(region)->values, sp);
     rec.count("regions", as_count(regions.size()));
     for (const RegionDeviation& r : regions) record_deviation(rec, fmt::format("deviation_by_region/{}_{}/", region, r.label), r.stats);
   }
@@ -266,7 +266,7 @@ void run_evaluate(StageRun& run) {
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
   const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
-  const SurfaceView ref_view{measured, ref.triangles};
+  const SurfaceView ref_view{measured, ref.mesh.triangles};
   const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);
   double back_sum = 0.0, back_max = 0.0;
   for (double d : back) {
@@ -290,7 +290,7 @@ void run_evaluate(StageRun& run) {
 
   rec.summary = fmt::format("evaluate: {}{} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
                             "Hausdorff {:.4g}; mesh {}",
-                            plural(ref.cloud.size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
+                            plural(ref.cloud().size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
                             distance_sign_names().name(dist.sign_used), stats.max_positive,
                             stats.max_negative, stats.mean_positive, stats.mean_negative, stats.rms, 100.0 * stats.within_tolerance,
                             stats.tolerance, std::max(forward_max, back_max), quality_line(q));
@@ -298,10 +298,10 @@ void run_evaluate(StageRun& run) {
   // The output: the measured points with their deviation.
   run.context.copy(ref_tag, run.output);
   DataItem& out = run.context.item(run.output);
-  out.triangles.clear();
+  out.mesh.triangles.clear();
   out.is_mesh = false;
-  out.cloud.fields.add("deviation", out.cloud.size()).values = dist.distances;
-  if (fit) fit->apply(out.cloud);
+  out.cloud().fields.add("deviation", out.cloud().size()).values = dist.distances;
+  if (fit) fit->apply(out.cloud());
 }
 
 // The parameter `name` of `params` (declared there).

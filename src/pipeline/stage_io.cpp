@@ -65,53 +65,53 @@ void run_read(StageRun& run) {
     encoding = r.encoding;
     if (r.dropped_faces > 0) warnings.push_back(fmt::format("{} dropped (degenerate or on dropped vertices)", plural(r.dropped_faces, "face")));
     if (r.polygons_triangulated > 0) warnings.push_back(fmt::format("{} split into triangles", plural(r.polygons_triangulated, "polygon")));
-    item.cloud.positions = std::move(r.mesh.vertices);
-    item.cloud.normals = std::move(r.mesh.vertex_normals);
-    item.cloud.colors = std::move(r.mesh.vertex_colors);
-    item.cloud.fields = std::move(r.mesh.vertex_fields);
-    item.triangles = std::move(r.mesh.triangles);
-    item.face_fields = std::move(r.mesh.face_fields);
-    item.is_mesh = !item.triangles.empty();
+    item.cloud().positions = std::move(r.mesh.vertices.positions);
+    item.cloud().normals = std::move(r.mesh.vertices.normals);
+    item.cloud().colors = std::move(r.mesh.vertices.colors);
+    item.cloud().fields = std::move(r.mesh.vertices.fields);
+    item.mesh.triangles = std::move(r.mesh.triangles);
+    item.mesh.face_fields = std::move(r.mesh.face_fields);
+    item.is_mesh = !item.mesh.triangles.empty();
   } else {
     CloudReadResult r = read_point_cloud(file, options);
     dropped = r.dropped_nonfinite;
     warnings = std::move(r.warnings);
     encoding = r.encoding;
-    item.cloud = std::move(r.cloud);
+    item.cloud() = std::move(r.cloud);
     if (r.scans.size() > 1 || !options.apply_poses) rec.count("scans", as_count(r.scans.size()));
     if (!options.apply_poses) item.scans = std::move(r.scans);
   }
   for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
   if (dropped > 0)
     rec.warnings.push_back(fmt::format("{}: {} with NaN/Inf coordinates dropped (strict makes this an error)", file, plural(dropped, "point")));
-  if (item.cloud.empty()) throw InputError(fmt::format("{}: no points", file));
+  if (item.cloud().empty()) throw InputError(fmt::format("{}: no points", file));
   rec.set_used("format", format);
-  rec.count("points", as_count(item.cloud.size()));
-  rec.count("faces", as_count(item.triangles.size()));
+  rec.count("points", as_count(item.cloud().size()));
+  rec.count("faces", as_count(item.mesh.triangles.size()));
   rec.count("dropped_nonfinite", as_count(dropped));
   rec.metric("encoding", encoding);
-  rec.metric("normals", item.cloud.has_normals());
-  rec.metric("colors", item.cloud.has_colors());
+  rec.metric("normals", item.cloud().has_normals());
+  rec.metric("colors", item.cloud().has_colors());
   std::vector<std::string> fields;
-  for (const ScalarField& f : item.cloud.fields) fields.push_back(f.name);
+  for (const ScalarField& f : item.cloud().fields) fields.push_back(f.name);
   std::string field_list;
   for (const std::string& f : fields) field_list += (field_list.empty() ? "" : ",") + f;
   rec.metric("fields", field_list);
-  rec.summary = fmt::format("read {}{} from {} ({})", plural(item.cloud.size(), "point"),
-                            item.triangles.empty() ? "" : fmt::format(", {}", plural(item.triangles.size(), "face")), file, format);
+  rec.summary = fmt::format("read {}{} from {} ({})", plural(item.cloud().size(), "point"),
+                            item.mesh.triangles.empty() ? "" : fmt::format(", {}", plural(item.mesh.triangles.size(), "face")), file, format);
   run.context.set(run.output, std::move(item));
 }
 
 // What the output format cannot hold, said before writing.
 std::vector<std::string> lost_attributes(const std::string& path, const std::string& format, const DataItem& item) {
   std::vector<std::string> lost;
-  const PointCloud& c = item.cloud;
-  if (!item.triangles.empty() && !holds_faces(format)) lost.push_back(plural(item.triangles.size(), "face"));
+  const PointCloud& c = item.cloud();
+  if (!item.mesh.triangles.empty() && !holds_faces(format)) lost.push_back(plural(item.mesh.triangles.size(), "face"));
   // Only PLY has per-face properties; a format that holds faces but no face properties loses
   // the face fields (a format without faces loses them with the faces, said above).
   const FileFormat& ff = file_format(format);
-  if (!item.triangles.empty() && ff.holds_faces && !ff.holds_face_fields)
-    for (const ScalarField& f : item.face_fields) lost.push_back(fmt::format("face field '{}'", f.name));
+  if (!item.mesh.triangles.empty() && ff.holds_faces && !ff.holds_face_fields)
+    for (const ScalarField& f : item.mesh.face_fields) lost.push_back(fmt::format("face field '{}'", f.name));
   if (!ff.holds_normals && c.has_normals()) lost.push_back("normals");
   if (!ff.holds_colors && c.has_colors()) lost.push_back("colours");
   const std::string ext = lower(std::filesystem::path(path).extension().string());
@@ -147,15 +147,15 @@ void run_write(StageRun& run) {
     for (const std::string& l : lost) list += (list.empty() ? "" : ", ") + l;
     rec.warnings.push_back(fmt::format("{}: the {} format cannot hold: {}", file, format, list));
   }
-  const WriteResult written = item.triangles.empty()
-                                  ? write_point_cloud(file, item.cloud, w)
-                                  : write_mesh(file, TriangleMesh::from_cloud(item.cloud, item.triangles, item.face_fields), w);
+  const WriteResult written = item.mesh.triangles.empty()
+                                  ? write_point_cloud(file, item.cloud(), w)
+                                  : write_mesh(file, item.mesh, w);
   for (const std::string& note : written.notes) rec.warnings.push_back(note);
-  const std::size_t faces = holds_faces(format) ? item.triangles.size() : 0;
-  rec.count("points", as_count(item.cloud.size()));
+  const std::size_t faces = holds_faces(format) ? item.mesh.triangles.size() : 0;
+  rec.count("points", as_count(item.cloud().size()));
   rec.count("faces", as_count(faces));
   if (item.is_mesh) rec.metric("mesh_built_from", item.source);
-  rec.summary = fmt::format("wrote {}{} to {}", plural(item.cloud.size(), "point"), faces > 0 ? fmt::format(", {}", plural(faces, "face")) : "",
+  rec.summary = fmt::format("wrote {}{} to {}", plural(item.cloud().size(), "point"), faces > 0 ? fmt::format(", {}", plural(faces, "face")) : "",
                             file);
 }
 

@@ -83,7 +83,7 @@ std::string orientation_used(const StageArgs& a, const PointCloud& cloud) {
 }
 
 void run_keep_normals(StageRun& run) {
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   StageRecord& rec = run.record;
   if (!cloud.has_normals()) throw key_error("orient", " keep: the input has no normals to keep (use mst, viewpoint or direction)");
   const std::size_t zero = zero_normal_count(cloud);
@@ -100,7 +100,7 @@ void run_keep_normals(StageRun& run) {
 void run_normals(StageRun& run) {
   const StageArgs& a = run.args;
   DataItem& item = run.context.item(run.output);
-  PointCloud& cloud = item.cloud;
+  PointCloud& cloud = item.cloud();
   if (cloud.size() < 3) throw InputError(fmt::format("{}; normals need at least 3", plural(cloud.size(), "point")));
   const std::string orientation = orientation_used(a, cloud);
   if (orientation == "keep") return run_keep_normals(run);
@@ -166,7 +166,7 @@ void run_normals(StageRun& run) {
 // Normals for stages that need oriented ones when the input has none: PCA over `k`
 // neighbours and MST orientation through the context's tree; said in the record.
 void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback& progress) {
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   const KdTree& tree = run.context.tree(run.output);
   NormalParams params;
   params.k = k;
@@ -178,7 +178,7 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
 
 void run_curvature(StageRun& run) {
   const StageArgs& a = run.args;
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   CurvatureParams params = curvature_params(a);
   const std::size_t needed = params.degree == 2 ? 6 : 10;
   if (cloud.size() < needed) throw InputError(fmt::format("{}; a degree-{} jet needs at least {}", plural(cloud.size(), "point"), params.degree, needed));
@@ -231,7 +231,7 @@ void run_curvature(StageRun& run) {
 
 void run_features(StageRun& run) {
   const StageArgs& a = run.args;
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   const FeatureParams params = feature_params(a);
   if (cloud.size() < static_cast<std::size_t>(params.k) + 1)
     throw InputError(fmt::format("{}; feature detection with k = {} needs at least {}", plural(cloud.size(), "point"), params.k, params.k + 1));
@@ -284,7 +284,7 @@ void run_features(StageRun& run) {
 void estimate_missing_normals(StageRun& run, int k, const ProgressCallback& progress) { estimate_missing_normals_impl(run, k, progress); }
 
 std::size_t check_input_normals(StageRun& run, const std::string& skipped) {
-  const PointCloud& cloud = run.context.item(run.output).cloud;
+  const PointCloud& cloud = run.context.item(run.output).cloud();
   const std::size_t zero = zero_normal_count(cloud);
   if (zero == 0) return 0;
   if (zero == cloud.size())

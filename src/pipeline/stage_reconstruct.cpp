@@ -97,14 +97,14 @@ void run_reconstruct(StageRun& run) {
   const StageArgs& a = run.args;
   const std::string& method = a.method();
   DataItem& item = run.context.item(run.output);
-  if (item.cloud.size() < 3) throw InputError(fmt::format("{}; a surface needs at least 3", plural(item.cloud.size(), "point")));
-  if (!item.triangles.empty()) drop_faces(item, run.record);
+  if (item.cloud().size() < 3) throw InputError(fmt::format("{}; a surface needs at least 3", plural(item.cloud().size(), "point")));
+  if (!item.mesh.triangles.empty()) drop_faces(item, run.record);
   const double spacing = run.context.mean_spacing(run.output);
-  if (!(spacing > 0.0)) throw InputError(fmt::format("all {} coincide; no surface can be built", plural(item.cloud.size(), "point")));
+  if (!(spacing > 0.0)) throw InputError(fmt::format("all {} coincide; no surface can be built", plural(item.cloud().size(), "point")));
   StageRecord& rec = run.record;
-  const bool estimated = method != "cocone" && method != "crust" && !item.cloud.has_normals();
+  const bool estimated = method != "cocone" && method != "crust" && !item.cloud().has_normals();
   if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.2));
-  const PointCloud& cloud = item.cloud;
+  const PointCloud& cloud = item.cloud();
   const KdTree& tree = run.context.tree(run.output);
   const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
   const NoiseEstimate noise = estimate_noise(cloud, tree);
@@ -190,7 +190,7 @@ void run_reconstruct(StageRun& run) {
   // The mesh's vertices are the cloud's points in order (Poisson: new vertices): the item keeps
   // its positions (and so its cached tree) and gains the faces.
   TriangleMesh& mesh = result.mesh;
-  if (mesh.vertex_normals.empty() && cloud.has_normals() && mesh.vertices.size() == cloud.size()) mesh.vertex_normals = cloud.normals;
+  if (mesh.vertices.normals.empty() && cloud.has_normals() && mesh.vertices.positions.size() == cloud.size()) mesh.vertices.normals = cloud.normals;
   item.assign_mesh(std::move(mesh), run.record.inputs.front());  // the mesh records the cloud it came from
 }
 

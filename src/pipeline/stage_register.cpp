@@ -34,10 +34,10 @@ void record_result(StageRecord& rec, const RegistrationResult& r, const std::str
 void run_register(StageRun& run) {
   const RegisterPairParams params = pair_params(run.args);
   const DataItem& source = run.context.item(run.inputs[0]);
-  const PointCloud& target = run.context.item(run.inputs[1]).cloud;
-  const RegisterPairResult r = register_pair(source.cloud, target, params, run.progress);
+  const PointCloud& target = run.context.item(run.inputs[1]).cloud();
+  const RegisterPairResult r = register_pair(source.cloud(), target, params, run.progress);
   StageRecord& rec = run.record;
-  rec.count("source_points", as_count(source.cloud.size()));
+  rec.count("source_points", as_count(source.cloud().size()));
   rec.count("target_points", as_count(target.size()));
   rec.count("source_samples", as_count(r.source_samples));
   rec.count("target_samples", as_count(r.target_samples));
@@ -62,7 +62,7 @@ void run_register(StageRun& run) {
                             r.result.fitness, r.result.inlier_rmse);
 
   DataItem moved = source;  // a mesh keeps its faces: the motion is rigid
-  r.result.transform.apply(moved.cloud);
+  r.result.transform.apply(moved.cloud());
   run.context.set(run.output, std::move(moved));
 
   const std::string& out = run.args.text("out");
@@ -92,8 +92,8 @@ void run_register_many(StageRun& run) {
   std::size_t faces = 0;
   for (const std::string& tag : run.inputs) {
     const DataItem& item = run.context.item(tag);
-    faces += item.triangles.size();
-    scans.push_back(item.cloud);
+    faces += item.mesh.triangles.size();
+    scans.push_back(item.cloud());
   }
   const RegisterScansResult r = register_scans(scans, params, run.progress);
   StageRecord& rec = run.record;

@@ -25,7 +25,7 @@ void run_render(StageRun& run) {
     c.eye = Vector3d(eye[0], eye[1], eye[2]);
     const std::vector<double>& target = a.numbers("target");
     if (target.size() == 3) c.target = Vector3d(target[0], target[1], target[2]);
-    else c.target = bounding_box(item.cloud.positions).center();
+    else c.target = bounding_box(item.cloud().positions).center();
     const std::vector<double>& up = a.numbers("up");
     c.up = Vector3d(up[0], up[1], up[2]);
     c.fov_deg = a.number("fov_deg");
@@ -33,10 +33,10 @@ void run_render(StageRun& run) {
     p.camera = c;
   }
   if (!p.field.empty()) {
-    const ScalarField* f = item.cloud.fields.find(p.field);
+    const ScalarField* f = item.cloud().fields.find(p.field);
     std::vector<double> axis;
     if (f == nullptr && (p.field == "x" || p.field == "y" || p.field == "z"))
-      for (const Vector3d& q : item.cloud.positions) axis.push_back(q[p.field[0] - 'x']);
+      for (const Vector3d& q : item.cloud().positions) axis.push_back(q[p.field[0] - 'x']);
     if (f != nullptr || !axis.empty()) {
       ColorScale s = default_color_scale(f ? std::span<const double>(f->values) : std::span<const double>(axis), p.field, a.boolean("diverging"));
       const std::vector<double>& range = a.numbers("range");
@@ -49,7 +49,7 @@ void run_render(StageRun& run) {
       p.scale = s;
     }
   }
-  RenderResult r = render_scene(item.cloud, item.triangles, p);
+  RenderResult r = render_scene(item.cloud(), item.mesh.triangles, p);
   const std::string& file = a.text("filename");
   const std::vector<std::uint8_t> png = encode_png(r.image);
   write_file_atomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
@@ -64,7 +64,7 @@ void run_render(StageRun& run) {
   }
   run.record.metric("image", file);
   run.record.summary = fmt::format("render: {} view of {} to {} ({}x{})", p.camera ? "camera" : a.text("view"),
-                                   item.triangles.empty() ? plural(item.cloud.size(), "point") : plural(item.triangles.size(), "triangle"),
+                                   item.mesh.triangles.empty() ? plural(item.cloud().size(), "point") : plural(item.mesh.triangles.size(), "triangle"),
                                    file, p.size.width, p.size.height);
 }
 

@@ -32,7 +32,7 @@ void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
 
 void run_segment(StageRun& run) {
   const StageArgs& a = run.args;
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   const std::string& method = a.method();
   StageRecord& rec = run.record;
   if (cloud.size() < 3) throw InputError(fmt::format("{}; segmentation needs at least 3", plural(cloud.size(), "point")));
@@ -76,7 +76,7 @@ void run_segment(StageRun& run) {
 
 void run_boundary(StageRun& run) {
   const StageArgs& a = run.args;
-  PointCloud& cloud = run.context.item(run.output).cloud;
+  PointCloud& cloud = run.context.item(run.output).cloud();
   StageRecord& rec = run.record;
   if (cloud.size() < 5) throw InputError(fmt::format("{}; the boundary test needs at least 5", plural(cloud.size(), "point")));
   const KdTree& tree = run.context.tree(run.output);

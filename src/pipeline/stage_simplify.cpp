@@ -38,7 +38,7 @@ void run_simplify(StageRun& run) {
   const StageArgs& a = run.args;
   const std::string& method = a.method();
   DataItem& item = run.context.item(run.output);
-  const PointCloud& cloud = item.cloud;
+  const PointCloud& cloud = item.cloud();
   const bool surface = method != "grid" && method != "random";
   if (surface && cloud.size() < 3) throw InputError(fmt::format("{}; method {} needs at least 3", plural(cloud.size(), "point"), method));
   const KdTree* tree = cloud.size() >= 2 ? &run.context.tree(run.output) : nullptr;
@@ -87,10 +87,10 @@ void run_simplify(StageRun& run) {
   };
   std::pair<double, double> out_to_in{0.0, 0.0};
   if (tree != nullptr && !r.cloud.empty()) out_to_in = summarise(tree->knn_all(r.cloud.positions, 1));
-  std::vector<Vector3d> input_positions = std::move(item.cloud.positions);
-  if (!item.triangles.empty() || item.is_mesh) drop_faces(item, rec);
-  item.cloud = std::move(r.cloud);
-  if (tree != nullptr && !item.cloud.empty()) {
+  std::vector<Vector3d> input_positions = std::move(item.cloud().positions);
+  if (!item.mesh.triangles.empty() || item.is_mesh) drop_faces(item, rec);
+  item.cloud() = std::move(r.cloud);
+  if (tree != nullptr && !item.cloud().empty()) {
     const auto in_to_out = summarise(run.context.tree(run.output).knn_all(input_positions, 1));
     rec.metric("input_to_output_mean", in_to_out.first);
     rec.metric("input_to_output_max", in_to_out.second);
@@ -104,7 +104,7 @@ void run_simplify(StageRun& run) {
   std::string extra;
   if (r.feature_points > 0) extra += fmt::format(", {} kept", plural(r.feature_points, "feature point"));
   if (r.added_points > 0) extra += fmt::format(", {} added", plural(r.added_points, "point"));
-  rec.summary = fmt::format("simplify: {} -> {} ({}, {:.2f}x){}", plural(input, "point"), plural(item.cloud.size(), "point"), method,
+  rec.summary = fmt::format("simplify: {} -> {} ({}, {:.2f}x){}", plural(input, "point"), plural(item.cloud().size(), "point"), method,
                             reduction, extra);
 }
 

@@ -20,10 +20,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 void keep_selected(StageRun& run, const std::vector<std::size_t>& kept, const std::string& what) {
   DataItem& item = run.context.item(run.output);
-  const std::size_t before = item.cloud.size();
+  const std::size_t before = item.cloud().size();
   if (kept.size() != before) {
     drop_faces(item, run.record);
-    item.cloud = item.cloud.select(kept);
+    item.cloud() = item.cloud().select(kept);
   }
   run.record.count("input", as_count(before));
   run.record.count("kept", as_count(kept.size()));
@@ -36,7 +36,7 @@ void run_crop(StageRun& run) {
   const std::vector<double>& lo = run.args.numbers("min");
   const std::vector<double>& hi = run.args.numbers("max");
   const bool outside = run.args.boolean("outside");
-  const PointCloud& c = run.context.item(run.output).cloud;
+  const PointCloud& c = run.context.item(run.output).cloud();
   std::vector<std::size_t> kept;
   for (std::size_t i = 0; i < c.size(); ++i) {
     const Vector3d& p = c.positions[i];
@@ -49,7 +49,7 @@ void run_crop(StageRun& run) {
 void run_range(StageRun& run) {
   const std::string& name = run.args.text("field");
   const double lo = run.args.number("min"), hi = run.args.number("max");
-  const PointCloud& c = run.context.item(run.output).cloud;
+  const PointCloud& c = run.context.item(run.output).cloud();
   const int axis = name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : -1;
   const ScalarField* field = axis < 0 ? c.fields.find(name) : nullptr;
   if (axis < 0 && field == nullptr) {
@@ -81,12 +81,12 @@ void run_transform(StageRun& run) {
   RigidTransform t = transform_of(run.args);
   if (run.args.boolean("invert")) t = t.inverse();
   DataItem& item = run.context.item(run.output);
-  t.apply(item.cloud);
+  t.apply(item.cloud());
   const Vector3d shift = t.translation();
-  run.record.count("points", as_count(item.cloud.size()));
+  run.record.count("points", as_count(item.cloud().size()));
   run.record.metric("translation", std::vector<double>{shift.x(), shift.y(), shift.z()});
   run.record.metric("rotation_angle_deg", t.angle_degrees());
-  run.record.summary = fmt::format("transform: moved {} (rotation {:.3g} degrees, translation {:.4g})", plural(item.cloud.size(), "point"),
+  run.record.summary = fmt::format("transform: moved {} (rotation {:.3g} degrees, translation {:.4g})", plural(item.cloud().size(), "point"),
                                    t.angle_degrees(), shift.norm());
 }
 
@@ -95,9 +95,9 @@ void run_merge(StageRun& run) {
   std::size_t faces = 0;
   for (const std::string& tag : run.inputs) {
     const DataItem& item = run.context.item(tag);
-    faces += item.triangles.size();
-    merged.append(item.cloud);
-    run.record.count("points_" + tag, as_count(item.cloud.size()));
+    faces += item.mesh.triangles.size();
+    merged.append(item.cloud());
+    run.record.count("points_" + tag, as_count(item.cloud().size()));
   }
   if (faces > 0) run.record.warnings.push_back(fmt::format("merge works on points: {} dropped", plural(faces, "face")));
   run.record.count("points", as_count(merged.size()));

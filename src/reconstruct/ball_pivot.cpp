@@ -622,7 +622,7 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   reporter.report(1.0);
   reporter.throw_if_cancelled();
 
-  result.mesh = TriangleMesh::from_cloud(cloud, pivoter.take_triangles());
+  result.mesh = TriangleMesh{cloud, pivoter.take_triangles(), {}};
   // Small holes (where the ball could not rest on a hole's corners, typically at a sharp edge):
   // the hole filler every reconstruction shares.
   result.stats.candidate_triangles = result.mesh.triangles.size();

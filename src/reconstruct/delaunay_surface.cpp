@@ -604,9 +604,9 @@ ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const Del
     });
     PointCloud copy = cloud;
     copy.normals = std::move(normals);
-    result.mesh = TriangleMesh::from_cloud(std::move(copy), std::move(out_tris));
+    result.mesh = TriangleMesh{std::move(copy), std::move(out_tris), {}};
   } else {
-    result.mesh = TriangleMesh::from_cloud(cloud, std::move(out_tris));
+    result.mesh = TriangleMesh{cloud, std::move(out_tris), {}};
   }
   // 6. Small holes. Undersampled spots (random samples, thin parts) leave holes where the
   // candidates missed a triangle or the walk met a conflict: the hole filler every

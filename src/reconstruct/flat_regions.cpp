@@ -68,12 +68,12 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t t = r.begin(); t < r.end(); ++t) {
       const Triangle& tri = mesh.triangles[t];
-      const Vector3d& a = mesh.vertices[std::size_t(tri[0])];
+      const Vector3d& a = mesh.vertices.positions[std::size_t(tri[0])];
       // Edge vectors, not positions: a mesh 1e6 m from the origin gets the same normals.
-      const Vector3d cross = (mesh.vertices[std::size_t(tri[1])] - a).cross(mesh.vertices[std::size_t(tri[2])] - a);
+      const Vector3d cross = (mesh.vertices.positions[std::size_t(tri[1])] - a).cross(mesh.vertices.positions[std::size_t(tri[2])] - a);
       const double norm = cross.norm();
       FaceGeometry& g = geo[t];
-      g.centroid = (a + mesh.vertices[std::size_t(tri[1])] + mesh.vertices[std::size_t(tri[2])]) / 3.0;
+      g.centroid = (a + mesh.vertices.positions[std::size_t(tri[1])] + mesh.vertices.positions[std::size_t(tri[2])]) / 3.0;
       if (norm > 0.0 && std::isfinite(norm)) {
         g.normal = cross / norm;
         g.area = 0.5 * norm;

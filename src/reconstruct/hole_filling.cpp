@@ -467,12 +467,12 @@ namespace detail {
 
 HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params) {
   HoleFillStats stats;
-  const std::size_t n = mesh.vertices.size();
+  const std::size_t n = mesh.vertices.positions.size();
   if (!(params.max_perimeter_in_spacings > 0.0) || mesh.triangles.empty()) return stats;
   // Local origin: georeferenced coordinates keep their precision in the cross products.
-  const Vector3d origin = bounding_box(mesh.vertices).center();
+  const Vector3d origin = bounding_box(mesh.vertices.positions).center();
   std::vector<Vector3d> p(n);
-  for (std::size_t v = 0; v < n; ++v) p[v] = mesh.vertices[v] - origin;
+  for (std::size_t v = 0; v < n; ++v) p[v] = mesh.vertices.positions[v] - origin;
   // Degenerate triangles (a repeated index) stay as they are, outside the filler.
   std::vector<Triangle> kept_aside;
   // Vertices on an edge with more than two triangles, or traversed twice the same way, are
@@ -508,10 +508,10 @@ HoleFillStats fill_mesh_holes(TriangleMesh& mesh, const HoleFillParams& params) 
       degree[b] += 1;
     }
   }
-  const bool has_normals = mesh.vertex_normals.size() == n;
+  const bool has_normals = mesh.vertices.normals.size() == n;
   for (std::size_t v = 0; v < n; ++v) {
     if (degree[v] > 0) spacing[v] /= double(degree[v]);
-    Vector3d nrm = has_normals ? mesh.vertex_normals[v] : Vector3d::Zero();
+    Vector3d nrm = has_normals ? mesh.vertices.normals[v] : Vector3d::Zero();
     if (!(nrm.norm() > 0.0) || !nrm.allFinite()) nrm = face_sum[v];
     const double len = nrm.norm();
     normals[v] = len > 0.0 ? Vector3d(nrm / len) : Vector3d::Zero();

@@ -60,7 +60,7 @@ std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh
   for (const Triangle& t : mesh.triangles) {
     const std::uint32_t r = find(std::uint32_t(t[0]));
     ++faces[r];
-    area[r] += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+    area[r] += 0.5 * (mesh.vertices.positions[t[1]] - mesh.vertices.positions[t[0]]).cross(mesh.vertices.positions[t[2]] - mesh.vertices.positions[t[0]]).norm();
   }
   const std::uint32_t largest = std::uint32_t(std::max_element(faces.begin(), faces.end()) - faces.begin());
   std::vector<double> samples(nv, 0.0);
@@ -93,7 +93,7 @@ std::pair<std::size_t, std::size_t> remove_unsupported_pieces(TriangleMesh& mesh
     for (std::size_t i = 0; i < kept_faces.size(); ++i) out.values[i] = f.values[kept_faces[i]];
   }
   const std::size_t removed = nf - kept.size();
-  mesh = TriangleMesh::from_cloud(mesh.vertex_cloud().select(vertices), std::move(kept), std::move(face_fields));
+  mesh = TriangleMesh{mesh.vertices.select(vertices), std::move(kept), std::move(face_fields)};
   return {pieces, removed};
 }
 
@@ -244,37 +244,37 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
 
   TriangleMesh& mesh = result.mesh;
-  mesh.vertices = std::move(surface.vertices);
-  mesh.vertex_normals = std::move(surface.normals);
+  mesh.vertices.positions = std::move(surface.vertices);
+  mesh.vertices.normals = std::move(surface.normals);
   mesh.triangles.resize(surface.triangles.size());
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) mesh.triangles[t][k] = static_cast<int>(surface.triangles[t][std::size_t(k)]);
-  const std::size_t nv = mesh.vertices.size();
-  ScalarField& density = mesh.vertex_fields.add("density", nv, ScalarType::Float32);
+  const std::size_t nv = mesh.vertices.positions.size();
+  ScalarField& density = mesh.vertices.fields.add("density", nv, ScalarType::Float32);
   std::vector<std::uint32_t> nearest(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbor> hit;
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
-      density.values[v] = function.density_depth(mesh.vertices[v]);  // centred frame
-      mesh.vertices[v] += centre;
-      tree->knn(mesh.vertices[v], 1, hit);
+      density.values[v] = function.density_depth(mesh.vertices.positions[v]);  // centred frame
+      mesh.vertices.positions[v] += centre;
+      tree->knn(mesh.vertices.positions[v], 1, hit);
       nearest[v] = hit.empty() ? 0 : hit.front().index;
     }
   });
   if (cloud.has_colors()) {
-    mesh.vertex_colors.resize(nv);
-    for (std::size_t v = 0; v < nv; ++v) mesh.vertex_colors[v] = cloud.colors[nearest[v]];
+    mesh.vertices.colors.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) mesh.vertices.colors[v] = cloud.colors[nearest[v]];
   }
   for (const ScalarField& field : cloud.fields) {
     if (field.name == "density") continue;
-    ScalarField& out = mesh.vertex_fields.add(field.name, nv, field.type);
+    ScalarField& out = mesh.vertices.fields.add(field.name, nv, field.type);
     for (std::size_t v = 0; v < nv; ++v) out.values[v] = field.values[nearest[v]];
   }
 
   if (params.unsupported_piece_gap > 0.0 && nv > 0) {
     // each sample supports its nearest vertex within two finest cells
     const double reach = 2.0 * lattice.size / double(1 << lattice.depth);
-    const KdTree vertices(mesh.vertices);
+    const KdTree vertices(mesh.vertices.positions);
     std::vector<std::uint32_t> to(usable.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, usable.size()), [&](const tbb::blocked_range<std::size_t>& range) {
       std::vector<Neighbor> hit;

@@ -895,7 +895,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
   reporter.report(0.98);
 
-  result.mesh = TriangleMesh::from_cloud(cloud, std::move(sel.triangles));
+  result.mesh = TriangleMesh{cloud, std::move(sel.triangles), {}};
   result.topology = analyze_topology(result.mesh);
   std::vector<std::uint8_t> used(n, 0);
   for (const Triangle& t : result.mesh.triangles)

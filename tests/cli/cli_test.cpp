@@ -210,7 +210,7 @@ TEST_F(Cli, ConvertKeepsGeoreferencedPrecisionThroughLasAndPly) {
 
 TEST_F(Cli, ConvertCarriesFacesAndWarnsWhereTheFormatCannotHoldThem) {
   TriangleMesh mesh;
-  mesh.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  mesh.vertices.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
   mesh.triangles = {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)};
   write_mesh(path("tet.off"), mesh);
   ASSERT_EQ(run("convert " + path("tet.off") + " " + path("tet.ply") + " --quiet", dir_).exit_code, 0);
@@ -225,7 +225,7 @@ TEST_F(Cli, ConvertCarriesFacesAndWarnsWhereTheFormatCannotHoldThem) {
 
 TEST_F(Cli, FaceFieldsTravelThroughPlyAndAreNamedWhereAFormatDropsThem) {
   TriangleMesh mesh;
-  mesh.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  mesh.vertices.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
   mesh.triangles = {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)};
   mesh.face_fields.add("region", 4, ScalarType::Int32).values = {0, 1, 1, 2};
   write_mesh(path("tet.ply"), mesh);

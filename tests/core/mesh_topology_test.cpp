@@ -11,7 +11,7 @@ namespace {
 
 TriangleMesh tetrahedron() {
   TriangleMesh mesh;
-  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  mesh.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   return mesh;
 }
@@ -23,9 +23,9 @@ TriangleMesh grid(int rows, int cols, bool wrap_u, bool wrap_v) {
     for (int j = 0; j < cols; ++j) {
       if (wrap_u && wrap_v) {
         const double u = 2 * std::numbers::pi * i / rows, v = 2 * std::numbers::pi * j / cols;
-        mesh.vertices.push_back({(2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v)});
+        mesh.vertices.positions.push_back({(2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v)});
       } else {
-        mesh.vertices.push_back({static_cast<double>(j) / (cols - 1), static_cast<double>(i) / (rows - 1), 0.0});
+        mesh.vertices.positions.push_back({static_cast<double>(j) / (cols - 1), static_cast<double>(i) / (rows - 1), 0.0});
       }
     }
   const int cell_rows = wrap_u ? rows : rows - 1, cell_cols = wrap_v ? cols : cols - 1;
@@ -99,7 +99,7 @@ TEST(MeshTopology, FlippedTriangleIsInconsistent) {
 
 TEST(MeshTopology, ThreeTrianglesOnOneEdgeAreNonManifold) {
   TriangleMesh mesh;
-  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  mesh.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
   mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
   const MeshTopology t = analyze_topology(mesh);
   EXPECT_EQ(t.non_manifold_edges, 1u);
@@ -108,7 +108,7 @@ TEST(MeshTopology, ThreeTrianglesOnOneEdgeAreNonManifold) {
 
 TEST(MeshTopology, BowtieVertexAndComponentsAndDegenerates) {
   TriangleMesh mesh;
-  mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {5, 5, 5}, {6, 5, 5}};
+  mesh.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {5, 5, 5}, {6, 5, 5}};
   mesh.triangles = {{0, 1, 2}, {0, 3, 4}, {5, 6, 6}};
   const MeshTopology t = analyze_topology(mesh);
   EXPECT_EQ(t.non_manifold_vertices, 1u);  // vertex 0 joins two separate fans

@@ -29,7 +29,7 @@ double rms_distance(const std::vector<Vector3d>& points, const TriangleMesh& mes
 // A box with unequal sides (no symmetry a small motion could slide along), its centre at `c`.
 TriangleMesh box(const Vector3d& c) {
   TriangleMesh m = test::cube_mesh(1.0, Vector3d::Zero());
-  for (Vector3d& v : m.vertices) v = c + Vector3d(1.0 * v.x(), 0.7 * v.y(), 0.4 * v.z());
+  for (Vector3d& v : m.vertices.positions) v = c + Vector3d(1.0 * v.x(), 0.7 * v.y(), 0.4 * v.z());
   return m;
 }
 
@@ -57,7 +57,7 @@ TEST(AlignToMesh, MovesAScanOfTheMeshBackAndItThenMeasuresZero) {
 TEST(AlignToMesh, WorksAgainstTheVerticesOfADenseMesh) {
   const TriangleMesh mesh = [] {
     TriangleMesh m = test::grid_cube(30, 1.0);
-    for (Vector3d& v : m.vertices) v = Vector3d(v.x(), 0.7 * v.y(), 0.4 * v.z());
+    for (Vector3d& v : m.vertices.positions) v = Vector3d(v.x(), 0.7 * v.y(), 0.4 * v.z());
     return m;
   }();
   std::vector<Vector3d> scan = sample_mesh_surface(mesh, 20000, 11);

@@ -49,7 +49,7 @@ Scene make_scene() {
   Scene s{test::icosphere_mesh(2, 1.0, center), {}};
   for (std::size_t t = 0; t < s.mesh.triangles.size(); ++t) {
     const Triangle& f = s.mesh.triangles[t];
-    const Vector3d a = s.mesh.vertices[std::size_t(f[0])], b = s.mesh.vertices[std::size_t(f[1])], c = s.mesh.vertices[std::size_t(f[2])];
+    const Vector3d a = s.mesh.vertices.positions[std::size_t(f[0])], b = s.mesh.vertices.positions[std::size_t(f[1])], c = s.mesh.vertices.positions[std::size_t(f[2])];
     const Vector3d n = (b - a).cross(c - a).normalized();
     s.cloud.positions.push_back((a + b + c) / 3.0 + (t % 2 == 0 ? 0.01 : -0.01) * n);
   }
@@ -136,7 +136,7 @@ TEST_F(EvaluateCli, BadInputGetsAClearAnswer) {
 TEST_F(EvaluateCli, AlignMovesTheReferenceOntoTheMeshBeforeMeasuring) {
   const Vector3d center(1.0e6, 2.0e6, 10.0);
   TriangleMesh mesh = test::cube_mesh(1.0, Vector3d::Zero());
-  for (Vector3d& v : mesh.vertices) v = center + Vector3d(v.x(), 0.6 * v.y(), 0.3 * v.z());
+  for (Vector3d& v : mesh.vertices.positions) v = center + Vector3d(v.x(), 0.6 * v.y(), 0.3 * v.z());
   PointCloud scan;
   scan.positions = sample_mesh_surface(mesh, 20000, 5);
   const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.02, Vector3d(0.3, 1.0, -0.4).normalized()).toRotationMatrix();

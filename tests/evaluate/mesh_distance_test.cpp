@@ -32,8 +32,8 @@ std::vector<Vector3d> random_points(std::size_t n, double lo, double hi, std::ui
 double convex_signed_distance(const Vector3d& p, const TriangleMesh& mesh) {
   double plane = -std::numeric_limits<double>::infinity();
   for (const Triangle& t : mesh.triangles) {
-    const Vector3d& a = mesh.vertices[std::size_t(t[0])];
-    const Vector3d n = (mesh.vertices[std::size_t(t[1])] - a).cross(mesh.vertices[std::size_t(t[2])] - a).normalized();
+    const Vector3d& a = mesh.vertices.positions[std::size_t(t[0])];
+    const Vector3d n = (mesh.vertices.positions[std::size_t(t[1])] - a).cross(mesh.vertices.positions[std::size_t(t[2])] - a).normalized();
     plane = std::max(plane, n.dot(p - a));
   }
   if (plane > 0.0) return std::sqrt(test::brute_force_squared_distance(p, mesh));
@@ -80,8 +80,8 @@ TEST(MeshDistance, SphereMeshIsExactAndSignedOnBothSides) {
   std::vector<Vector3d> points = random_points(1500, -1.6, 1.6, 9);
   // And points very near the surface, on both sides of a face, an edge and a vertex.
   for (const double d : {1e-3, -1e-3, 1e-7, -1e-7}) {
-    points.push_back(sphere.vertices[5] * (1.0 + d));
-    points.push_back((sphere.vertices[std::size_t(sphere.triangles[3][0])] + sphere.vertices[std::size_t(sphere.triangles[3][1])]) * 0.5 * (1.0 + d));
+    points.push_back(sphere.vertices.positions[5] * (1.0 + d));
+    points.push_back((sphere.vertices.positions[std::size_t(sphere.triangles[3][0])] + sphere.vertices.positions[std::size_t(sphere.triangles[3][1])]) * 0.5 * (1.0 + d));
   }
   const MeshDistanceResult r = mesh_distances(points, sphere);
   const double diagonal = 2.0 * std::sqrt(3.0);
@@ -138,7 +138,7 @@ TEST(MeshDistance, InconsistentOrientationGivesUnsignedDistancesWithAWarning) {
 TEST(MeshDistance, PseudoNormalsOfACubeCornerPointOutward) {
   const PseudoNormals n = pseudo_normals(test::cube_mesh());
   for (std::size_t v = 0; v < 8; ++v) {
-    const Vector3d corner = test::cube_mesh().vertices[v];
+    const Vector3d corner = test::cube_mesh().vertices.positions[v];
     EXPECT_GT(n.vertex[v].normalized().dot(corner.normalized()), 0.99) << v;
   }
   ASSERT_EQ(n.across.size(), 36u);
@@ -152,7 +152,7 @@ TEST(MeshDistance, PseudoNormalsOfACubeCornerPointOutward) {
 TEST(MeshDistance, BadInputIsNamed) {
   const std::vector<Vector3d> p = {{0, 0, 0}};
   TriangleMesh empty;
-  empty.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  empty.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   try {
     mesh_distances(p, empty);
     FAIL();
@@ -160,7 +160,7 @@ TEST(MeshDistance, BadInputIsNamed) {
     EXPECT_NE(std::string(e.what()).find("no faces"), std::string::npos) << e.what();
   }
   TriangleMesh nan = test::cube_mesh();
-  nan.vertices[3].x() = std::numeric_limits<double>::quiet_NaN();
+  nan.vertices.positions[3].x() = std::numeric_limits<double>::quiet_NaN();
   try {
     mesh_distances(p, nan);
     FAIL();

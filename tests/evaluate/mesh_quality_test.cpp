@@ -45,7 +45,7 @@ TEST(MeshQuality, CubeIsWatertightGenusZeroWithAreaAndVolume) {
 
 TEST(MeshQuality, EquilateralTriangleHasAspectRatioOne) {
   TriangleMesh t;
-  t.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2.0, 0}};
+  t.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2.0, 0}};
   t.triangles = {Triangle(0, 1, 2)};
   const MeshQuality q = analyze_mesh_quality(t);
   EXPECT_NEAR(q.aspect_ratios.min, 1.0, 1e-12);
@@ -69,7 +69,7 @@ TEST(MeshQuality, OpenBoxHasOneLoopOfLengthEight) {
 
 TEST(MeshQuality, BowTieIsVertexNonManifold) {
   TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {1, 1, 0}, {1, -1, 0}, {-1, 1, 0}, {-1, -1, 0}};
+  m.vertices.positions = {{0, 0, 0}, {1, 1, 0}, {1, -1, 0}, {-1, 1, 0}, {-1, -1, 0}};
   m.triangles = {Triangle(0, 2, 1), Triangle(0, 3, 4)};
   const MeshQuality q = analyze_mesh_quality(m);
   EXPECT_TRUE(q.edge_manifold);
@@ -78,7 +78,7 @@ TEST(MeshQuality, BowTieIsVertexNonManifold) {
   EXPECT_EQ(q.self_intersections, 0u);  // they share a vertex
   // Three triangles on one edge: edge non-manifold.
   TriangleMesh fin = test::cube_mesh();
-  fin.vertices.push_back(Vector3d(0, 0, 3));
+  fin.vertices.positions.push_back(Vector3d(0, 0, 3));
   fin.triangles.push_back(Triangle(6, 7, 8));  // on the top edge from (-1,1,1) to (1,1,1)
   const MeshQuality f = analyze_mesh_quality(fin);
   EXPECT_FALSE(f.edge_manifold);
@@ -109,11 +109,11 @@ TEST(MeshQuality, TwoDisjointCubesAreTwoComponents) {
 
 TEST(MeshQuality, CrossingPairIsOneSelfIntersection) {
   TriangleMesh m;
-  m.vertices = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {1.5, 1.5, 1}};
+  m.vertices.positions = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {1.5, 1.5, 1}};
   m.triangles = {Triangle(0, 1, 2), Triangle(3, 4, 5)};
   EXPECT_EQ(analyze_mesh_quality(m).self_intersections, 1u);
   // Moved apart, they no longer cross.
-  for (std::size_t v = 3; v < 6; ++v) m.vertices[v].x() += 10.0;
+  for (std::size_t v = 3; v < 6; ++v) m.vertices.positions[v].x() += 10.0;
   EXPECT_EQ(analyze_mesh_quality(m).self_intersections, 0u);
 }
 
@@ -122,9 +122,9 @@ TEST(MeshQuality, DegenerateAndDuplicateFacesAreCounted) {
   m.triangles.push_back(m.triangles[0]);                       // duplicate
   m.triangles.push_back(Triangle(m.triangles[1][2], m.triangles[1][0], m.triangles[1][1]));  // same vertices, rotated
   m.triangles.push_back(Triangle(0, 0, 1));                    // repeated index
-  m.vertices.push_back(Vector3d(0, 0, 0));
-  m.vertices.push_back(Vector3d(1, 0, 0));
-  m.vertices.push_back(Vector3d(2, 0, 0));
+  m.vertices.positions.push_back(Vector3d(0, 0, 0));
+  m.vertices.positions.push_back(Vector3d(1, 0, 0));
+  m.vertices.positions.push_back(Vector3d(2, 0, 0));
   m.triangles.push_back(Triangle(8, 9, 10));                   // collinear
   const MeshQuality q = analyze_mesh_quality(m);
   EXPECT_EQ(q.duplicate_faces, 2u);
@@ -133,7 +133,7 @@ TEST(MeshQuality, DegenerateAndDuplicateFacesAreCounted) {
 
 TEST(MeshQuality, BadInputIsNamed) {
   TriangleMesh m = test::cube_mesh();
-  m.vertices[2].y() = std::numeric_limits<double>::quiet_NaN();
+  m.vertices.positions[2].y() = std::numeric_limits<double>::quiet_NaN();
   try {
     analyze_mesh_quality(m);
     FAIL();

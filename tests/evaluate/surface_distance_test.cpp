@@ -15,7 +15,7 @@ namespace {
 
 TEST(SurfaceDistance, SamplingIsSeededAreaUniformAndOnTheSurface) {
   TriangleMesh two;
-  two.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 5}, {3, 0, 5}, {0, 3, 5}};
+  two.vertices.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 5}, {3, 0, 5}, {0, 3, 5}};
   two.triangles = {Triangle(0, 1, 2), Triangle(3, 4, 5)};  // areas 1/2 and 9/2
   const std::vector<Vector3d> s = sample_mesh_surface(two, 20000, 7);
   ASSERT_EQ(s.size(), 20000u);
@@ -51,7 +51,7 @@ TEST(SurfaceDistance, CloudAgainstAMeshIsExactOrSampled) {
   const TriangleMesh grid = test::grid_mesh(4);
   std::vector<Vector3d> above;
   for (int i = 0; i < 50; ++i) above.emplace_back(-0.8 + 0.032 * i, 0.1, 0.2);
-  const SurfaceView cloud{above, {}}, mesh{grid.vertices, grid.triangles};
+  const SurfaceView cloud{above, {}}, mesh{grid.vertices.positions, grid.triangles};
   const SurfaceDistanceResult exact = surface_distance(cloud, mesh, {.exact = true, .samples = 5000});
   EXPECT_NEAR(exact.a_to_b.max, 0.2, 1e-12);
   EXPECT_NEAR(exact.a_to_b.mean, 0.2, 1e-12);

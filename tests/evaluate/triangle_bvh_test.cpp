@@ -30,8 +30,10 @@ TEST(TriangleBvh, ClosestPointAgreesWithBruteForceOnRandomSoups) {
       EXPECT_NEAR(c.squared_distance, expected, 1e-12 * (1.0 + expected)) << "soup of " << count << ", query " << q;
       // The point returned lies on the triangle returned, at the distance returned.
       EXPECT_NEAR((c.point - p).squaredNorm(), c.squared_distance, 1e-12);
-      const double on_triangle = test::brute_force_squared_distance(
-          c.point, TriangleMesh{{soup.vertices.begin() + 3 * c.triangle, soup.vertices.begin() + 3 * c.triangle + 3}, {Triangle(0, 1, 2)}});
+      TriangleMesh hit;
+      hit.vertices.positions.assign(soup.vertices.positions.begin() + 3 * c.triangle, soup.vertices.positions.begin() + 3 * c.triangle + 3);
+      hit.triangles = {Triangle(0, 1, 2)};
+      const double on_triangle = test::brute_force_squared_distance(c.point, hit);
       EXPECT_LT(on_triangle, 1e-20);
     }
   }
@@ -86,10 +88,10 @@ TEST(TriangleBvh, OverlappingVisitsExactlyTheTrianglesWhoseBoxesOverlap) {
   bvh.overlapping(lo, hi, [&](int t) { got.insert(t); });
   std::set<int> expected;
   for (std::size_t t = 0; t < soup.triangles.size(); ++t) {
-    Vector3d tlo = soup.vertices[3 * t], thi = tlo;
+    Vector3d tlo = soup.vertices.positions[3 * t], thi = tlo;
     for (int c = 1; c < 3; ++c) {
-      tlo = tlo.cwiseMin(soup.vertices[3 * t + std::size_t(c)]);
-      thi = thi.cwiseMax(soup.vertices[3 * t + std::size_t(c)]);
+      tlo = tlo.cwiseMin(soup.vertices.positions[3 * t + std::size_t(c)]);
+      thi = thi.cwiseMax(soup.vertices.positions[3 * t + std::size_t(c)]);
     }
     if ((tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all()) expected.insert(static_cast<int>(t));
   }

@@ -253,7 +253,7 @@ TEST(DetectFeaturePoints, CancelLeavesTheCloudUnchanged) {
 test::FeatureShape folded_sheet(double turn_deg, std::size_t n) {
   const double t = turn_deg * std::numbers::pi / 180.0;
   TriangleMesh mesh;
-  mesh.vertices = {{-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {std::cos(t), -1, std::sin(t)}, {std::cos(t), 1, std::sin(t)}};
+  mesh.vertices.positions = {{-1, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-1, 1, 0}, {std::cos(t), -1, std::sin(t)}, {std::cos(t), 1, std::sin(t)}};
   mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
   test::FeatureShape shape = test::sample_mesh_features(mesh, n, 30.0, 5);
   shape.cloud.normals.clear();

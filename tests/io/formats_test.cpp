@@ -27,7 +27,7 @@ using test::error_of;
 TriangleMesh tetrahedron() {
   PointCloud c;
   c.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
-  return TriangleMesh::from_cloud(std::move(c), {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)}, {});
+  return TriangleMesh{std::move(c), {Triangle(0, 2, 1), Triangle(0, 1, 3), Triangle(0, 3, 2), Triangle(1, 2, 3)}, {}};
 }
 
 // The file names in `dir`, sorted.
@@ -45,12 +45,12 @@ void expect_tetrahedron(const fs::path& path, const FileFormat& f, const ReadOpt
   const CloudReadResult r = read_point_cloud(path, options);
   EXPECT_EQ(r.format, f.name);
   const TriangleMesh m = tetrahedron();
-  ASSERT_EQ(r.cloud.size(), m.vertices.size());
+  ASSERT_EQ(r.cloud.size(), m.vertices.positions.size());
   // STL stores each facet's corners and the reader welds them, in its own order: compare as sets.
-  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
-    double nearest = (r.cloud.positions[i] - m.vertices[i]).norm();
+  for (std::size_t i = 0; i < m.vertices.positions.size(); ++i) {
+    double nearest = (r.cloud.positions[i] - m.vertices.positions[i]).norm();
     if (f.name == "stl")
-      for (const Vector3d& v : m.vertices) nearest = std::min(nearest, (r.cloud.positions[i] - v).norm());
+      for (const Vector3d& v : m.vertices.positions) nearest = std::min(nearest, (r.cloud.positions[i] - v).norm());
     EXPECT_LT(nearest, 1e-4) << "point " << i;
   }
   if (f.holds_faces) {

@@ -175,8 +175,8 @@ TEST(ReadMesh, DropsFacesOfDroppedVerticesAndRemapsTheRest) {
   const MeshReadResult result = read_mesh(path);
   EXPECT_EQ(result.dropped_nonfinite, 1u);
   ASSERT_EQ(result.mesh.vertex_count(), 3u);
-  EXPECT_EQ(result.mesh.vertices[2], Vector3d(0, 0, 1));
-  EXPECT_EQ(result.mesh.vertex_fields.find("label")->values, (std::vector<double>{11, 12, 13}));
+  EXPECT_EQ(result.mesh.vertices.positions[2], Vector3d(0, 0, 1));
+  EXPECT_EQ(result.mesh.vertices.fields.find("label")->values, (std::vector<double>{11, 12, 13}));
   // Face (1 2 0) uses vertex 0 and goes; face (1 2 3) becomes (0 1 2); the quad (0 1 2 3)
   // fans into (0 1 2), which uses vertex 0, and (0 2 3), which does too.
   EXPECT_EQ(result.mesh.triangles, (std::vector<Triangle>{Triangle(0, 1, 2)}));

@@ -35,9 +35,9 @@ TriangleMesh cube_mesh() {
   const Vector3d origin(0.1, 1e6 + 0.3, -7.0 / 3.0);
   for (int i = 0; i < 8; ++i) {
     const Vector3d corner(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-    mesh.vertices.push_back(origin + corner * (1.0 / 3.0));
-    mesh.vertex_normals.push_back((2.0 * corner - Vector3d::Ones()).normalized());
-    mesh.vertex_colors.emplace_back(static_cast<float>(i * 30) / 255.0f, 1.0f, static_cast<float>(255 - i * 7) / 255.0f);
+    mesh.vertices.positions.push_back(origin + corner * (1.0 / 3.0));
+    mesh.vertices.normals.push_back((2.0 * corner - Vector3d::Ones()).normalized());
+    mesh.vertices.colors.emplace_back(static_cast<float>(i * 30) / 255.0f, 1.0f, static_cast<float>(255 - i * 7) / 255.0f);
   }
   mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
                     {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
@@ -51,9 +51,9 @@ TEST(Off, MeshRoundTripKeepsVerticesNormalsColoursExactly) {
   EXPECT_EQ(read_text(dir / "cube.off").substr(0, 6), "CNOFF\n");
   const MeshReadResult result = read_mesh(dir / "cube.off");
   EXPECT_EQ(result.format, "off");
-  EXPECT_EQ(result.mesh.vertices, mesh.vertices);
-  EXPECT_EQ(result.mesh.vertex_normals, mesh.vertex_normals);
-  EXPECT_EQ(result.mesh.vertex_colors, mesh.vertex_colors);
+  EXPECT_EQ(result.mesh.vertices.positions, mesh.vertices.positions);
+  EXPECT_EQ(result.mesh.vertices.normals, mesh.vertices.normals);
+  EXPECT_EQ(result.mesh.vertices.colors, mesh.vertices.colors);
   EXPECT_EQ(result.mesh.triangles, mesh.triangles);
 }
 
@@ -85,11 +85,11 @@ TEST(Off, ReadsCommentsCoffColoursAndPolygons) {
   const MeshReadResult result = read_mesh(path);
   const TriangleMesh& m = result.mesh;
   ASSERT_EQ(m.vertex_count(), 4u);
-  EXPECT_EQ(m.vertices[2], Vector3d(1, 1, 0));
-  ASSERT_EQ(m.vertex_colors.size(), 4u);
-  EXPECT_EQ(m.vertex_colors[0], Vector3f(1, 0, 0));
-  EXPECT_EQ(m.vertex_colors[2], Vector3f(0, 0, 1));
-  EXPECT_EQ(m.vertex_colors[3], Vector3f(51 / 255.0f, 102 / 255.0f, 153 / 255.0f));
+  EXPECT_EQ(m.vertices.positions[2], Vector3d(1, 1, 0));
+  ASSERT_EQ(m.vertices.colors.size(), 4u);
+  EXPECT_EQ(m.vertices.colors[0], Vector3f(1, 0, 0));
+  EXPECT_EQ(m.vertices.colors[2], Vector3f(0, 0, 1));
+  EXPECT_EQ(m.vertices.colors[3], Vector3f(51 / 255.0f, 102 / 255.0f, 153 / 255.0f));
   EXPECT_EQ(result.polygons_triangulated, 1u);
   EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 2, 3}}));
 }
@@ -98,12 +98,12 @@ TEST(Off, ReadsCountsOnTheHeaderLineAndFloatColoursWithNormals) {
   const auto dir = test::temp_dir("off_cnoff");
   const MeshReadResult one = read_mesh(write_text(dir / "a.off", "CNOFF 1 0 0\n0.5 0 -1 0 0 1 1.0 0.5 0.25 1.0\n"));
   ASSERT_EQ(one.mesh.vertex_count(), 1u);
-  EXPECT_EQ(one.mesh.vertices[0], Vector3d(0.5, 0, -1));
-  EXPECT_EQ(one.mesh.vertex_normals[0], Vector3d(0, 0, 1));
-  EXPECT_EQ(one.mesh.vertex_colors[0], Vector3f(1.0f, 0.5f, 0.25f));
+  EXPECT_EQ(one.mesh.vertices.positions[0], Vector3d(0.5, 0, -1));
+  EXPECT_EQ(one.mesh.vertices.normals[0], Vector3d(0, 0, 1));
+  EXPECT_EQ(one.mesh.vertices.colors[0], Vector3f(1.0f, 0.5f, 0.25f));
   const MeshReadResult two = read_mesh(write_text(dir / "b.off", "OFF 3 1 3\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
   EXPECT_EQ(two.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}}));
-  EXPECT_FALSE(two.mesh.vertex_colors.size());
+  EXPECT_FALSE(two.mesh.vertices.colors.size());
 }
 
 TEST(Off, MalformedFilesNameTheLine) {
@@ -133,9 +133,9 @@ TEST(Obj, MeshRoundTripKeepsVerticesNormalsColoursExactly) {
   write_mesh(dir / "cube.obj", mesh);
   const MeshReadResult result = read_mesh(dir / "cube.obj");
   EXPECT_EQ(result.format, "obj");
-  EXPECT_EQ(result.mesh.vertices, mesh.vertices);
-  EXPECT_EQ(result.mesh.vertex_normals, mesh.vertex_normals);
-  EXPECT_EQ(result.mesh.vertex_colors, mesh.vertex_colors);
+  EXPECT_EQ(result.mesh.vertices.positions, mesh.vertices.positions);
+  EXPECT_EQ(result.mesh.vertices.normals, mesh.vertices.normals);
+  EXPECT_EQ(result.mesh.vertices.colors, mesh.vertices.colors);
   EXPECT_EQ(result.mesh.triangles, mesh.triangles);
 }
 
@@ -177,17 +177,17 @@ TEST(Obj, ReadsEveryFaceFormNegativeIndicesAndQuads) {
   const MeshReadResult result = read_mesh(path);
   const TriangleMesh& m = result.mesh;
   ASSERT_EQ(m.vertex_count(), 5u);
-  EXPECT_EQ(m.vertices[4], Vector3d(0.5, 0.5, 1));
+  EXPECT_EQ(m.vertices.positions[4], Vector3d(0.5, 0.5, 1));
   EXPECT_EQ(result.polygons_triangulated, 1u);
   EXPECT_EQ(m.triangles, (std::vector<Triangle>{{0, 3, 2}, {0, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}}));
   // Normals come from the face references; a vertex given two different ones gets their mean.
-  ASSERT_EQ(m.vertex_normals.size(), 5u);
-  EXPECT_EQ(m.vertex_normals[0], Vector3d(0, 0, -1));
-  EXPECT_EQ(m.vertex_normals[1], Vector3d(0, 0, -1));
-  EXPECT_TRUE(m.vertex_normals[2].isApprox(Vector3d(1, 0, -1).normalized(), 1e-15));
-  EXPECT_TRUE(m.vertex_normals[3].isApprox(Vector3d(1, 0, -1).normalized(), 1e-15));
-  EXPECT_EQ(m.vertex_normals[4], Vector3d(1, 0, 0));
-  EXPECT_TRUE(m.vertex_colors.empty());
+  ASSERT_EQ(m.vertices.normals.size(), 5u);
+  EXPECT_EQ(m.vertices.normals[0], Vector3d(0, 0, -1));
+  EXPECT_EQ(m.vertices.normals[1], Vector3d(0, 0, -1));
+  EXPECT_TRUE(m.vertices.normals[2].isApprox(Vector3d(1, 0, -1).normalized(), 1e-15));
+  EXPECT_TRUE(m.vertices.normals[3].isApprox(Vector3d(1, 0, -1).normalized(), 1e-15));
+  EXPECT_EQ(m.vertices.normals[4], Vector3d(1, 0, 0));
+  EXPECT_TRUE(m.vertices.colors.empty());
 }
 
 TEST(Obj, ReadsVertexColoursInEitherRange) {
@@ -226,7 +226,7 @@ TEST(Obj, MalformedFilesNameTheLine) {
 std::vector<Vector3d> triangle_corners(const TriangleMesh& mesh) {
   std::vector<Vector3d> corners;
   for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) corners.push_back(mesh.vertices[t[c]]);
+    for (int c = 0; c < 3; ++c) corners.push_back(mesh.vertices.positions[t[c]]);
   return corners;
 }
 
@@ -284,7 +284,7 @@ TEST(Stl, ReadsHandWrittenAscii) {
                                "  endfacet\n"
                                "endsolid square\n");
   const MeshReadResult result = read_mesh(path);
-  EXPECT_EQ(result.mesh.vertices, (std::vector<Vector3d>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  EXPECT_EQ(result.mesh.vertices.positions, (std::vector<Vector3d>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
   EXPECT_EQ(result.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));
 }
 
@@ -299,7 +299,7 @@ std::string binary_cube_stl(std::uint32_t announced, std::size_t facets) {
     const Triangle& t = mesh.triangles[f % 12];
     float values[12] = {};
     for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) values[3 + 3 * c + k] = static_cast<float>(mesh.vertices[t[c]][k]);
+      for (int k = 0; k < 3; ++k) values[3 + 3 * c + k] = static_cast<float>(mesh.vertices.positions[t[c]][k]);
     bytes.append(reinterpret_cast<const char*>(values), sizeof(values));
     bytes.append(2, '\0');
   }

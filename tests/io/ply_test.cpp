@@ -42,15 +42,15 @@ void put(std::string& bytes, T value, bool big) {
 TriangleMesh attributed_mesh() {
   const PointCloud sphere = test::sample_sphere(50, 2.0, Vector3d(10, -20, 30), 3);
   TriangleMesh mesh;
-  mesh.vertices = sphere.positions;
-  mesh.vertex_normals = sphere.normals;
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
-    mesh.vertex_colors.emplace_back(static_cast<float>(i % 256) / 255.0f, static_cast<float>((3 * i) % 256) / 255.0f, 1.0f);
-  ScalarField& label = mesh.vertex_fields.add("label", 50, ScalarType::UInt8);
-  ScalarField& intensity = mesh.vertex_fields.add("intensity", 50, ScalarType::Float32);
-  ScalarField& distance = mesh.vertex_fields.add("distance", 50, ScalarType::Float64);
-  ScalarField& offset = mesh.vertex_fields.add("offset", 50, ScalarType::Int16);
-  ScalarField& id = mesh.vertex_fields.add("id", 50, ScalarType::UInt32);
+  mesh.vertices.positions = sphere.positions;
+  mesh.vertices.normals = sphere.normals;
+  for (std::size_t i = 0; i < mesh.vertices.positions.size(); ++i)
+    mesh.vertices.colors.emplace_back(static_cast<float>(i % 256) / 255.0f, static_cast<float>((3 * i) % 256) / 255.0f, 1.0f);
+  ScalarField& label = mesh.vertices.fields.add("label", 50, ScalarType::UInt8);
+  ScalarField& intensity = mesh.vertices.fields.add("intensity", 50, ScalarType::Float32);
+  ScalarField& distance = mesh.vertices.fields.add("distance", 50, ScalarType::Float64);
+  ScalarField& offset = mesh.vertices.fields.add("offset", 50, ScalarType::Int16);
+  ScalarField& id = mesh.vertices.fields.add("id", 50, ScalarType::UInt32);
   for (std::size_t i = 0; i < 50; ++i) {
     label.values[i] = static_cast<double>(i % 7);
     intensity.values[i] = 0.25 * static_cast<double>(i);
@@ -88,13 +88,13 @@ TEST_P(PlyRoundTrip, KeepsEveryAttributeExactly) {
   EXPECT_EQ(result.format, "ply");
   EXPECT_EQ(result.encoding, expected_encoding);
   const TriangleMesh& back = result.mesh;
-  EXPECT_EQ(back.vertices, mesh.vertices);
-  EXPECT_EQ(back.vertex_normals, mesh.vertex_normals);
-  EXPECT_EQ(back.vertex_colors, mesh.vertex_colors);
+  EXPECT_EQ(back.vertices.positions, mesh.vertices.positions);
+  EXPECT_EQ(back.vertices.normals, mesh.vertices.normals);
+  EXPECT_EQ(back.vertices.colors, mesh.vertices.colors);
   EXPECT_EQ(back.triangles, mesh.triangles);
-  ASSERT_EQ(back.vertex_fields.size(), mesh.vertex_fields.size());
-  for (const ScalarField& field : mesh.vertex_fields) {
-    const ScalarField* got = back.vertex_fields.find(field.name);
+  ASSERT_EQ(back.vertices.fields.size(), mesh.vertices.fields.size());
+  for (const ScalarField& field : mesh.vertices.fields) {
+    const ScalarField* got = back.vertices.fields.find(field.name);
     ASSERT_NE(got, nullptr) << field.name;
     EXPECT_EQ(got->type, field.type) << field.name;
     EXPECT_EQ(got->values, field.values) << field.name;
@@ -190,17 +190,17 @@ TEST(Ply, AsciiWithOddOrderSpellingsAndExtraElements) {
   const MeshReadResult result = read_mesh(path);
   const TriangleMesh& mesh = result.mesh;
   ASSERT_EQ(mesh.vertex_count(), 4u);
-  EXPECT_EQ(mesh.vertices[0], Vector3d(1, 2.25, 0.5));
-  EXPECT_EQ(mesh.vertices[1], Vector3d(-2, 3.5, 1.5));
-  EXPECT_EQ(mesh.vertices[3], Vector3d(-128, 5.5, 3.5));
-  ASSERT_EQ(mesh.vertex_normals.size(), 4u);
-  EXPECT_EQ(mesh.vertex_normals[0], Vector3d(0, 1, 0));  // nz nx ny = 0 0 1
-  EXPECT_EQ(mesh.vertex_normals[1], Vector3d(0, 0, 1));
-  ASSERT_EQ(mesh.vertex_colors.size(), 4u);
-  EXPECT_EQ(mesh.vertex_colors[0], Vector3f(1.0f, 0.0f, 51 / 255.0f));
-  EXPECT_EQ(mesh.vertex_colors[2], Vector3f(10 / 255.0f, 20 / 255.0f, 30 / 255.0f));
-  ASSERT_EQ(mesh.vertex_fields.size(), 1u);
-  const ScalarField* quality = mesh.vertex_fields.find("quality");
+  EXPECT_EQ(mesh.vertices.positions[0], Vector3d(1, 2.25, 0.5));
+  EXPECT_EQ(mesh.vertices.positions[1], Vector3d(-2, 3.5, 1.5));
+  EXPECT_EQ(mesh.vertices.positions[3], Vector3d(-128, 5.5, 3.5));
+  ASSERT_EQ(mesh.vertices.normals.size(), 4u);
+  EXPECT_EQ(mesh.vertices.normals[0], Vector3d(0, 1, 0));  // nz nx ny = 0 0 1
+  EXPECT_EQ(mesh.vertices.normals[1], Vector3d(0, 0, 1));
+  ASSERT_EQ(mesh.vertices.colors.size(), 4u);
+  EXPECT_EQ(mesh.vertices.colors[0], Vector3f(1.0f, 0.0f, 51 / 255.0f));
+  EXPECT_EQ(mesh.vertices.colors[2], Vector3f(10 / 255.0f, 20 / 255.0f, 30 / 255.0f));
+  ASSERT_EQ(mesh.vertices.fields.size(), 1u);
+  const ScalarField* quality = mesh.vertices.fields.find("quality");
   ASSERT_NE(quality, nullptr);
   EXPECT_EQ(quality->type, ScalarType::Int16);
   EXPECT_EQ(quality->values, (std::vector<double>{-7, 12, 300, -1}));
@@ -320,12 +320,12 @@ TEST(Ply, BigEndianBinaryBuiltByteByByte) {
   EXPECT_EQ(result.encoding, "binary_big_endian");
   const TriangleMesh& mesh = result.mesh;
   ASSERT_EQ(mesh.vertex_count(), 3u);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(mesh.vertices[i], Vector3d(xs[i], ys[i], zs[i])) << i;
-  ASSERT_NE(mesh.vertex_fields.find("intensity"), nullptr);
-  EXPECT_EQ(mesh.vertex_fields.find("intensity")->type, ScalarType::UInt16);
-  EXPECT_EQ(mesh.vertex_fields.find("intensity")->values, (std::vector<double>{60000, 60001, 60002}));
-  EXPECT_EQ(mesh.vertex_fields.find("tag")->type, ScalarType::Int8);
-  EXPECT_EQ(mesh.vertex_fields.find("tag")->values, (std::vector<double>{-1, -2, -3}));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(mesh.vertices.positions[i], Vector3d(xs[i], ys[i], zs[i])) << i;
+  ASSERT_NE(mesh.vertices.fields.find("intensity"), nullptr);
+  EXPECT_EQ(mesh.vertices.fields.find("intensity")->type, ScalarType::UInt16);
+  EXPECT_EQ(mesh.vertices.fields.find("intensity")->values, (std::vector<double>{60000, 60001, 60002}));
+  EXPECT_EQ(mesh.vertices.fields.find("tag")->type, ScalarType::Int8);
+  EXPECT_EQ(mesh.vertices.fields.find("tag")->values, (std::vector<double>{-1, -2, -3}));
   EXPECT_EQ(mesh.triangles, (std::vector<Triangle>{Triangle(2, 0, 1)}));
 }
 

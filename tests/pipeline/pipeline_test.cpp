@@ -46,7 +46,7 @@ TEST(Context, CachesTheTreeUntilThePositionsChange) {
   EXPECT_EQ(&ctx.tree("a"), first);
   EXPECT_EQ(ctx.mean_spacing("a"), spacing);
   EXPECT_EQ(ctx.tree_builds(), 1u);
-  ctx.item("a").cloud.normals.clear();  // attributes do not invalidate
+  ctx.item("a").cloud().normals.clear();  // attributes do not invalidate
   ctx.tree("a");
   EXPECT_EQ(ctx.tree_builds(), 1u);
   ctx.rename("a", "b");  // a chain passes its cloud on with its tree
@@ -55,7 +55,7 @@ TEST(Context, CachesTheTreeUntilThePositionsChange) {
   ctx.copy("b", "c");  // a copy shares the tree until it changes
   ctx.tree("c");
   EXPECT_EQ(ctx.tree_builds(), 1u);
-  ctx.item("c").cloud.positions[7].x() += 1e-3;  // moved: noticed without being told
+  ctx.item("c").cloud().positions[7].x() += 1e-3;  // moved: noticed without being told
   ctx.tree("c");
   EXPECT_EQ(ctx.tree_builds(), 2u);
   ctx.tree("b");

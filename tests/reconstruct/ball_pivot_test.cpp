@@ -27,7 +27,7 @@ using test::expect_error;
 // Hausdorff distance between the mesh surface and the true surface, both sampled densely: the
 // true surface is given by a dense sample of the same shape (different seed).
 double hausdorff_to(const ReconstructionResult& r, const PointCloud& truth) {
-  const std::vector<Vector3d> on_mesh = test::sample_mesh_surface(r.mesh.vertices, r.mesh.triangles, truth.size());
+  const std::vector<Vector3d> on_mesh = test::sample_mesh_surface(r.mesh.vertices.positions, r.mesh.triangles, truth.size());
   return test::set_distances(on_mesh, truth.positions).hausdorff;
 }
 
@@ -35,8 +35,8 @@ double hausdorff_to(const ReconstructionResult& r, const PointCloud& truth) {
 std::size_t flipped_triangles(const TriangleMesh& mesh) {
   std::size_t flipped = 0;
   for (const Triangle& t : mesh.triangles) {
-    const Vector3d n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    const Vector3d vn = mesh.vertex_normals[t[0]] + mesh.vertex_normals[t[1]] + mesh.vertex_normals[t[2]];
+    const Vector3d n = (mesh.vertices.positions[t[1]] - mesh.vertices.positions[t[0]]).cross(mesh.vertices.positions[t[2]] - mesh.vertices.positions[t[0]]);
+    const Vector3d vn = mesh.vertices.normals[t[0]] + mesh.vertices.normals[t[1]] + mesh.vertices.normals[t[2]];
     if (!(n.dot(vn) > 0.0)) ++flipped;
   }
   return flipped;
@@ -83,7 +83,7 @@ TEST(BallPivot, SphereIsClosedGenusZeroWithinTwoSpacings) {
   expect_closed_genus(r, 0);
   EXPECT_EQ(r.unused_points, 0u);
   ASSERT_EQ(r.mesh.vertex_count(), cloud.size());
-  EXPECT_EQ(r.mesh.vertex_normals, cloud.normals);  // vertices are the points, normals kept
+  EXPECT_EQ(r.mesh.vertices.normals, cloud.normals);  // vertices are the points, normals kept
   EXPECT_GT(r.mean_spacing, 0.0);
   EXPECT_LE(hausdorff_to(r, test::sample_sphere(40000, 1.0, Vector3d::Zero(), 9)), 2.0 * r.mean_spacing);
 }
@@ -134,7 +134,7 @@ TEST(BallPivot, OpenPatchHasExactlyOneBoundaryLoop) {
   // and 0.018 against the limit 2 spacings = 0.036 (the symmetric Hausdorff to the whole square
   // is 0.055, at its corners; the mesh-to-square figure is the truth sample's own gaps).
   const double s = r.mean_spacing;
-  const std::vector<Vector3d> on_mesh = test::sample_mesh_surface(r.mesh.vertices, r.mesh.triangles, 40000);
+  const std::vector<Vector3d> on_mesh = test::sample_mesh_surface(r.mesh.vertices.positions, r.mesh.triangles, 40000);
   EXPECT_LE(test::max_nearest_distance(on_mesh, test::sample_plane(40000, 1.0, 9).positions), 2.0 * s);
   EXPECT_LE(test::max_nearest_distance(test::sample_plane(40000, 1.0 - 2.0 * s, 9).positions, on_mesh), 2.0 * s);
 }

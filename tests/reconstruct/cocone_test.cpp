@@ -59,11 +59,11 @@ TEST(Cocone, SphereIsWatertightGenusZeroOutwardAndClose) {
   EXPECT_EQ(r.topology.components, 1u);
   EXPECT_EQ(r.unused_points, 0u);
   EXPECT_EQ(inward_faces(r.mesh, Vector3d::Zero()), 0u);
-  EXPECT_EQ(r.mesh.vertices.size(), cloud.size());
-  ASSERT_EQ(r.mesh.vertex_normals.size(), cloud.size());
+  EXPECT_EQ(r.mesh.vertices.positions.size(), cloud.size());
+  ASSERT_EQ(r.mesh.vertices.normals.size(), cloud.size());
   double worst = 0.0;
   for (std::size_t i = 0; i < cloud.size(); ++i)
-    worst = std::max(worst, std::acos(std::clamp(r.mesh.vertex_normals[i].dot(cloud.positions[i].normalized()), -1.0, 1.0)));
+    worst = std::max(worst, std::acos(std::clamp(r.mesh.vertices.normals[i].dot(cloud.positions[i].normalized()), -1.0, 1.0)));
   EXPECT_LT(worst * 180.0 / 3.14159265358979, 10.0);  // pole vectors are outward normal estimates
   const auto [to_truth, from_truth] =
       hausdorff_to_surface(r.mesh, test::sample_sphere(20000, 1.0, Vector3d::Zero(), 5).positions, [](const Vector3d& x) { return sphere_distance(x, 1.0); });
@@ -91,7 +91,7 @@ TEST(Cocone, TorusIsWatertightGenusOne) {
   // outward: the face normal points away from the tube's centre line
   std::size_t inward = 0;
   for (const Triangle& t : r.mesh.triangles) {
-    const Vector3d a = r.mesh.vertices[t[0]], b = r.mesh.vertices[t[1]], c = r.mesh.vertices[t[2]];
+    const Vector3d a = r.mesh.vertices.positions[t[0]], b = r.mesh.vertices.positions[t[1]], c = r.mesh.vertices.positions[t[2]];
     const Vector3d m = (a + b + c) / 3.0;
     const Vector3d axis_point = Vector3d(m.x(), m.y(), 0.0).normalized();
     if ((b - a).cross(c - a).dot(m - axis_point) < 0) ++inward;
@@ -151,7 +151,7 @@ TEST(Cocone, OpenPatchIsEdgeManifoldOrientedAndCoversItsInterior) {
   EXPECT_EQ(interior_unused, 0u);
   // no triangle is longer than a few spacings (no bridging over the patch)
   for (const Triangle& t : r.mesh.triangles)
-    for (int k = 0; k < 3; ++k) EXPECT_LT((r.mesh.vertices[t[k]] - r.mesh.vertices[t[(k + 1) % 3]]).norm(), 5.0 * r.mean_spacing);
+    for (int k = 0; k < 3; ++k) EXPECT_LT((r.mesh.vertices.positions[t[k]] - r.mesh.vertices.positions[t[(k + 1) % 3]]).norm(), 5.0 * r.mean_spacing);
 }
 
 TEST(Cocone, NoTriangleBridgesTwoParallelPlanesThreeSpacingsApart) {
@@ -167,8 +167,8 @@ TEST(Cocone, NoTriangleBridgesTwoParallelPlanesThreeSpacingsApart) {
   EXPECT_GT(r.mesh.triangles.size(), bottom.size());
   std::size_t bridging = 0;
   for (const Triangle& t : r.mesh.triangles) {
-    const double lo = std::min({r.mesh.vertices[t[0]].z(), r.mesh.vertices[t[1]].z(), r.mesh.vertices[t[2]].z()});
-    const double hi = std::max({r.mesh.vertices[t[0]].z(), r.mesh.vertices[t[1]].z(), r.mesh.vertices[t[2]].z()});
+    const double lo = std::min({r.mesh.vertices.positions[t[0]].z(), r.mesh.vertices.positions[t[1]].z(), r.mesh.vertices.positions[t[2]].z()});
+    const double hi = std::max({r.mesh.vertices.positions[t[0]].z(), r.mesh.vertices.positions[t[1]].z(), r.mesh.vertices.positions[t[2]].z()});
     if (hi - lo > 0.5 * gap) ++bridging;
   }
   EXPECT_EQ(bridging, 0u);
@@ -197,7 +197,7 @@ TEST(Cocone, ClosesTheThinRimOfAFlattenedEllipsoid) {
     // within the chord sag of a triangle a few spacings wide (none crosses the inside).
     std::size_t off = 0;
     for (const Triangle& t : r.mesh.triangles) {
-      Vector3d c = (r.mesh.vertices[t[0]] + r.mesh.vertices[t[1]] + r.mesh.vertices[t[2]]) / 3.0;
+      Vector3d c = (r.mesh.vertices.positions[t[0]] + r.mesh.vertices.positions[t[1]] + r.mesh.vertices.positions[t[2]]) / 3.0;
       c.z() /= 0.08;
       if (!(c.norm() > 0.9)) ++off;
     }
@@ -226,8 +226,8 @@ TEST(Cocone, KeepsInputNormalsAndOrientsTrianglesByThem) {
   PointCloud cloud = spaced(test::sample_sphere(20000, 1.0, Vector3d::Zero(), 22), 0.08, true);
   for (auto& n : cloud.normals) n = -n;  // inward normals: the mesh must follow them
   const ReconstructionResult r = reconstruct_cocone(cloud);
-  ASSERT_EQ(r.mesh.vertex_normals.size(), cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) EXPECT_EQ(r.mesh.vertex_normals[i], cloud.normals[i]);
+  ASSERT_EQ(r.mesh.vertices.normals.size(), cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) EXPECT_EQ(r.mesh.vertices.normals[i], cloud.normals[i]);
   EXPECT_TRUE(r.topology.watertight());
   EXPECT_EQ(inward_faces(r.mesh, Vector3d::Zero()), r.mesh.triangles.size());
 }
@@ -284,8 +284,8 @@ TEST(Cocone, DuplicatesAreMergedAndLeftUnused) {
   EXPECT_TRUE(r.topology.edge_manifold());
   EXPECT_TRUE(r.topology.oriented());
   EXPECT_TRUE(r.topology.closed());
-  ASSERT_EQ(r.mesh.vertex_normals.size(), cloud.size());
-  for (std::size_t i = n; i < cloud.size(); ++i) EXPECT_EQ(r.mesh.vertex_normals[i], r.mesh.vertex_normals[i - n]);
+  ASSERT_EQ(r.mesh.vertices.normals.size(), cloud.size());
+  for (std::size_t i = n; i < cloud.size(); ++i) EXPECT_EQ(r.mesh.vertices.normals[i], r.mesh.vertices.normals[i - n]);
   // the later copies are the unused ones, whatever order the triangulation inserted them in
   std::vector<char> used(cloud.size(), 0);
   for (const Triangle& t : r.mesh.triangles) used[t[0]] = used[t[1]] = used[t[2]] = 1;

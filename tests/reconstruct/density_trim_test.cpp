@@ -18,15 +18,15 @@ using detail::trim_by_vertex_field;
 double area(const TriangleMesh& m) {
   double a = 0.0;
   for (const Triangle& t : m.triangles)
-    a += 0.5 * (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).norm();
+    a += 0.5 * (m.vertices.positions[t[1]] - m.vertices.positions[t[0]]).cross(m.vertices.positions[t[2]] - m.vertices.positions[t[0]]).norm();
   return a;
 }
 
 /// A field that is a function of the position, plus a copy as a second field.
 void set_field(TriangleMesh& m, const std::function<double(const Vector3d&)>& f) {
-  ScalarField& d = m.vertex_fields.add("density", m.vertices.size());
-  ScalarField& x = m.vertex_fields.add("x", m.vertices.size(), ScalarType::Float32);
-  for (std::size_t i = 0; i < m.vertices.size(); ++i) d.values[i] = f(m.vertices[i]), x.values[i] = m.vertices[i].x();
+  ScalarField& d = m.vertices.fields.add("density", m.vertices.positions.size());
+  ScalarField& x = m.vertices.fields.add("x", m.vertices.positions.size(), ScalarType::Float32);
+  for (std::size_t i = 0; i < m.vertices.positions.size(); ++i) d.values[i] = f(m.vertices.positions[i]), x.values[i] = m.vertices.positions[i].x();
 }
 
 TEST(DensityTrim, LinearFieldCutsThePlaneExactlyAtTheLevel) {
@@ -40,12 +40,12 @@ TEST(DensityTrim, LinearFieldCutsThePlaneExactlyAtTheLevel) {
   const auto r = trim_by_vertex_field(m, "density", 0.3, 0.0, 0);
   m.validate();
   EXPECT_NEAR(area(m), 2.0 * 0.7, 1e-12);
-  for (const Vector3d& v : m.vertices) EXPECT_GE(v.x(), 0.3 - 1e-12);
-  const ScalarField& d = *m.vertex_fields.find("density");
-  const ScalarField& x = *m.vertex_fields.find("x");
-  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
-    EXPECT_NEAR(d.values[i], m.vertices[i].x(), 1e-12);
-    EXPECT_NEAR(x.values[i], m.vertices[i].x(), 1e-12);
+  for (const Vector3d& v : m.vertices.positions) EXPECT_GE(v.x(), 0.3 - 1e-12);
+  const ScalarField& d = *m.vertices.fields.find("density");
+  const ScalarField& x = *m.vertices.fields.find("x");
+  for (std::size_t i = 0; i < m.vertices.positions.size(); ++i) {
+    EXPECT_NEAR(d.values[i], m.vertices.positions[i].x(), 1e-12);
+    EXPECT_NEAR(x.values[i], m.vertices.positions[i].x(), 1e-12);
   }
   EXPECT_GT(r.cut_triangles, 0u);
   EXPECT_EQ(r.removed_islands + r.filled_holes, 0u);
@@ -67,7 +67,7 @@ TEST(DensityTrim, SphereTrimmedByHeightIsAHemisphereWithOneLoop) {
   EXPECT_EQ(topo.genus(), 0);
   EXPECT_EQ(topo.non_manifold_edges + topo.non_manifold_vertices + topo.inconsistent_edges, 0u);
   EXPECT_NEAR(area(m), 2.0 * M_PI, 0.02 * 2.0 * M_PI);
-  for (int v : topo.boundary_loops[0].vertices) EXPECT_NEAR(m.vertices[v].z(), 0.0, 1e-12);
+  for (int v : topo.boundary_loops[0].vertices) EXPECT_NEAR(m.vertices.positions[v].z(), 0.0, 1e-12);
 }
 
 TEST(DensityTrim, SmallIslandsGoAndSmallHolesAreFilled) {
@@ -93,7 +93,7 @@ TEST(DensityTrim, SmallIslandsGoAndSmallHolesAreFilled) {
   EXPECT_EQ(topo.boundary_loops.size(), 1u);
   EXPECT_EQ(topo.genus(), 0);
   EXPECT_EQ(topo.non_manifold_edges + topo.non_manifold_vertices + topo.inconsistent_edges, 0u);
-  for (const Vector3d& v : b.vertices) EXPECT_LT(v.x(), 0.3);
+  for (const Vector3d& v : b.vertices.positions) EXPECT_LT(v.x(), 0.3);
 }
 
 TEST(DensityTrim, SmoothingAveragesTheNeighbours) {
@@ -107,7 +107,7 @@ TEST(DensityTrim, SmoothingAveragesTheNeighbours) {
   EXPECT_GT(unsmoothed.triangles.size(), 0u);
   trim_by_vertex_field(m, "density", 3.0, 0.0, 1);
   EXPECT_EQ(m.triangles.size(), 0u);
-  EXPECT_EQ(m.vertices.size(), 0u);
+  EXPECT_EQ(m.vertices.positions.size(), 0u);
 }
 
 TEST(DensityTrim, RejectsAMissingFieldAndBadParameters) {

@@ -21,7 +21,7 @@ TriangleMesh cut(TriangleMesh mesh, const Vector3d& at, double radius) {
   std::vector<Triangle> kept;
   for (const Triangle& t : mesh.triangles) {
     bool near = false;
-    for (int c = 0; c < 3; ++c) near = near || (mesh.vertices[std::size_t(t[c])] - at).norm() < radius;
+    for (int c = 0; c < 3; ++c) near = near || (mesh.vertices.positions[std::size_t(t[c])] - at).norm() < radius;
     if (!near) kept.push_back(t);
   }
   mesh.triangles = std::move(kept);
@@ -31,7 +31,7 @@ TriangleMesh cut(TriangleMesh mesh, const Vector3d& at, double radius) {
 double mean_edge(const TriangleMesh& mesh) {
   double sum = 0.0;
   for (const Triangle& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) sum += (mesh.vertices[std::size_t(t[c])] - mesh.vertices[std::size_t(t[(c + 1) % 3])]).norm();
+    for (int c = 0; c < 3; ++c) sum += (mesh.vertices.positions[std::size_t(t[c])] - mesh.vertices.positions[std::size_t(t[(c + 1) % 3])]).norm();
   return sum / double(3 * mesh.triangles.size());
 }
 
@@ -39,7 +39,7 @@ double mean_edge(const TriangleMesh& mesh) {
 TriangleMesh grid(int n) {
   TriangleMesh m;
   for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.vertices.emplace_back(i, j, 0.0);
+    for (int i = 0; i <= n; ++i) m.vertices.positions.emplace_back(i, j, 0.0);
   const auto id = [n](int i, int j) { return j * (n + 1) + i; };
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
@@ -68,8 +68,8 @@ TEST(FillHoles, ClosesASmallHoleOnASphereWithTrianglesOnTheSurface) {
   // The new triangles face outward, like the sphere's.
   for (std::size_t t = faces_before; t < holed.triangles.size(); ++t) {
     const Triangle& tri = holed.triangles[t];
-    const Vector3d& a = holed.vertices[std::size_t(tri[0])];
-    const Vector3d n = (holed.vertices[std::size_t(tri[1])] - a).cross(holed.vertices[std::size_t(tri[2])] - a);
+    const Vector3d& a = holed.vertices.positions[std::size_t(tri[0])];
+    const Vector3d n = (holed.vertices.positions[std::size_t(tri[1])] - a).cross(holed.vertices.positions[std::size_t(tri[2])] - a);
     EXPECT_GT(n.dot(a), 0.0);
   }
 }
@@ -107,7 +107,7 @@ TEST(FillHoles, ClosesAnInnerHoleOfAnOpenGridAndLeavesItsBorder) {
   EXPECT_NEAR(after.boundary_loops.front().length, 120.0, 1e-9);
   EXPECT_EQ(after.non_manifold_vertices, 0u);
   for (const Triangle& t : m.triangles) {  // flat and facing +z
-    const Vector3d n = (m.vertices[std::size_t(t[1])] - m.vertices[std::size_t(t[0])]).cross(m.vertices[std::size_t(t[2])] - m.vertices[std::size_t(t[0])]);
+    const Vector3d n = (m.vertices.positions[std::size_t(t[1])] - m.vertices.positions[std::size_t(t[0])]).cross(m.vertices.positions[std::size_t(t[2])] - m.vertices.positions[std::size_t(t[0])]);
     EXPECT_GT(n.z(), 0.0);
   }
   EXPECT_TRUE(s.face_fields_dropped);
@@ -119,10 +119,10 @@ TEST(FillHoles, SameResultAMillionMetresAway) {
   // Jittered (seeded) so that no two fillings tie exactly, as on a scan.
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> jitter(-0.005, 0.005);
-  for (Vector3d& v : m.vertices) v += Vector3d(jitter(rng), jitter(rng), jitter(rng));
+  for (Vector3d& v : m.vertices.positions) v += Vector3d(jitter(rng), jitter(rng), jitter(rng));
   TriangleMesh far = m;
   const Vector3d shift(1e6, -3e6, 2e5);
-  for (Vector3d& v : far.vertices) v += shift;
+  for (Vector3d& v : far.vertices.positions) v += shift;
   fill_holes(m);
   fill_holes(far);
   EXPECT_EQ(m.triangles, far.triangles);
@@ -132,7 +132,7 @@ TEST(FillHoles, RejectsBadParametersAndMeshes) {
   TriangleMesh m = test::icosphere_mesh(2);
   EXPECT_THROW(fill_holes(m, {-1.0}), UsageError);
   EXPECT_THROW(fill_holes(m, {std::nan("")}), UsageError);
-  m.triangles.emplace_back(0, 1, int(m.vertices.size()));
+  m.triangles.emplace_back(0, 1, int(m.vertices.positions.size()));
   EXPECT_THROW(fill_holes(m), InputError);
 }
 

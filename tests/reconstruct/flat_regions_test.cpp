@@ -23,7 +23,7 @@ namespace {
 
 Vector3d face_normal(const TriangleMesh& m, std::size_t f) {
   const Triangle& t = m.triangles[f];
-  return (m.vertices[std::size_t(t[1])] - m.vertices[std::size_t(t[0])]).cross(m.vertices[std::size_t(t[2])] - m.vertices[std::size_t(t[0])]).normalized();
+  return (m.vertices.positions[std::size_t(t[1])] - m.vertices.positions[std::size_t(t[0])]).cross(m.vertices.positions[std::size_t(t[2])] - m.vertices.positions[std::size_t(t[0])]).normalized();
 }
 
 double angle_deg(const Vector3d& a, const Vector3d& b) { return std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / std::numbers::pi; }
@@ -62,7 +62,7 @@ TEST(FlatRegions, JitteredPlaneIsOneRegion) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> jitter(-0.2, 0.2);
   for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n; ++j) plane.vertices.emplace_back(i + jitter(rng), j + jitter(rng), 0.0);
+    for (int j = 0; j <= n; ++j) plane.vertices.positions.emplace_back(i + jitter(rng), j + jitter(rng), 0.0);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const int a = i * (n + 1) + j, b = a + n + 1;
@@ -125,16 +125,16 @@ TEST(FlatRegions, ShiftBy1e6GivesTheSameLabels) {
   // Vertices on a grid of 2^-20 so that the shift itself is exact: what is tested is that
   // nothing downstream depends on the distance from the origin.
   TriangleMesh sphere = test::icosphere_mesh(3, 2.0);
-  for (Vector3d& p : sphere.vertices) p = (p * 1048576.0).array().round().matrix() / 1048576.0;
+  for (Vector3d& p : sphere.vertices.positions) p = (p * 1048576.0).array().round().matrix() / 1048576.0;
   TriangleMesh shifted = sphere;
-  for (Vector3d& p : shifted.vertices) p += Vector3d(1e6, -2e6, 5e5);
+  for (Vector3d& p : shifted.vertices.positions) p += Vector3d(1e6, -2e6, 5e5);
   const FlatRegionResult a = label_flat_regions(sphere);
   const FlatRegionResult b = label_flat_regions(shifted);
   EXPECT_GE(a.regions, 15u);
   EXPECT_EQ(a.region, b.region);
   const TriangleMesh cube = test::grid_cube(3, 0.5);
   TriangleMesh far_cube = cube;
-  for (Vector3d& p : far_cube.vertices) p += Vector3d(4.5e6, 5.5e6, 120.0);
+  for (Vector3d& p : far_cube.vertices.positions) p += Vector3d(4.5e6, 5.5e6, 120.0);
   EXPECT_EQ(label_flat_regions(cube).region, label_flat_regions(far_cube).region);
   EXPECT_EQ(label_flat_regions(far_cube).regions, 6u);
 }
@@ -143,7 +143,7 @@ TEST(FlatRegions, BoundaryNonManifoldAndDegenerateFacesSeparate) {
   // Three coplanar triangles on one edge (0, 1): a non-manifold edge joins none of them; a
   // fourth face of zero area stays alone; a face sharing a manifold edge with the first joins.
   TriangleMesh m;
-  m.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0.5, 1, 0), Vector3d(0.5, 2, 0), Vector3d(0.5, 3, 0),
+  m.vertices.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0.5, 1, 0), Vector3d(0.5, 2, 0), Vector3d(0.5, 3, 0),
                 Vector3d(1.5, 1, 0), Vector3d(2, 0, 0)};
   m.triangles = {Triangle(0, 1, 2), Triangle(0, 1, 3), Triangle(0, 1, 4), Triangle(1, 5, 2), Triangle(1, 6, 6)};
   const FlatRegionResult r = label_flat_regions(m);
@@ -152,7 +152,7 @@ TEST(FlatRegions, BoundaryNonManifoldAndDegenerateFacesSeparate) {
   EXPECT_EQ(r.largest_region, 2u);
   // Opposite orientation across a manifold edge: normals 180 degrees apart, kept apart.
   TriangleMesh flipped;
-  flipped.vertices = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(1, 1, 0)};
+  flipped.vertices.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(1, 1, 0)};
   flipped.triangles = {Triangle(0, 1, 2), Triangle(1, 2, 3)};
   EXPECT_EQ(label_flat_regions(flipped).regions, 2u);
   EXPECT_EQ(label_flat_regions(TriangleMesh{}).regions, 0u);

@@ -19,16 +19,16 @@ namespace {
 TriangleMesh sphere_with_specks() {
   TriangleMesh mesh = test::icosphere_mesh(3, 1.0);
   auto add_triangle = [&](const Vector3d& at) {
-    const int base = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.insert(mesh.vertices.end(), {at, at + Vector3d(0.01, 0, 0), at + Vector3d(0, 0.01, 0)});
+    const int base = static_cast<int>(mesh.vertices.positions.size());
+    mesh.vertices.positions.insert(mesh.vertices.positions.end(), {at, at + Vector3d(0.01, 0, 0), at + Vector3d(0, 0.01, 0)});
     mesh.triangles.emplace_back(base, base + 1, base + 2);
   };
   add_triangle(Vector3d(10, 0, 0));
   add_triangle(Vector3d(0, 10, 0));
   add_triangle(Vector3d(0, 0, 10));
   add_triangle(Vector3d(-10, 0, 0));
-  const int last = static_cast<int>(mesh.vertices.size()) - 1;  // the pair: shares edge (last - 1, last)
-  mesh.vertices.push_back(Vector3d(-10, 0, 0) + Vector3d(0.01, 0.01, 0));
+  const int last = static_cast<int>(mesh.vertices.positions.size()) - 1;  // the pair: shares edge (last - 1, last)
+  mesh.vertices.positions.push_back(Vector3d(-10, 0, 0) + Vector3d(0.01, 0.01, 0));
   mesh.triangles.emplace_back(last - 1, last + 1, last);
   ScalarField& id = mesh.face_fields.add("id", mesh.triangle_count(), ScalarType::Int32);
   for (std::size_t f = 0; f < id.values.size(); ++f) id.values[f] = static_cast<double>(f);

@@ -64,7 +64,7 @@ TEST(Poisson, SphereWithinOnePercentOfTheRadiusAtDepth7WatertightGenus0) {
   const PoissonResult r = reconstruct_poisson(sphere, params);
   ASSERT_GT(r.mesh.vertex_count(), 1000u);
   double worst = 0.0;
-  for (const Vector3d& v : r.mesh.vertices) worst = std::max(worst, std::abs(v.norm() - 1.0));
+  for (const Vector3d& v : r.mesh.vertices.positions) worst = std::max(worst, std::abs(v.norm() - 1.0));
   EXPECT_LT(worst, 0.01);
   EXPECT_TRUE(r.topology.watertight());
   EXPECT_EQ(r.topology.components, 1u);
@@ -72,20 +72,20 @@ TEST(Poisson, SphereWithinOnePercentOfTheRadiusAtDepth7WatertightGenus0) {
   EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
   EXPECT_EQ(r.topology.genus(), 0);
   // normals from the gradient: outward, unit
-  ASSERT_EQ(r.mesh.vertex_normals.size(), r.mesh.vertex_count());
+  ASSERT_EQ(r.mesh.vertices.normals.size(), r.mesh.vertex_count());
   for (std::size_t v = 0; v < r.mesh.vertex_count(); ++v) {
-    EXPECT_NEAR(r.mesh.vertex_normals[v].norm(), 1.0, 1e-9);
-    EXPECT_GT(r.mesh.vertex_normals[v].dot(r.mesh.vertices[v].normalized()), 0.95);
+    EXPECT_NEAR(r.mesh.vertices.normals[v].norm(), 1.0, 1e-9);
+    EXPECT_GT(r.mesh.vertices.normals[v].dot(r.mesh.vertices.positions[v].normalized()), 0.95);
   }
   // triangles counter-clockwise from outside
   for (const Triangle& t : r.mesh.triangles) {
-    const Vector3d& a = r.mesh.vertices[t[0]];
-    EXPECT_GT((r.mesh.vertices[t[1]] - a).cross(r.mesh.vertices[t[2]] - a).dot(a), 0.0);
+    const Vector3d& a = r.mesh.vertices.positions[t[0]];
+    EXPECT_GT((r.mesh.vertices.positions[t[1]] - a).cross(r.mesh.vertices.positions[t[2]] - a).dot(a), 0.0);
   }
   EXPECT_EQ(r.depth, 7);
   EXPECT_EQ(r.nodes_per_level.size(), 8u);
   EXPECT_GT(r.peak_bytes, 0u);
-  const ScalarField* density = r.mesh.vertex_fields.find("density");
+  const ScalarField* density = r.mesh.vertices.fields.find("density");
   ASSERT_NE(density, nullptr);
   for (const double d : density->values) EXPECT_GT(d, 4.0);
 }
@@ -98,7 +98,7 @@ TEST(Poisson, TorusIsWatertightOfGenus1) {
   EXPECT_TRUE(r.topology.watertight());
   EXPECT_EQ(r.topology.components, 1u);
   EXPECT_EQ(r.topology.genus(), 1);
-  for (const Vector3d& v : r.mesh.vertices) {
+  for (const Vector3d& v : r.mesh.vertices.positions) {
     const double ring = std::hypot(v.x(), v.y()) - 1.0;
     EXPECT_NEAR(std::hypot(ring, v.z()), 0.35, 0.01);
   }
@@ -117,7 +117,7 @@ TEST(Poisson, TrimmedHemisphereHasExactlyOneBoundaryLoop) {
   params.depth = 7;
   const PoissonResult untrimmed = reconstruct_poisson(dome, params);
   double lowest = 0.0;
-  for (const Vector3d& v : untrimmed.mesh.vertices) lowest = std::min(lowest, v.z());
+  for (const Vector3d& v : untrimmed.mesh.vertices.positions) lowest = std::min(lowest, v.z());
   EXPECT_LT(lowest, -0.2);  // the closing part hangs below the rim
   params.trim_depth = 5.0;  // the samples' density is about 6.1 (depth units)
   const PoissonResult r = reconstruct_poisson(dome, params);
@@ -126,13 +126,13 @@ TEST(Poisson, TrimmedHemisphereHasExactlyOneBoundaryLoop) {
   EXPECT_EQ(r.topology.components, 1u);
   EXPECT_EQ(r.topology.non_manifold_edges, 0u);
   EXPECT_EQ(r.topology.non_manifold_vertices, 0u);
-  for (const Vector3d& v : r.mesh.vertices) {
+  for (const Vector3d& v : r.mesh.vertices.positions) {
     EXPECT_GT(v.z(), -0.2);
     if (v.z() > 0.1) {
       EXPECT_NEAR(v.norm(), 1.0, 0.01);
     }
   }
-  for (const int v : r.topology.boundary_loops.front().vertices) EXPECT_NEAR(r.mesh.vertices[std::size_t(v)].z(), 0.0, 0.2);
+  for (const int v : r.topology.boundary_loops.front().vertices) EXPECT_NEAR(r.mesh.vertices.positions[std::size_t(v)].z(), 0.0, 0.2);
   // the closed sphere is dense everywhere: nothing goes
   PoissonParams closed;
   closed.depth = 7;
@@ -151,7 +151,7 @@ TEST(Poisson, DirichletBoundaryAlsoGivesTheSphere) {
   EXPECT_TRUE(r.topology.watertight());
   EXPECT_EQ(r.topology.genus(), 0);
   // the zero on the cube, 0.1 from the sphere, pulls the surface out a little
-  for (const Vector3d& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 1.0, 0.03);
+  for (const Vector3d& v : r.mesh.vertices.positions) EXPECT_NEAR(v.norm(), 1.0, 0.03);
 }
 
 // The same mesh (up to 1e-9 of the diagonal) for the points shifted by 1e6 m and shuffled, with
@@ -175,7 +175,7 @@ TEST(Poisson, SameMeshUnderAShiftOf1e6AndAPermutation) {
     ASSERT_EQ(a.mesh.triangle_count(), b.mesh.triangle_count());
     const double diagonal = 2.0 * std::sqrt(3.0);
     double worst = 0.0;
-    for (std::size_t v = 0; v < a.mesh.vertex_count(); ++v) worst = std::max(worst, (b.mesh.vertices[v] - shift - a.mesh.vertices[v]).norm());
+    for (std::size_t v = 0; v < a.mesh.vertex_count(); ++v) worst = std::max(worst, (b.mesh.vertices.positions[v] - shift - a.mesh.vertices.positions[v]).norm());
     EXPECT_LT(worst, 1e-9 * diagonal) << steps << " secant steps";
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
   }
@@ -212,7 +212,7 @@ TEST(Poisson, OutlierBubblesAreRemovedAndASecondObjectStays) {
   EXPECT_EQ(cleaned.topology.components, 2u);
   EXPECT_GT(cleaned.unsupported_pieces, 0u);
   EXPECT_EQ(cleaned.topology.boundary_edges, 0u);
-  for (const Vector3d& v : cleaned.mesh.vertices) {
+  for (const Vector3d& v : cleaned.mesh.vertices.positions) {
     const double d = std::min(std::abs(v.norm() - 1.0), std::abs((v - Vector3d(2.0, 0.0, 0.0)).norm() - 0.5));
     EXPECT_LT(d, 0.05) << "a vertex away from both spheres";
     if (d >= 0.05) break;
@@ -246,14 +246,14 @@ TEST(Poisson, CarriesColoursAndFieldsFromTheNearestSample) {
   PoissonParams params;
   params.depth = 6;
   const PoissonResult r = reconstruct_poisson(sphere, params);
-  ASSERT_EQ(r.mesh.vertex_colors.size(), r.mesh.vertex_count());
-  const ScalarField* out = r.mesh.vertex_fields.find("side");
+  ASSERT_EQ(r.mesh.vertices.colors.size(), r.mesh.vertex_count());
+  const ScalarField* out = r.mesh.vertices.fields.find("side");
   ASSERT_NE(out, nullptr);
   EXPECT_EQ(out->type, ScalarType::Int32);
   for (std::size_t v = 0; v < r.mesh.vertex_count(); ++v) {
-    const double z = r.mesh.vertices[v].z();
+    const double z = r.mesh.vertices.positions[v].z();
     if (std::abs(z) < 0.1) continue;
-    EXPECT_EQ(r.mesh.vertex_colors[v].x(), z > 0 ? 1.0f : 0.0f);
+    EXPECT_EQ(r.mesh.vertices.colors[v].x(), z > 0 ? 1.0f : 0.0f);
     EXPECT_EQ(out->values[v], z > 0 ? 1.0 : -1.0);
   }
 }

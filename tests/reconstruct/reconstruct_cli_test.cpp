@@ -67,7 +67,7 @@ TEST_F(ReconstructCli, BallPivotWritesAClosedSphereWithNormalsAndReportsItsTopol
 
   const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
   ASSERT_EQ(mesh.vertex_count(), sphere.size());
-  ASSERT_EQ(mesh.vertex_normals.size(), sphere.size());  // the input normals are kept
+  ASSERT_EQ(mesh.vertices.normals.size(), sphere.size());  // the input normals are kept
   const MeshTopology t = analyze_topology(mesh);
   EXPECT_TRUE(t.watertight());
   EXPECT_EQ(t.genus(), 0);
@@ -102,7 +102,7 @@ TEST_F(ReconstructCli, EstimatesMissingNormalsAndSaysSo) {
   EXPECT_TRUE(test::contains(r.err, "(normals estimated)")) << r.err;
   EXPECT_TRUE(stage("run.json", "reconstruct")["figures"]["normals_estimated"].get<bool>());
   const TriangleMesh mesh = read_mesh(path("mesh.ply")).mesh;
-  EXPECT_EQ(mesh.vertex_normals.size(), torus.size());
+  EXPECT_EQ(mesh.vertices.normals.size(), torus.size());
   const MeshTopology t = analyze_topology(mesh);
   EXPECT_TRUE(t.edge_manifold());
   EXPECT_EQ(t.components, 1u);
@@ -278,9 +278,9 @@ TEST_F(ReconstructCli, PoissonWritesAWatertightSphereWithDensityAndReportsTheOct
   const MeshTopology t = analyze_topology(mesh.mesh);
   EXPECT_TRUE(t.watertight());
   EXPECT_EQ(t.genus(), 0);
-  EXPECT_EQ(mesh.mesh.vertex_normals.size(), mesh.mesh.vertex_count());
-  EXPECT_TRUE(mesh.mesh.vertex_fields.contains("density"));
-  for (const Vector3d& v : mesh.mesh.vertices) EXPECT_NEAR((v - Vector3d(10.0, -5.0, 2.0)).norm(), 1.0, 0.02);
+  EXPECT_EQ(mesh.mesh.vertices.normals.size(), mesh.mesh.vertex_count());
+  EXPECT_TRUE(mesh.mesh.vertices.fields.contains("density"));
+  for (const Vector3d& v : mesh.mesh.vertices.positions) EXPECT_NEAR((v - Vector3d(10.0, -5.0, 2.0)).norm(), 1.0, 0.02);
   const nlohmann::json s = stage("run.json", "reconstruct");
   ASSERT_FALSE(s.is_null());
   EXPECT_EQ(s["parameters"]["method"], "poisson");

@@ -26,14 +26,14 @@ double angle_between(const Vector3d& a, const Vector3d& b) {
 std::array<double, 3> inner_angles(const TriangleMesh& m, const Triangle& t) {
   std::array<double, 3> out{};
   for (int c = 0; c < 3; ++c) {
-    const Vector3d& p = m.vertices[std::size_t(t[c])];
-    out[std::size_t(c)] = angle_between(m.vertices[std::size_t(t[(c + 1) % 3])] - p, m.vertices[std::size_t(t[(c + 2) % 3])] - p);
+    const Vector3d& p = m.vertices.positions[std::size_t(t[c])];
+    out[std::size_t(c)] = angle_between(m.vertices.positions[std::size_t(t[(c + 1) % 3])] - p, m.vertices.positions[std::size_t(t[(c + 2) % 3])] - p);
   }
   return out;
 }
 
 Vector3d face_normal(const TriangleMesh& m, const Triangle& t) {
-  return (m.vertices[std::size_t(t[1])] - m.vertices[std::size_t(t[0])]).cross(m.vertices[std::size_t(t[2])] - m.vertices[std::size_t(t[0])]).normalized();
+  return (m.vertices.positions[std::size_t(t[1])] - m.vertices.positions[std::size_t(t[0])]).cross(m.vertices.positions[std::size_t(t[2])] - m.vertices.positions[std::size_t(t[0])]).normalized();
 }
 
 std::size_t count_if_triangle(const TriangleMesh& m, auto&& predicate) {
@@ -124,7 +124,7 @@ TEST(TriangulateRules, MaximumInnerAngle) {
 double longest_edge(const TriangleMesh& m) {
   double longest = 0.0;
   for (const Triangle& t : m.triangles)
-    for (int c = 0; c < 3; ++c) longest = std::max(longest, (m.vertices[std::size_t(t[c])] - m.vertices[std::size_t(t[(c + 1) % 3])]).norm());
+    for (int c = 0; c < 3; ++c) longest = std::max(longest, (m.vertices.positions[std::size_t(t[c])] - m.vertices.positions[std::size_t(t[(c + 1) % 3])]).norm());
   return longest;
 }
 

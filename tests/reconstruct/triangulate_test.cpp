@@ -62,11 +62,11 @@ TEST(RegionGrowing, SphereIsClosedOrientedAndClose) {
   const TriangulateResult r = reconstruct_region_growing(cloud);
   expect_closed(r, 0);
   EXPECT_EQ(r.unused_points, 0u);
-  EXPECT_EQ(r.mesh.vertices.size(), cloud.size());
-  EXPECT_EQ(r.mesh.vertex_normals.size(), cloud.size());
+  EXPECT_EQ(r.mesh.vertices.positions.size(), cloud.size());
+  EXPECT_EQ(r.mesh.vertices.normals.size(), cloud.size());
   // Counter-clockwise seen from outside: every triangle's normal points away from the centre.
   for (const Triangle& t : r.mesh.triangles) {
-    const Vector3d &a = r.mesh.vertices[t[0]], &b = r.mesh.vertices[t[1]], &c = r.mesh.vertices[t[2]];
+    const Vector3d &a = r.mesh.vertices.positions[t[0]], &b = r.mesh.vertices.positions[t[1]], &c = r.mesh.vertices.positions[t[2]];
     ASSERT_GT((b - a).cross(c - a).dot(a + b + c), 0.0);
   }
   const double hausdorff = mesh_to_surface(r, [](const Vector3d& p) { return std::abs(p.norm() - 1.0); });
@@ -146,7 +146,7 @@ TEST(RegionGrowing, OpenPatchHasOneBoundaryLoop) {
   // The rim runs near the square's border (perimeter 8).
   EXPECT_GT(t.boundary_loops[0].length, 7.0);
   for (const Triangle& tri : r.mesh.triangles) {
-    const Vector3d &a = r.mesh.vertices[tri[0]], &b = r.mesh.vertices[tri[1]], &c = r.mesh.vertices[tri[2]];
+    const Vector3d &a = r.mesh.vertices.positions[tri[0]], &b = r.mesh.vertices.positions[tri[1]], &c = r.mesh.vertices.positions[tri[2]];
     ASSERT_GT((b - a).cross(c - a).z(), 0.0);  // facing the normals (+z)
   }
 }
@@ -172,7 +172,7 @@ TEST(RegionGrowing, CutAwayCapIsReportedAsOneHole) {
   // The loop zigzags through the samples just below z = 0.8: measured 1.09 x the circumference.
   EXPECT_GT(t.boundary_loops[0].length, 0.95 * rim);
   EXPECT_LT(t.boundary_loops[0].length, 1.3 * rim);
-  for (int v : t.boundary_loops[0].vertices) EXPECT_GT(r.mesh.vertices[std::size_t(v)].z(), 0.6);
+  for (int v : t.boundary_loops[0].vertices) EXPECT_GT(r.mesh.vertices.positions[std::size_t(v)].z(), 0.6);
 }
 
 // A sphere sampled densely above the equator and 400 times sparser below (the abrupt change of

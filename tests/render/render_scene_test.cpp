@@ -46,7 +46,7 @@ RenderParams plain(View view) {
 
 TEST(RenderScene, SphereSilhouetteHasTheAreaOfItsDisc) {
   const TriangleMesh sphere = test::icosphere_mesh(5, 2.0);
-  const PointCloud c = coloured(sphere.vertices, Vector3f(1, 0, 0));
+  const PointCloud c = coloured(sphere.vertices.positions, Vector3f(1, 0, 0));
   for (View v : {View::Front, View::Side, View::Top, View::Iso}) {
     const RenderResult r = render_scene(c, sphere.triangles, plain(v));
     EXPECT_TRUE(r.warnings.empty());
@@ -73,7 +73,7 @@ TEST(RenderScene, SplattedSphereCoversItsDisc) {
 
 TEST(RenderScene, PlaneSeenEdgeOnDrawsNothingAndSeenFromAboveFillsItsSquare) {
   const TriangleMesh plane = test::grid_mesh(20, 1.0);
-  const PointCloud c = coloured(plane.vertices, Vector3f(1, 0, 0));
+  const PointCloud c = coloured(plane.vertices.positions, Vector3f(1, 0, 0));
   // The front view looks along y, within the plane z = 0: every triangle has zero area.
   const RenderResult edge = render_scene(c, plane.triangles, plain(View::Front));
   EXPECT_EQ(object_pixels(edge.image, 0, 0, 400, 300 - 30), 0u);
@@ -149,7 +149,7 @@ TEST(RenderScene, LegendShowsTheFieldsExtremesTopToBottom) {
 
 TEST(RenderScene, ShiftOfAMillionMetresGivesTheSamePicture) {
   const TriangleMesh sphere = test::icosphere_mesh(4, 1.5);
-  PointCloud a = coloured(sphere.vertices, Vector3f(0.8f, 0.5f, 0.2f));
+  PointCloud a = coloured(sphere.vertices.positions, Vector3f(0.8f, 0.5f, 0.2f));
   PointCloud b = a;
   for (Vector3d& p : b.positions) p += Vector3d(1e6, -2e6, 3e6);
   for (bool mesh : {true, false}) {
@@ -164,7 +164,7 @@ TEST(RenderScene, ShiftOfAMillionMetresGivesTheSamePicture) {
 TEST(RenderScene, SamePictureOnEveryRun) {
   const TriangleMesh sphere = test::icosphere_mesh(3);
   PointCloud c;
-  c.positions = sphere.vertices;
+  c.positions = sphere.vertices.positions;
   RenderParams p = plain(View::Iso);
   p.wireframe = true;
   EXPECT_EQ(render_scene(c, sphere.triangles, p).image.rgb, render_scene(c, sphere.triangles, p).image.rgb);

@@ -46,7 +46,7 @@ HtmlReportInputs inputs() {
   in.run_json = run_json();
   in.origin = "run.json";
   const TriangleMesh sphere = test::icosphere_mesh(4, 1.0, Vector3d(5e5, 4e6, 100));
-  in.mesh_vertices.positions = sphere.vertices;
+  in.mesh_vertices.positions = sphere.vertices.positions;
   in.mesh_triangles = sphere.triangles;
   in.cloud = test::sample_sphere(2000, 1.01, Vector3d(5e5, 4e6, 100));
   ScalarField& d = in.cloud.fields.add("deviation", in.cloud.size());
@@ -123,7 +123,7 @@ TEST(HtmlReport, HasEverySectionAndAValidPayload) {
 TEST(HtmlReport, DecimatesForTheBrowserAboveTheLimits) {
   HtmlReportInputs in = inputs();
   const TriangleMesh big = test::icosphere_mesh(6);  // 81,920 triangles
-  in.mesh_vertices.positions = big.vertices;
+  in.mesh_vertices.positions = big.vertices.positions;
   in.mesh_triangles = big.triangles;
   in.cloud = test::sample_sphere(30000);
   HtmlReportParams params;

@@ -144,7 +144,7 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   HtmlReportInputs in = inputs();
   const Vector3d at(5e5, 4e6, 100);
   const TriangleMesh sphere = test::icosphere_mesh(2, 1.0, at);
-  in.mesh_vertices.positions = sphere.vertices;
+  in.mesh_vertices.positions = sphere.vertices.positions;
   in.mesh_triangles = sphere.triangles;
   in.cloud = test::sample_sphere(500, 1.0, at);
   ScalarField& d = in.cloud.fields.add("deviation", in.cloud.size());
@@ -157,12 +157,12 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   EXPECT_NEAR(v.centre[1], 4e6, 0.1);
   EXPECT_NEAR(v.radius, std::sqrt(3.0), 0.1);
   ASSERT_TRUE(v.mesh);
-  EXPECT_EQ(v.mesh->vertices, sphere.vertices.size());
+  EXPECT_EQ(v.mesh->vertices.positions, sphere.vertices.positions.size());
   EXPECT_EQ(v.mesh->triangles, sphere.triangles.size());
-  EXPECT_EQ(v.mesh->positions.size(), 3 * sphere.vertices.size());
+  EXPECT_EQ(v.mesh->positions.size(), 3 * sphere.vertices.positions.size());
   EXPECT_EQ(v.mesh->indices.size(), 3 * sphere.triangles.size());
-  EXPECT_EQ(v.mesh->colors.size(), 3 * sphere.vertices.size());
-  EXPECT_NEAR(v.mesh->positions[1], sphere.vertices[0].y() - v.centre[1], 1e-6);
+  EXPECT_EQ(v.mesh->colors.size(), 3 * sphere.vertices.positions.size());
+  EXPECT_NEAR(v.mesh->positions[1], sphere.vertices.positions[0].y() - v.centre[1], 1e-6);
   ASSERT_TRUE(v.cloud);
   EXPECT_EQ(v.cloud->points, 500u);
   EXPECT_EQ(v.cloud->colors.size(), 1500u);
@@ -175,7 +175,7 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   // A vertex shows the colour of its nearest point (brute force here).
   std::size_t nearest = 0;
   for (std::size_t j = 0; j < in.cloud.size(); ++j)
-    if ((in.cloud.positions[j] - sphere.vertices[0]).norm() < (in.cloud.positions[nearest] - sphere.vertices[0]).norm()) nearest = j;
+    if ((in.cloud.positions[j] - sphere.vertices.positions[0]).norm() < (in.cloud.positions[nearest] - sphere.vertices.positions[0]).norm()) nearest = j;
   for (int k = 0; k < 3; ++k) EXPECT_EQ(v.mesh->colors[std::size_t(k)], v.cloud->colors[3 * nearest + std::size_t(k)]);
   EXPECT_EQ(v.notes, std::vector<std::string>{"mesh coloured by the deviation of the nearest measured point"});
   std::vector<std::string> captions;
@@ -193,7 +193,7 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
 TEST(HtmlReportView, TheBrowsersLimitsAreKeptAndSaid) {
   HtmlReportInputs in = inputs();
   const TriangleMesh sphere = test::icosphere_mesh(4);  // 5120 triangles
-  in.mesh_vertices.positions = sphere.vertices;
+  in.mesh_vertices.positions = sphere.vertices.positions;
   in.mesh_triangles = sphere.triangles;
   in.cloud = test::sample_sphere(3000);
   HtmlReportParams params;
@@ -206,7 +206,7 @@ TEST(HtmlReportView, TheBrowsersLimitsAreKeptAndSaid) {
   EXPECT_TRUE(v.mesh_decimated);
   EXPECT_LE(v.mesh->triangles, 1000u);
   EXPECT_EQ(v.mesh->original_triangles, 5120u);
-  EXPECT_EQ(v.mesh->positions.size(), 3 * v.mesh->vertices);
+  EXPECT_EQ(v.mesh->positions.size(), 3 * v.mesh->vertices.positions);
   ASSERT_TRUE(v.cloud);
   EXPECT_TRUE(v.cloud_subsampled);
   EXPECT_EQ(v.cloud->points, 400u);

@@ -127,7 +127,7 @@ FeatureShape sample_cube_features(std::size_t n, double half, std::uint64_t seed
 }
 
 SharpEdges::SharpEdges(const TriangleMesh& mesh, double sharp_deg) {
-  const auto& v = mesh.vertices;
+  const auto& v = mesh.vertices.positions;
   std::vector<Vector3d> face_normals;
   double area = 0.0;
   for (const Triangle& t : mesh.triangles) {
@@ -187,7 +187,7 @@ double SharpEdges::distance(const Vector3d& p, double* turn_deg) const {
 }
 
 FeatureShape sample_mesh_features(const TriangleMesh& mesh, std::size_t n, double sharp_deg, std::uint64_t seed) {
-  const auto& v = mesh.vertices;
+  const auto& v = mesh.vertices.positions;
   std::vector<double> areas;
   std::vector<Vector3d> face_normals;
   for (const Triangle& t : mesh.triangles) {

@@ -24,7 +24,7 @@ std::set<std::array<int, 3>> oriented_triangle_set(const TriangleMesh& mesh, con
 
 std::pair<double, double> hausdorff_to_surface(const TriangleMesh& mesh, const std::vector<Vector3d>& truth,
                                                const std::function<double(const Vector3d&)>& distance) {
-  const auto on_mesh = sample_mesh_surface(mesh.vertices, mesh.triangles, 100000);
+  const auto on_mesh = sample_mesh_surface(mesh.vertices.positions, mesh.triangles, 100000);
   double to_truth = 0.0;
   for (const auto& x : on_mesh) to_truth = std::max(to_truth, distance(x));
   const auto back = nearest_distances(truth, on_mesh);
@@ -35,9 +35,9 @@ std::pair<double, double> hausdorff_to_surface(const TriangleMesh& mesh, const s
 std::size_t inward_faces(const TriangleMesh& mesh, const Vector3d& centre) {
   std::size_t count = 0;
   for (const Triangle& t : mesh.triangles) {
-    const Vector3d& a = mesh.vertices[std::size_t(t[0])];
-    const Vector3d n = (mesh.vertices[std::size_t(t[1])] - a).cross(mesh.vertices[std::size_t(t[2])] - a);
-    if (n.dot((a + mesh.vertices[std::size_t(t[1])] + mesh.vertices[std::size_t(t[2])]) / 3.0 - centre) < 0) ++count;
+    const Vector3d& a = mesh.vertices.positions[std::size_t(t[0])];
+    const Vector3d n = (mesh.vertices.positions[std::size_t(t[1])] - a).cross(mesh.vertices.positions[std::size_t(t[2])] - a);
+    if (n.dot((a + mesh.vertices.positions[std::size_t(t[1])] + mesh.vertices.positions[std::size_t(t[2])]) / 3.0 - centre) < 0) ++count;
   }
   return count;
 }

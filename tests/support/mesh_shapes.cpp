@@ -17,7 +17,7 @@ namespace {
 // Flips every face of a convex, centred mesh to point away from `center`.
 void orient_outward(TriangleMesh& mesh, const Vector3d& center) {
   for (Triangle& t : mesh.triangles) {
-    const Vector3d &a = mesh.vertices[std::size_t(t[0])], &b = mesh.vertices[std::size_t(t[1])], &c = mesh.vertices[std::size_t(t[2])];
+    const Vector3d &a = mesh.vertices.positions[std::size_t(t[0])], &b = mesh.vertices.positions[std::size_t(t[1])], &c = mesh.vertices.positions[std::size_t(t[2])];
     if ((b - a).cross(c - a).dot((a + b + c) / 3.0 - center) < 0.0) std::swap(t[1], t[2]);
   }
 }
@@ -34,7 +34,7 @@ double segment_squared_distance(const Vector3d& p, const Vector3d& a, const Vect
 TriangleMesh cube_mesh(double half, const Vector3d& center) {
   TriangleMesh m;
   for (int i = 0; i < 8; ++i)
-    m.vertices.push_back(center + half * Vector3d((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1));
+    m.vertices.positions.push_back(center + half * Vector3d((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1));
   // Each face as a quad of corner indices in cyclic order, split along one diagonal.
   const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
@@ -50,7 +50,7 @@ TriangleMesh open_box_mesh(double half, const Vector3d& center) {
   std::vector<Triangle> kept;
   for (const Triangle& t : m.triangles) {
     bool top = true;
-    for (int c = 0; c < 3; ++c) top = top && m.vertices[std::size_t(t[c])].z() > center.z();
+    for (int c = 0; c < 3; ++c) top = top && m.vertices.positions[std::size_t(t[c])].z() > center.z();
     if (!top) kept.push_back(t);
   }
   m.triangles = kept;
@@ -84,7 +84,7 @@ TriangleMesh icosphere_mesh(int levels, double radius, const Vector3d& center) {
     f = std::move(next);
   }
   TriangleMesh m;
-  for (const Vector3d& p : v) m.vertices.push_back(center + radius * p);
+  for (const Vector3d& p : v) m.vertices.positions.push_back(center + radius * p);
   m.triangles = f;
   orient_outward(m, center);
   return m;
@@ -94,7 +94,7 @@ TriangleMesh grid_mesh(int n, double half, const Vector3d& center) {
   TriangleMesh m;
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i)
-      m.vertices.push_back(center + Vector3d(-half + 2.0 * half * i / n, -half + 2.0 * half * j / n, 0.0));
+      m.vertices.positions.push_back(center + Vector3d(-half + 2.0 * half * i / n, -half + 2.0 * half * j / n, 0.0));
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
@@ -110,8 +110,8 @@ TriangleMesh random_soup(std::size_t count, std::uint64_t seed) {
   TriangleMesh m;
   for (std::size_t t = 0; t < count; ++t) {
     const Vector3d c(u(rng), u(rng), u(rng));
-    const int first = static_cast<int>(m.vertices.size());
-    for (int k = 0; k < 3; ++k) m.vertices.push_back(c + Vector3d(small(rng), small(rng), small(rng)));
+    const int first = static_cast<int>(m.vertices.positions.size());
+    for (int k = 0; k < 3; ++k) m.vertices.positions.push_back(c + Vector3d(small(rng), small(rng), small(rng)));
     m.triangles.emplace_back(first, first + 1, first + 2);
   }
   return m;
@@ -119,8 +119,8 @@ TriangleMesh random_soup(std::size_t count, std::uint64_t seed) {
 
 TriangleMesh join_meshes(const TriangleMesh& a, const TriangleMesh& b) {
   TriangleMesh m = a;
-  const int shift = static_cast<int>(a.vertices.size());
-  m.vertices.insert(m.vertices.end(), b.vertices.begin(), b.vertices.end());
+  const int shift = static_cast<int>(a.vertices.positions.size());
+  m.vertices.positions.insert(m.vertices.positions.end(), b.vertices.positions.begin(), b.vertices.positions.end());
   for (const Triangle& t : b.triangles) m.triangles.emplace_back(t[0] + shift, t[1] + shift, t[2] + shift);
   return m;
 }
@@ -128,7 +128,7 @@ TriangleMesh join_meshes(const TriangleMesh& a, const TriangleMesh& b) {
 double brute_force_squared_distance(const Vector3d& p, const TriangleMesh& mesh) {
   double best = std::numeric_limits<double>::infinity();
   for (const Triangle& t : mesh.triangles) {
-    const Vector3d &a = mesh.vertices[std::size_t(t[0])], &b = mesh.vertices[std::size_t(t[1])], &c = mesh.vertices[std::size_t(t[2])];
+    const Vector3d &a = mesh.vertices.positions[std::size_t(t[0])], &b = mesh.vertices.positions[std::size_t(t[1])], &c = mesh.vertices.positions[std::size_t(t[2])];
     const Vector3d n = (b - a).cross(c - a);
     if (n.squaredNorm() > 0.0) {
       const Vector3d unit = n.normalized();
@@ -155,8 +155,8 @@ TriangleMesh grid_cube(int n, double half) {
   auto vertex = [&](std::array<int, 3> q) {
     const auto it = index.find(q);
     if (it != index.end()) return it->second;
-    mesh.vertices.emplace_back(half * (2.0 * q[0] / n - 1.0), half * (2.0 * q[1] / n - 1.0), half * (2.0 * q[2] / n - 1.0));
-    return index[q] = static_cast<int>(mesh.vertices.size()) - 1;
+    mesh.vertices.positions.emplace_back(half * (2.0 * q[0] / n - 1.0), half * (2.0 * q[1] / n - 1.0), half * (2.0 * q[2] / n - 1.0));
+    return index[q] = static_cast<int>(mesh.vertices.positions.size()) - 1;
   };
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {

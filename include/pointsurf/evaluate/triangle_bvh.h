@@ -38,7 +38,7 @@ struct ClosestPoint {
 class TriangleBvh {
 public:
   TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
-  explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices, mesh.triangles) {}
+  explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices.positions, mesh.triangles) {}
 
   std::size_t triangle_count() const noexcept { return faces_.size(); }
   const Vector3d& origin() const noexcept { return origin_; }

@@ -16,18 +16,18 @@
 
 namespace pointsurf {
 
-/// One named item: a cloud, or a mesh (its vertices with their attributes in `cloud`, its
-/// faces in `triangles`, their per-face values in `face_fields`).
+/// One named item: a cloud (the vertices of `mesh`, without triangles) or a mesh.
 struct DataItem {
-  PointCloud cloud;
-  std::vector<Triangle> triangles;
-  FieldSet face_fields;  // each holds one value per triangle; cleared with the triangles
+  TriangleMesh mesh;  // a mesh's face fields are cleared with its triangles
   bool is_mesh = false;
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
   std::vector<ScanPose> scans;  // E57 scans read with keep_poses: the pose of each value of field "scan"
 
-  /// Becomes `mesh`: its vertices and their attributes as the cloud, its faces as triangles.
-  void assign_mesh(TriangleMesh mesh, std::string mesh_source);
+  /// The points: a cloud's, or a mesh's vertices with their attributes.
+  PointCloud& cloud() noexcept { return mesh.vertices; }
+  const PointCloud& cloud() const noexcept { return mesh.vertices; }
+  /// Becomes `m`, a mesh built from `mesh_source`.
+  void assign_mesh(TriangleMesh m, std::string mesh_source);
 };
 
 class Context {

@@ -47,10 +47,10 @@ struct CoconeStats : DelaunaySurfaceStats {};
 ///     features/boundary_points.h) are peeled (rim slivers of open surfaces);
 ///  5. holes up to `max_hole_perimeter_in_spacings` local spacings (left by undersampling) are
 ///     closed by fill_holes() (reconstruct/fill_holes.h) with triangles of the samples.
-/// Output: `mesh.vertices` are the input points in input order with their colours and fields.
+/// Output: `mesh.vertices.positions` are the input points in input order with their colours and fields.
 /// If the cloud has normals they are kept and each piece is oriented to agree with them;
 /// otherwise each closed piece faces outward (positive volume), each open piece by the hull
-/// pole vectors, and `mesh.vertex_normals` are the unit pole vectors, signed to agree with the
+/// pole vectors, and `mesh.vertices.normals` are the unit pole vectors, signed to agree with the
 /// triangles (face normals where a sample has no finite pole). Triangles are counter-clockwise
 /// seen from the side the normals point to. Guarantees: edge-manifold and oriented (not
 /// necessarily vertex-manifold); no guarantee of closedness under undersampling, noise, sharp

@@ -40,7 +40,7 @@ struct HoleFillStats {
 /// holes that had no valid filling are removed and the holes this opens (up to 3x the limit)
 /// closed again. No vertex is added or moved; vertex attributes are kept. Face fields of the
 /// input are dropped when triangles are added or removed (a new triangle has no value).
-/// Corner normals: `mesh.vertex_normals` when present, else the area-weighted face normals.
+/// Corner normals: `mesh.vertices.normals` when present, else the area-weighted face normals.
 /// Loops through a non-manifold or inconsistently oriented edge are left open.
 /// Throws UsageError for a parameter out of range, InputError for an invalid mesh (indices out of
 /// range, attribute sizes). Cost: about linear in the mesh size plus m^3 per hole of m corners.

@@ -18,12 +18,12 @@ inline std::string plural(std::size_t n, const std::string& singular, const std:
 
 /// A stage that changes the point set of a mesh cannot keep its faces: drop them and say so.
 inline void drop_faces(DataItem& item, StageRecord& record) {
-  if (item.triangles.empty() && !item.is_mesh) return;
-  if (!item.triangles.empty())
+  if (item.mesh.triangles.empty() && !item.is_mesh) return;
+  if (!item.mesh.triangles.empty())
     record.warnings.push_back(fmt::format("the input is a mesh: its {} are dropped ({} works on points)",
-                                          plural(item.triangles.size(), "face"), record.type));
-  item.triangles.clear();
-  item.face_fields = FieldSet{};
+                                          plural(item.mesh.triangles.size(), "face"), record.type));
+  item.mesh.triangles.clear();
+  item.mesh.face_fields = FieldSet{};
   item.is_mesh = false;
 }
 

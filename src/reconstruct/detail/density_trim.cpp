@@ -43,12 +43,12 @@ int find(std::vector<int>& parent, int x) {
 
 TrimResult trim_by_vertex_field(TriangleMesh& mesh, std::string_view field, double level, double island_area_ratio,
                                 int smooth_iterations) {
-  const ScalarField* source = mesh.vertex_fields.find(field);
+  const ScalarField* source = mesh.vertices.fields.find(field);
   if (!source) throw InputError("trim_by_vertex_field: the mesh has no vertex field '" + std::string(field) + "'");
   if (!(island_area_ratio >= 0.0)) throw UsageError("trim_by_vertex_field: island_area_ratio must be >= 0");
   if (smooth_iterations < 0) throw UsageError("trim_by_vertex_field: smooth_iterations must be >= 0");
   mesh.validate();
-  const int vertex_count = static_cast<int>(mesh.vertices.size());
+  const int vertex_count = static_cast<int>(mesh.vertices.positions.size());
 
   // 1. The field, smoothed as SurfaceTrimmer does: the mean of the edge neighbours' values.
   std::vector<double> value = source->values;
@@ -100,8 +100,8 @@ TrimResult trim_by_vertex_field(TriangleMesh& mesh, std::string_view field, doub
     pieces.push_back({{p, c, q}, f, !lone_above});
   }
 
-  std::vector<Eigen::Vector3d> position(mesh.vertices.begin(), mesh.vertices.end());
-  for (const Cut& c : cuts) position.push_back(mesh.vertices[c.a] + c.t * (mesh.vertices[c.b] - mesh.vertices[c.a]));
+  std::vector<Eigen::Vector3d> position(mesh.vertices.positions.begin(), mesh.vertices.positions.end());
+  for (const Cut& c : cuts) position.push_back(mesh.vertices.positions[c.a] + c.t * (mesh.vertices.positions[c.b] - mesh.vertices.positions[c.a]));
 
   // 3. Islands: components of each side (pieces sharing an edge), measured against the total area.
   std::vector<char> keep(pieces.size());
@@ -174,14 +174,14 @@ TrimResult trim_by_vertex_field(TriangleMesh& mesh, std::string_view field, doub
   std::vector<Eigen::Vector3d> vertices;
   vertices.reserve(old_of.size());
   for (int v : old_of) vertices.push_back(position[v]);
-  mesh.vertices = std::move(vertices);
-  lerp_or_copy(mesh.vertex_normals, [](const Vector3d& a, const Vector3d& b, double t) {
+  mesh.vertices.positions = std::move(vertices);
+  lerp_or_copy(mesh.vertices.normals, [](const Vector3d& a, const Vector3d& b, double t) {
     const Vector3d n = (1 - t) * a + t * b;
     return Vector3d(n.norm() > 0.0 ? Vector3d(n.normalized()) : a);
   });
-  lerp_or_copy(mesh.vertex_colors,
+  lerp_or_copy(mesh.vertices.colors,
                [](const Vector3f& a, const Vector3f& b, double t) { return Vector3f((1 - float(t)) * a + float(t) * b); });
-  for (ScalarField& f : mesh.vertex_fields) {
+  for (ScalarField& f : mesh.vertices.fields) {
     const bool real = scalar_type_is_float(f.type);
     lerp_or_copy(f.values, [real](double a, double b, double t) { return real ? (1 - t) * a + t * b : (t < 0.5 ? a : b); });
   }
