@@ -292,6 +292,7 @@ struct PoissonFunction::Impl {
   double depth_of(double w) const { return params.kernel_depth + 0.5 * std::log2(w / (0.55 * params.samples_per_node)); }
   void splat_and_restrict();
   std::vector<Eigen::Vector3d> VF;  // the normals splatted at the levels solved so far, as coefficients of the last
+  struct LevelSolve;  // solve_level's phases
   PoissonLevelReport solve_level(int l);
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
@@ -618,140 +619,41 @@ void PoissonFunction::Impl::splat_and_restrict() {
   }
 }
 
-PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
-  Level& L = levels[std::size_t(l)];
-  const std::size_t nodes = L.nodes(), nblocks = L.block_cells.size();
-  PoissonLevelReport report;
-  report.level = l;
-  report.nodes = nodes;
-  // The screening points of this level: the samples of each cell merged into their
-  // area-weighted mean (PoissonRecon's approximate point interpolation). At the finest level a
-  // cell holds one or two samples; at coarse levels this keeps the work per iteration at the
-  // number of cells.
-  std::vector<std::int32_t> cells;
-  for (std::size_t i = 0; i < nodes; ++i)
-    if (L.first[i] < L.last[i]) cells.push_back(std::int32_t(i));
-  if (nodes == 0) {
-    VF.clear();
-    return report;
-  }
-  const std::size_t ns = cells.size();
-  std::vector<Eigen::Vector3d> pos(ns);
-  std::vector<double> weight(ns), G(ns, 0.0);
-  std::vector<std::array<Weights1D, 3>> sw(ns);
-  std::vector<std::array<std::int32_t, 27>> snode(ns);
-  const Level* C = l > 1 ? &levels[std::size_t(l - 1)] : nullptr;
-  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t k) {
-    const std::size_t cell = std::size_t(cells[k]);
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    double w = 0.0;
-    for (std::uint32_t p = L.first[cell]; p < L.last[cell]; ++p)
-      if (level_of[p] >= l) sum += area[p] * q[p], w += area[p];  // the samples that reach this level
-    pos[k] = sum / w;
-    weight[k] = w;
-    for (int a = 0; a < 3; ++a) sw[k][std::size_t(a)] = weights_1d(pos[k][a], L.n, s);
-    const auto& ww = sw[k];
-    for (int t = 0; t < 27; ++t) snode[k][std::size_t(t)] = L.node(ww[0].idx[std::size_t(t % 3)], ww[1].idx[std::size_t(t / 3 % 3)], ww[2].idx[std::size_t(t / 9)]);
-    if (C) {  // the coarser levels' function there
-      bool complete = true;
-      G[k] = gather(*C, C->F, pos[k], 0, complete);
-      assert(complete);
-    }
-  });
-  auto sample_value = [&](std::size_t p, const std::vector<double>& c) {
-    const auto& w = sw[p];
-    double v = 0.0;
-    for (int t = 0; t < 27; ++t)
-      v += c[std::size_t(snode[p][std::size_t(t)])] * w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
-    return v;
-  };
-  // The screening, sample by sample into its 27 nodes: the cells are coloured by their
-  // coordinates mod 3, and two cells of one colour share no node, so each colour scatters in
-  // parallel without races (and in the same order for any thread count).
+double merge_samples(const std::vector<Eigen::Vector3d>& q, const std::vector<double>& area,
+                     const std::vector<std::uint8_t>& level_of, std::uint32_t first, std::uint32_t last, int level,
+                     Eigen::Vector3d& mean) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double w = 0.0;
+  for (std::uint32_t p = first; p < last; ++p)
+    if (level_of[p] >= level) sum += area[p] * q[p], w += area[p];  // the samples that reach this level
+  mean = sum / w;
+  return w;
+}
+
+std::array<std::vector<std::uint32_t>, 27> colour_classes(const std::vector<std::array<int, 3>>& cells) {
   std::array<std::vector<std::uint32_t>, 27> colours;
-  for (std::size_t k = 0; k < ns; ++k) {
-    const auto c = L.node_cell(std::size_t(cells[k]));
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    const auto& c = cells[k];
     colours[std::size_t(c[0] % 3 + 3 * (c[1] % 3) + 9 * (c[2] % 3))].push_back(std::uint32_t(k));
   }
-  // out_i += alpha sum_p A_p B_i(p) sv(p) (squared: B_i(p)^2 per function, the diagonal)
-  auto scatter = [&](auto&& sv, std::vector<double>& out, bool squared) {
-    for (const auto& points : colours)
-      tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t k) {
-        const std::size_t p = points[k];
-        const double f = alpha * weight[p] * sv(p);
-        const auto& w = sw[p];
-        for (int t = 0; t < 27; ++t) {
-          const double wt = w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
-          out[std::size_t(snode[p][std::size_t(t)])] += f * (squared ? wt * wt : wt);
-        }
-      });
-  };
-  // right-hand side: b minus the coarser levels' part
-  std::vector<double> r(nodes, 0.0), diag(nodes, 0.0);
-  tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
-    const auto& bc = L.block_cells[b];
-    const std::int32_t cb = C ? C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1) : -1;
-    for (std::size_t k = 0; k < 8; ++k) {
-      const std::size_t i = 8 * b + k;
-      const auto c = L.node_cell(i);
-      double cross = 0.0, up = 0.0;
-      if (cb >= 0) {
-        const auto& cbc = C->block_cells[std::size_t(cb)];
-        for (int tz = 0; tz < 4; ++tz) {
-          const int kz = (c[2] >> 1) - 2 + (c[2] & 1) + tz;
-          for (int ty = 0; ty < 4; ++ty) {
-            const int ky = (c[1] >> 1) - 2 + (c[1] & 1) + ty;
-            for (int tx = 0; tx < 4; ++tx) {
-              const int kx = (c[0] >> 1) - 2 + (c[0] & 1) + tx;
-              const std::int32_t j = C->near(cb, cbc, kx, ky, kz);
-              if (j < 0) continue;
-              const auto &Mx = L.Mc[std::size_t(c[0])], &My = L.Mc[std::size_t(c[1])], &Mz = L.Mc[std::size_t(c[2])];
-              const auto &Kx = L.Kc[std::size_t(c[0])], &Ky = L.Kc[std::size_t(c[1])], &Kz = L.Kc[std::size_t(c[2])];
-              const std::size_t ux = std::size_t(tx), uy = std::size_t(ty), uz = std::size_t(tz);
-              cross += C->F[std::size_t(j)] * (Kx[ux] * My[uy] * Mz[uz] + Mx[ux] * Ky[uy] * Mz[uz] + Mx[ux] * My[uy] * Kz[uz]);
-              if (!VF.empty()) {  // the coarser levels' normals: int V . grad B_i
-                const Eigen::Vector3d& vf = VF[std::size_t(j)];
-                const auto &Hx = L.Hc[std::size_t(c[0])], &Hy = L.Hc[std::size_t(c[1])], &Hz = L.Hc[std::size_t(c[2])];
-                up += vf.x() * Hx[ux] * My[uy] * Mz[uz] + vf.y() * Mx[ux] * Hy[uy] * Mz[uz] + vf.z() * Mx[ux] * My[uy] * Hz[uz];
-              }
-            }
-          }
-        }
-      }
-      r[i] = L.b[i] + up - cross;
-      diag[i] = L.K[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
-                L.M[std::size_t(c[0])][2] * L.K[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
-                L.M[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.K[std::size_t(c[2])][2];
-    }
-  });
-  std::vector<double> tmp(nodes, 0.0);
-  scatter([&](std::size_t p) { return G[p]; }, tmp, false);
-  for (std::size_t i = 0; i < nodes; ++i) r[i] -= tmp[i];
-  scatter([](std::size_t) { return 1.0; }, diag, true);
-  // (L + S) v
-  std::vector<double> sv(ns);
-  auto apply = [&](const std::vector<double>& v, std::vector<double>& out) {
-    tbb::parallel_for(std::size_t(0), ns, [&](std::size_t p) { sv[p] = sample_value(p, v); });
-    tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
-      double win[216];
-      load_window(L, b, v, win);
-      stencil_block(L.block_cells[b], L.M, L.K, L.M, L.K, L.M, L.K, win, &out[8 * b], false);
-    });
-    scatter([&](std::size_t p) { return sv[p]; }, out, false);
-  };
-  // Jacobi-preconditioned conjugate gradients from x = 0
-  std::vector<double>& x = L.x;
+  return colours;
+}
+
+PcgResult jacobi_pcg(const std::function<void(const std::vector<double>&, std::vector<double>&)>& apply,
+                     std::vector<double>& r, const std::vector<double>& diag, std::vector<double>& x, int max_iterations,
+                     double tolerance) {
+  const std::size_t nodes = r.size();
+  PcgResult result;
   std::fill(x.begin(), x.end(), 0.0);
   std::vector<double> z(nodes), d(nodes), Ad(nodes);
   for (std::size_t i = 0; i < nodes; ++i) z[i] = r[i] / diag[i];
   d = z;
   double rz = dot(r, z);
   const double r0 = std::sqrt(dot(r, r));
-  report.initial_residual = r0;
+  result.initial_residual = r0;
   double rn = r0;
   int it = 0;
-  const int max_it = l <= params.full_depth ? std::max(params.max_iterations, 100) : params.max_iterations;
-  while (it < max_it && rn > params.tolerance * r0 && rn > 0.0) {
+  while (it < max_iterations && rn > tolerance * r0 && rn > 0.0) {
     apply(d, Ad);
     const double dAd = dot(d, Ad);
     if (!(dAd > 0.0)) break;
@@ -768,9 +670,198 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
     rn = std::sqrt(dot(r, r));
     ++it;
   }
-  report.iterations = it;
-  report.final_residual = rn;
-  // the cumulative coefficients, and the function at the samples
+  result.iterations = it;
+  result.final_residual = rn;
+  return result;
+}
+
+// One level's solve, phase by phase (solve_level calls them in the order declared).
+struct PoissonFunction::Impl::LevelSolve {
+  LevelSolve(Impl& impl, int level);
+  /// Reads each node's samples and the coarser levels' F; produces the screening points (the
+  /// samples of a cell merged), their weights, 1-D weights and 27 nodes, and the coarser function there (G).
+  void merge_screening_points();
+  /// Reads the screening points' cells; produces their 27 colour classes.
+  void colour_points();
+  /// Reads b, the coarser levels' F and VF; produces r = b + (coarser normals) - (coarser
+  /// Laplacian) and the Laplacian's diagonal.
+  void coarse_right_hand_side();
+  /// Reads G; subtracts the coarser levels' screening from r and adds the screening to the diagonal.
+  void add_screening();
+  /// Solves (L + S) x = r into L.x; produces the report's iterations and residuals.
+  void solve();
+  /// Reads x and the coarser level's F; produces this level's cumulative coefficients F.
+  void accumulate_coefficients();
+  /// Reads VF (the coarser levels' normals); replaces it by the normals splatted up to this
+  /// level, as coefficients of this level (for the next level's right-hand side).
+  void carry_normals();
+
+  Impl& m;
+  const int l;
+  Level& L;
+  const Level* C;  // the coarser level; null at level 1
+  const std::size_t nodes, nblocks;
+  PoissonLevelReport report;
+
+ private:
+  double sample_value(std::size_t p, const std::vector<double>& c) const;
+  template <class Value>
+  void scatter(const Value& sv, std::vector<double>& out, bool squared) const;
+  void coarse_terms(const std::array<int, 3>& c, std::int32_t cb, double& cross, double& up) const;
+  void apply(const std::vector<double>& v, std::vector<double>& out);
+
+  std::vector<std::int32_t> cells;  // the nodes whose cells hold samples of this level
+  std::vector<Eigen::Vector3d> pos;  // per screening point
+  std::vector<double> weight, G;
+  std::vector<std::array<Weights1D, 3>> sw;
+  std::vector<std::array<std::int32_t, 27>> snode;
+  std::array<std::vector<std::uint32_t>, 27> colours;
+  std::vector<double> r, diag;  // right-hand side, then residual; Jacobi diagonal
+  std::vector<double> sv;       // apply's values at the screening points
+};
+
+PoissonFunction::Impl::LevelSolve::LevelSolve(Impl& impl, int level)
+    : m(impl), l(level), L(impl.levels[std::size_t(level)]), C(level > 1 ? &impl.levels[std::size_t(level - 1)] : nullptr),
+      nodes(L.nodes()), nblocks(L.block_cells.size()) {
+  report.level = l;
+  report.nodes = nodes;
+}
+
+// The screening points of this level: the samples of each cell merged into their area-weighted
+// mean (PoissonRecon's approximate point interpolation). At the finest level a cell holds one or
+// two samples; at coarse levels this keeps the work per iteration at the number of cells.
+void PoissonFunction::Impl::LevelSolve::merge_screening_points() {
+  for (std::size_t i = 0; i < nodes; ++i)
+    if (L.first[i] < L.last[i]) cells.push_back(std::int32_t(i));
+  const std::size_t ns = cells.size();
+  pos.resize(ns);
+  weight.resize(ns);
+  G.assign(ns, 0.0);
+  sw.resize(ns);
+  snode.resize(ns);
+  tbb::parallel_for(std::size_t(0), ns, [&](std::size_t k) {
+    const std::size_t cell = std::size_t(cells[k]);
+    weight[k] = merge_samples(m.q, m.area, m.level_of, L.first[cell], L.last[cell], l, pos[k]);
+    for (int a = 0; a < 3; ++a) sw[k][std::size_t(a)] = weights_1d(pos[k][a], L.n, m.s);
+    const auto& ww = sw[k];
+    for (int t = 0; t < 27; ++t) snode[k][std::size_t(t)] = L.node(ww[0].idx[std::size_t(t % 3)], ww[1].idx[std::size_t(t / 3 % 3)], ww[2].idx[std::size_t(t / 9)]);
+    if (C) {  // the coarser levels' function there
+      bool complete = true;
+      G[k] = m.gather(*C, C->F, pos[k], 0, complete);
+      assert(complete);
+    }
+  });
+}
+
+// The screening, sample by sample into its 27 nodes: the cells are coloured by their
+// coordinates mod 3, and two cells of one colour share no node, so each colour scatters in
+// parallel without races (and in the same order for any thread count).
+void PoissonFunction::Impl::LevelSolve::colour_points() {
+  std::vector<std::array<int, 3>> at(cells.size());
+  for (std::size_t k = 0; k < cells.size(); ++k) at[k] = L.node_cell(std::size_t(cells[k]));
+  colours = colour_classes(at);
+}
+
+double PoissonFunction::Impl::LevelSolve::sample_value(std::size_t p, const std::vector<double>& c) const {
+  const auto& w = sw[p];
+  double v = 0.0;
+  for (int t = 0; t < 27; ++t)
+    v += c[std::size_t(snode[p][std::size_t(t)])] * w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
+  return v;
+}
+
+// out_i += alpha sum_p A_p B_i(p) sv(p) (squared: B_i(p)^2 per function, the diagonal)
+template <class Value>
+void PoissonFunction::Impl::LevelSolve::scatter(const Value& value, std::vector<double>& out, bool squared) const {
+  for (const auto& points : colours)
+    tbb::parallel_for(std::size_t(0), points.size(), [&](std::size_t k) {
+      const std::size_t p = points[k];
+      const double f = m.alpha * weight[p] * value(p);
+      const auto& w = sw[p];
+      for (int t = 0; t < 27; ++t) {
+        const double wt = w[0].w[std::size_t(t % 3)] * w[1].w[std::size_t(t / 3 % 3)] * w[2].w[std::size_t(t / 9)];
+        out[std::size_t(snode[p][std::size_t(t)])] += f * (squared ? wt * wt : wt);
+      }
+    });
+}
+
+// The coarser levels' part in the equation of the node at cell c (coarse block cb around it):
+// their function against its Laplacian (cross), their normals against its gradient (up).
+void PoissonFunction::Impl::LevelSolve::coarse_terms(const std::array<int, 3>& c, std::int32_t cb, double& cross, double& up) const {
+  const auto& cbc = C->block_cells[std::size_t(cb)];
+  for (int tz = 0; tz < 4; ++tz) {
+    const int kz = (c[2] >> 1) - 2 + (c[2] & 1) + tz;
+    for (int ty = 0; ty < 4; ++ty) {
+      const int ky = (c[1] >> 1) - 2 + (c[1] & 1) + ty;
+      for (int tx = 0; tx < 4; ++tx) {
+        const int kx = (c[0] >> 1) - 2 + (c[0] & 1) + tx;
+        const std::int32_t j = C->near(cb, cbc, kx, ky, kz);
+        if (j < 0) continue;
+        const auto &Mx = L.Mc[std::size_t(c[0])], &My = L.Mc[std::size_t(c[1])], &Mz = L.Mc[std::size_t(c[2])];
+        const auto &Kx = L.Kc[std::size_t(c[0])], &Ky = L.Kc[std::size_t(c[1])], &Kz = L.Kc[std::size_t(c[2])];
+        const std::size_t ux = std::size_t(tx), uy = std::size_t(ty), uz = std::size_t(tz);
+        cross += C->F[std::size_t(j)] * (Kx[ux] * My[uy] * Mz[uz] + Mx[ux] * Ky[uy] * Mz[uz] + Mx[ux] * My[uy] * Kz[uz]);
+        if (!m.VF.empty()) {  // the coarser levels' normals: int V . grad B_i
+          const Eigen::Vector3d& vf = m.VF[std::size_t(j)];
+          const auto &Hx = L.Hc[std::size_t(c[0])], &Hy = L.Hc[std::size_t(c[1])], &Hz = L.Hc[std::size_t(c[2])];
+          up += vf.x() * Hx[ux] * My[uy] * Mz[uz] + vf.y() * Mx[ux] * Hy[uy] * Mz[uz] + vf.z() * Mx[ux] * My[uy] * Hz[uz];
+        }
+      }
+    }
+  }
+}
+
+// right-hand side: b minus the coarser levels' part
+void PoissonFunction::Impl::LevelSolve::coarse_right_hand_side() {
+  r.assign(nodes, 0.0);
+  diag.assign(nodes, 0.0);
+  tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
+    const auto& bc = L.block_cells[b];
+    const std::int32_t cb = C ? C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1) : -1;
+    for (std::size_t k = 0; k < 8; ++k) {
+      const std::size_t i = 8 * b + k;
+      const auto c = L.node_cell(i);
+      double cross = 0.0, up = 0.0;
+      if (cb >= 0) coarse_terms(c, cb, cross, up);
+      r[i] = L.b[i] + up - cross;
+      diag[i] = L.K[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
+                L.M[std::size_t(c[0])][2] * L.K[std::size_t(c[1])][2] * L.M[std::size_t(c[2])][2] +
+                L.M[std::size_t(c[0])][2] * L.M[std::size_t(c[1])][2] * L.K[std::size_t(c[2])][2];
+    }
+  });
+}
+
+void PoissonFunction::Impl::LevelSolve::add_screening() {
+  std::vector<double> tmp(nodes, 0.0);
+  scatter([&](std::size_t p) { return G[p]; }, tmp, false);
+  for (std::size_t i = 0; i < nodes; ++i) r[i] -= tmp[i];
+  scatter([](std::size_t) { return 1.0; }, diag, true);
+}
+
+// (L + S) v
+void PoissonFunction::Impl::LevelSolve::apply(const std::vector<double>& v, std::vector<double>& out) {
+  tbb::parallel_for(std::size_t(0), sv.size(), [&](std::size_t p) { sv[p] = sample_value(p, v); });
+  tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
+    double win[216];
+    load_window(L, b, v, win);
+    stencil_block(L.block_cells[b], L.M, L.K, L.M, L.K, L.M, L.K, win, &out[8 * b], false);
+  });
+  scatter([&](std::size_t p) { return sv[p]; }, out, false);
+}
+
+// Jacobi-preconditioned conjugate gradients from x = 0
+void PoissonFunction::Impl::LevelSolve::solve() {
+  sv.resize(cells.size());
+  const int max_it = l <= m.params.full_depth ? std::max(m.params.max_iterations, 100) : m.params.max_iterations;
+  const PcgResult cg = jacobi_pcg([&](const std::vector<double>& v, std::vector<double>& out) { apply(v, out); }, r, diag, L.x, max_it,
+                                  m.params.tolerance);
+  report.initial_residual = cg.initial_residual;
+  report.iterations = cg.iterations;
+  report.final_residual = cg.final_residual;
+}
+
+// the cumulative coefficients: the coarser levels' F prolonged, plus x
+void PoissonFunction::Impl::LevelSolve::accumulate_coefficients() {
   tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
     const auto& bc = L.block_cells[b];
     const std::int32_t cb = C ? C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1) : -1;
@@ -797,12 +888,15 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
           }
         }
       }
-      L.F[i] = pro + x[i];
+      L.F[i] = pro + L.x[i];
     }
   });
-  // the normals splatted so far, as coefficients of this level: for the next level's b
-  std::vector<Eigen::Vector3d> vf = splat(l);
-  if (!VF.empty())
+}
+
+// the normals splatted so far, as coefficients of this level: for the next level's b
+void PoissonFunction::Impl::LevelSolve::carry_normals() {
+  std::vector<Eigen::Vector3d> vf = m.splat(l);
+  if (!m.VF.empty())
     tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
       const auto& bc = L.block_cells[b];
       const std::int32_t cb = C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1);
@@ -819,13 +913,28 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
               if (kx < 0 || ky < 0 || kz < 0) continue;
               const std::int32_t j = C->near(cb, cbc, kx, ky, kz);
               if (j < 0) continue;
-              vf[i] += VF[std::size_t(j)] * (L.pw[std::size_t(c[0])][std::size_t(ux)] * L.pw[std::size_t(c[1])][std::size_t(uy)] *
-                                             L.pw[std::size_t(c[2])][std::size_t(uz)]);
+              vf[i] += m.VF[std::size_t(j)] * (L.pw[std::size_t(c[0])][std::size_t(ux)] * L.pw[std::size_t(c[1])][std::size_t(uy)] *
+                                               L.pw[std::size_t(c[2])][std::size_t(uz)]);
             }
       }
     });
-  VF.swap(vf);
-  return report;
+  m.VF.swap(vf);
+}
+
+PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
+  LevelSolve level(*this, l);
+  if (level.nodes == 0) {
+    VF.clear();
+    return level.report;
+  }
+  level.merge_screening_points();
+  level.colour_points();
+  level.coarse_right_hand_side();
+  level.add_screening();
+  level.solve();
+  level.accumulate_coefficients();
+  level.carry_normals();
+  return level.report;
 }
 
 PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const PoissonSystemParams& params, const IsoLattice& frame,

@@ -13,8 +13,10 @@
 // the B-spline supports of the samples reach, plus what the 5^3 Laplacian stencil and the
 // exact prolongation between levels need (see poisson_solver.cpp), and nothing else: no dense
 // grid below full_depth.
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -49,6 +51,34 @@ struct PoissonLevelReport {
   double initial_residual = 0.0;  // |b - A x| before / after this level's solve
   double final_residual = 0.0;
 };
+
+// The pieces of one level's solve (PoissonFunction's solve_level, whose phases are the members
+// of its LevelSolve in poisson_solver.cpp) that are pure functions of their inputs, tested alone.
+
+/// The area-weighted mean of the samples q[first..last) that reach `level` (level_of >= level),
+/// written to `mean`; returns their total area (the screening point's weight).
+double merge_samples(const std::vector<Eigen::Vector3d>& q, const std::vector<double>& area,
+                     const std::vector<std::uint8_t>& level_of, std::uint32_t first, std::uint32_t last, int level,
+                     Eigen::Vector3d& mean);
+
+/// The indices of `cells` in 27 classes by their coordinates mod 3 (class x%3 + 3 (y%3) + 9 (z%3)),
+/// each class in index order: two cells of a class are 3 or more apart along some axis, so the
+/// 3^3 nodes around them are disjoint and a class scatters into them in parallel without races.
+std::array<std::vector<std::uint32_t>, 27> colour_classes(const std::vector<std::array<int, 3>>& cells);
+
+struct PcgResult {
+  int iterations = 0;
+  double initial_residual = 0.0;  // |r| on entry
+  double final_residual = 0.0;    // |r| on return
+};
+
+/// Jacobi-preconditioned conjugate gradients for A x = r from x = 0 (x resized by the caller),
+/// `apply(v, out)` writing A v to out, `diag` A's diagonal: at most max_iterations steps, stops
+/// when |r| fell by `tolerance` or a direction has no positive curvature. On return r holds the
+/// residual. Deterministic: the reductions are in a fixed order for any thread count.
+PcgResult jacobi_pcg(const std::function<void(const std::vector<double>&, std::vector<double>&)>& apply,
+                     std::vector<double>& r, const std::vector<double>& diag, std::vector<double>& x, int max_iterations,
+                     double tolerance);
 
 /// The solved implicit function: sum over the levels of their B-splines. Smaller inside (the
 /// normals point outward: the function grows along them), evaluated in the unit cube.
