@@ -35,19 +35,19 @@ void mark_against(const PointCloud& cloud, Towards towards, std::vector<std::uin
   });
 }
 
-// Global sign of a component (step 6 of the MST orientation):
+// Global sign of a component (MstOrientation::decide_component_signs):
 // - mean |n_z| above which a component is made of mostly horizontal surfaces (a plane 1,
 //   terrain with trees and buildings about 0.8, a sphere 0.5, a cube 1/3);
 constexpr double kHorizontalShare = 0.7;
 // - length of the mean unit normal above which it is an open sheet (closed surfaces ~0, a
 //   hemisphere 0.5, a plane 1); a terrain tile whose roofs are still upside down scores ~0.7;
 constexpr double kSheetThreshold = 0.5;
-// - in step 7, share of a region's mean normal along z above which it faces up or down;
+// - in turn_up_level_regions, share of a region's mean normal along z above which it faces up or down;
 constexpr double kVerticalShare = 0.5;
 // - share of agreeing votes (|sum| / sum of |terms|) above which the outward vote decides:
 //   a sphere scores 1, a torus with tube/ring ratio 0.3 about 0.5.
 constexpr double kOutwardVoteThreshold = 0.05;
-// Angle between neighbouring normals above which the forest edge crosses a crease (step 7).
+// Angle between neighbouring normals above which the forest edge crosses a crease (cut_at_creases).
 constexpr double kCreaseAngleDeg = 45.0;
 
 // The next double above a non-negative one (infinity stays).
