@@ -24,6 +24,7 @@
 
 #include "io/detail/e57_format.h"
 #include "io/detail/e57_pages.h"
+#include "io/detail/e57_writer.h"
 #include "io/detail/file_util.h"
 #include "io/detail/formats.h"
 #include "pointsurf/core/error.h"
@@ -31,12 +32,6 @@
 namespace pointsurf::io::detail {
 
 namespace {
-
-// One field to write: its prototype element and its bytestream.
-struct OutField {
-  std::string element;  // the prototype element, e.g. <cartesianX type="Float"/>
-  std::vector<unsigned char> bytes;
-};
 
 std::string xml_number(double v) { return fmt::format("{:.17g}", v); }
 
@@ -155,12 +150,16 @@ std::string guid(std::mt19937_64& rng) {
 
 }  // namespace
 
-void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes) {
+E57Writer::E57Writer(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options,
+                     std::vector<std::string>& notes)
+    : path(path), cloud(cloud), options(options), notes(notes) {
   if (options.e57_scale && !(*options.e57_scale > 0.0 && std::isfinite(*options.e57_scale)))
     throw UsageError(fmt::format("{}: E57 scale {} must be positive", display_name(path), *options.e57_scale));
-  // Points of each scan, by the value of the `scan` field (one scan without it).
-  std::map<long long, std::vector<std::size_t>> groups;
-  const ScalarField* scan_field = cloud.fields.find("scan");
+}
+
+void E57Writer::group_scans() {
+  groups.clear();
+  scan_field = cloud.fields.find("scan");
   if (scan_field) {
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       const double v = scan_field->values[i];
@@ -174,8 +173,12 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
   }
   if (groups.empty()) groups[0];
-  const ScalarField* intensity = cloud.fields.find("intensity");
-  double intensity_lo = 0.0, intensity_hi = 1.0;
+}
+
+void E57Writer::set_intensity_limits() {
+  intensity = cloud.fields.find("intensity");
+  intensity_lo = 0.0;
+  intensity_hi = 1.0;
   if (intensity && !intensity->values.empty()) {
     const auto [a, b] = std::minmax_element(intensity->values.begin(), intensity->values.end());
     if (*a < 0.0 || *b > 1.0) {
@@ -184,122 +187,163 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
       notes.push_back(fmt::format("intensity outside [0, 1]: written with intensityLimits [{}, {}], which E57 readers scale it by", intensity_lo, intensity_hi));
     }
   }
-  std::mt19937_64 rng(std::random_device{}());
-  E57LogicalWriter w;
+}
+
+void E57Writer::start_file() {
+  rng.seed(std::random_device{}());
   // Bytes per point: coordinates, colours, normals and fields at most 8 each, plus packet and XML overhead.
-  w.reserve(cloud.size() * (24 + 3 + 12 + 8 * cloud.fields.size()) * 65 / 64 + 65536);
+  writer.reserve(cloud.size() * (24 + 3 + 12 + 8 * cloud.fields.size()) * 65 / 64 + 65536);
   const unsigned char header_space[kE57HeaderSize] = {};
-  w.append(header_space, kE57HeaderSize);
-  std::string scans_xml;
-  bool any_normals = false, any_extension = false;
-  std::vector<std::string> skipped;
-  for (const auto& [scan, indices] : groups) {
-    const std::size_t n = indices.size();
-    ScanPose pose;
-    if (scan < static_cast<long long>(options.scan_poses.size())) pose = options.scan_poses[static_cast<std::size_t>(scan)];
-    std::vector<OutField> fields;
-    std::vector<double> column(n);
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::string name = std::string("cartesian") + "XYZ"[axis];
-      for (std::size_t i = 0; i < n; ++i) column[i] = cloud.positions[indices[i]][axis];
-      if (!options.e57_scale) {
-        fields.push_back(float_field<double>(name, column));
-        continue;
-      }
-      const double scale = *options.e57_scale;
-      std::vector<std::int64_t> raw(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        const double q = std::round(column[i] / scale);
-        if (!(std::abs(q) < 9.0e18))
-          throw UsageError(fmt::format("{}: point {}: coordinate {} does not fit a 64-bit scaled integer of step {}", display_name(path),
-                                       indices[i], column[i], scale));
-        raw[i] = static_cast<std::int64_t>(q);
-      }
-      OutField f = integer_field(name, raw);
-      const std::string lo = f.element.substr(f.element.find("minimum="));
-      f.element = fmt::format("<{} type=\"ScaledInteger\" {} scale=\"{}\" offset=\"0\"/>", name, lo.substr(0, lo.size() - 2), xml_number(scale));
-      fields.push_back(std::move(f));
+  writer.append(header_space, kE57HeaderSize);
+}
+
+std::vector<OutField> E57Writer::coordinate_fields(const std::vector<std::size_t>& indices) const {
+  const std::size_t n = indices.size();
+  std::vector<OutField> fields;
+  std::vector<double> column(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::string name = std::string("cartesian") + "XYZ"[axis];
+    for (std::size_t i = 0; i < n; ++i) column[i] = cloud.positions[indices[i]][axis];
+    if (!options.e57_scale) {
+      fields.push_back(float_field<double>(name, column));
+      continue;
     }
-    if (cloud.has_colors()) {
-      for (int ch = 0; ch < 3; ++ch) {
-        std::vector<std::int64_t> raw(n);
-        for (std::size_t i = 0; i < n; ++i) raw[i] = static_cast<std::int64_t>(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * 255.0 + 0.5);
-        fields.push_back({fmt::format("<color{} type=\"Integer\" minimum=\"0\" maximum=\"255\"/>", ch == 0 ? "Red" : ch == 1 ? "Green" : "Blue"),
-                          pack_bits(std::vector<std::uint64_t>(raw.begin(), raw.end()), 8)});
-      }
+    const double scale = *options.e57_scale;
+    std::vector<std::int64_t> raw(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double q = std::round(column[i] / scale);
+      if (!(std::abs(q) < 9.0e18))
+        throw UsageError(fmt::format("{}: point {}: coordinate {} does not fit a 64-bit scaled integer of step {}", display_name(path),
+                                     indices[i], column[i], scale));
+      raw[i] = static_cast<std::int64_t>(q);
     }
-    if (cloud.has_normals()) {
-      any_normals = true;
-      for (int axis = 0; axis < 3; ++axis) {
-        for (std::size_t i = 0; i < n; ++i) column[i] = cloud.normals[indices[i]][axis];
-        fields.push_back(float_field<float>(std::string("nor:normal") + "XYZ"[axis], column));
-      }
-    }
-    for (const ScalarField& field : cloud.fields) {
-      if (&field == scan_field) continue;
-      for (std::size_t i = 0; i < n; ++i) column[i] = field.values[indices[i]];
-      if (&field == intensity) {
-        for (double& v : column) v = (v - intensity_lo) / (intensity_hi - intensity_lo);
-        fields.push_back(float_field<double>("intensity", column));
-        continue;
-      }
-      if (!is_xml_name(field.name)) {
-        if (scan == groups.begin()->first) skipped.push_back(field.name);
-        continue;
-      }
-      std::string element = field.name;
-      if (!is_e57_point_field(field.name)) {
-        element = std::string(kPointsurfPrefix) + field.name;
-        any_extension = true;
-      }
-      if (field.type == ScalarType::Float32) fields.push_back(float_field<float>(element, column));
-      else if (scalar_type_is_float(field.type)) fields.push_back(float_field<double>(element, column));
-      else {
-        std::vector<std::int64_t> raw(n);
-        for (std::size_t i = 0; i < n; ++i) raw[i] = to_stored<std::int64_t>(column[i]);
-        fields.push_back(integer_field(element, raw));
-      }
-    }
-    const std::uint64_t offset = write_section(w, fields);
-    std::string prototype;
-    for (const OutField& f : fields) prototype += "          " + f.element + "\n";
-    const std::string name = pose.name.empty() ? fmt::format("scan {}", scan) : pose.name;
-    const Eigen::Quaterniond q = pose.rotation.normalized();
-    scans_xml += fmt::format(
-        "    <vectorChild type=\"Structure\">\n"
-        "      <guid type=\"String\">{}</guid>\n"
-        "      <name type=\"String\">{}</name>\n"
-        "      <pose type=\"Structure\">\n"
-        "        <rotation type=\"Structure\"><w type=\"Float\">{}</w><x type=\"Float\">{}</x><y type=\"Float\">{}</y><z type=\"Float\">{}</z></rotation>\n"
-        "        <translation type=\"Structure\"><x type=\"Float\">{}</x><y type=\"Float\">{}</y><z type=\"Float\">{}</z></translation>\n"
-        "      </pose>\n",
-        cdata(guid(rng)), cdata(name), xml_number(q.w()), xml_number(q.x()), xml_number(q.y()), xml_number(q.z()),
-        xml_number(pose.translation.x()), xml_number(pose.translation.y()), xml_number(pose.translation.z()));
-    if (intensity)
-      scans_xml += fmt::format(
-          "      <intensityLimits type=\"Structure\"><intensityMinimum type=\"Float\">{}</intensityMinimum>"
-          "<intensityMaximum type=\"Float\">{}</intensityMaximum></intensityLimits>\n",
-          xml_number(intensity_lo), xml_number(intensity_hi));
-    if (cloud.has_colors()) {
-      scans_xml += "      <colorLimits type=\"Structure\">";
-      for (const char* c : {"Red", "Green", "Blue"})
-        scans_xml += fmt::format("<color{0}Minimum type=\"Integer\">0</color{0}Minimum><color{0}Maximum type=\"Integer\">255</color{0}Maximum>", c);
-      scans_xml += "</colorLimits>\n";
-    }
-    scans_xml += fmt::format(
-        "      <points type=\"CompressedVector\" fileOffset=\"{}\" recordCount=\"{}\">\n"
-        "        <prototype type=\"Structure\">\n{}        </prototype>\n"
-        "        <codecs type=\"Vector\" allowHeterogeneousChildren=\"1\"/>\n"
-        "      </points>\n"
-        "    </vectorChild>\n",
-        offset, n, prototype);
+    OutField f = integer_field(name, raw);
+    const std::string lo = f.element.substr(f.element.find("minimum="));
+    f.element = fmt::format("<{} type=\"ScaledInteger\" {} scale=\"{}\" offset=\"0\"/>", name, lo.substr(0, lo.size() - 2), xml_number(scale));
+    fields.push_back(std::move(f));
   }
+  return fields;
+}
+
+std::vector<OutField> E57Writer::color_fields(const std::vector<std::size_t>& indices) const {
+  const std::size_t n = indices.size();
+  std::vector<OutField> fields;
+  if (!cloud.has_colors()) return fields;
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<std::int64_t> raw(n);
+    for (std::size_t i = 0; i < n; ++i) raw[i] = static_cast<std::int64_t>(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * 255.0 + 0.5);
+    fields.push_back({fmt::format("<color{} type=\"Integer\" minimum=\"0\" maximum=\"255\"/>", ch == 0 ? "Red" : ch == 1 ? "Green" : "Blue"),
+                      pack_bits(std::vector<std::uint64_t>(raw.begin(), raw.end()), 8)});
+  }
+  return fields;
+}
+
+std::vector<OutField> E57Writer::normal_fields(const std::vector<std::size_t>& indices) {
+  const std::size_t n = indices.size();
+  std::vector<OutField> fields;
+  if (!cloud.has_normals()) return fields;
+  any_normals = true;
+  std::vector<double> column(n);
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::size_t i = 0; i < n; ++i) column[i] = cloud.normals[indices[i]][axis];
+    fields.push_back(float_field<float>(std::string("nor:normal") + "XYZ"[axis], column));
+  }
+  return fields;
+}
+
+std::vector<OutField> E57Writer::extra_fields(long long scan, const std::vector<std::size_t>& indices) {
+  const std::size_t n = indices.size();
+  std::vector<OutField> fields;
+  std::vector<double> column(n);
+  for (const ScalarField& field : cloud.fields) {
+    if (&field == scan_field) continue;
+    for (std::size_t i = 0; i < n; ++i) column[i] = field.values[indices[i]];
+    if (&field == intensity) {
+      for (double& v : column) v = (v - intensity_lo) / (intensity_hi - intensity_lo);
+      fields.push_back(float_field<double>("intensity", column));
+      continue;
+    }
+    if (!is_xml_name(field.name)) {
+      if (scan == groups.begin()->first) skipped.push_back(field.name);
+      continue;
+    }
+    std::string element = field.name;
+    if (!is_e57_point_field(field.name)) {
+      element = std::string(kPointsurfPrefix) + field.name;
+      any_extension = true;
+    }
+    if (field.type == ScalarType::Float32) fields.push_back(float_field<float>(element, column));
+    else if (scalar_type_is_float(field.type)) fields.push_back(float_field<double>(element, column));
+    else {
+      std::vector<std::int64_t> raw(n);
+      for (std::size_t i = 0; i < n; ++i) raw[i] = to_stored<std::int64_t>(column[i]);
+      fields.push_back(integer_field(element, raw));
+    }
+  }
+  return fields;
+}
+
+void E57Writer::write_scan(long long scan, const std::vector<std::size_t>& indices) {
+  std::vector<OutField> fields = coordinate_fields(indices);
+  const auto append = [&fields](std::vector<OutField> more) {
+    for (OutField& f : more) fields.push_back(std::move(f));
+  };
+  append(color_fields(indices));
+  append(normal_fields(indices));
+  append(extra_fields(scan, indices));
+  const std::uint64_t offset = write_section(writer, fields);
+  scans_xml += scan_structure(scan, indices.size(), offset, fields);
+}
+
+// The scan's structure in /data3D: name, pose, limits and the points' prototype.
+std::string E57Writer::scan_structure(long long scan, std::size_t n, std::uint64_t offset, const std::vector<OutField>& fields) {
+  ScanPose pose;
+  if (scan < static_cast<long long>(options.scan_poses.size())) pose = options.scan_poses[static_cast<std::size_t>(scan)];
+  std::string prototype;
+  for (const OutField& f : fields) prototype += "          " + f.element + "\n";
+  const std::string name = pose.name.empty() ? fmt::format("scan {}", scan) : pose.name;
+  const Eigen::Quaterniond q = pose.rotation.normalized();
+  std::string out = fmt::format(
+      "    <vectorChild type=\"Structure\">\n"
+      "      <guid type=\"String\">{}</guid>\n"
+      "      <name type=\"String\">{}</name>\n"
+      "      <pose type=\"Structure\">\n"
+      "        <rotation type=\"Structure\"><w type=\"Float\">{}</w><x type=\"Float\">{}</x><y type=\"Float\">{}</y><z type=\"Float\">{}</z></rotation>\n"
+      "        <translation type=\"Structure\"><x type=\"Float\">{}</x><y type=\"Float\">{}</y><z type=\"Float\">{}</z></translation>\n"
+      "      </pose>\n",
+      cdata(guid(rng)), cdata(name), xml_number(q.w()), xml_number(q.x()), xml_number(q.y()), xml_number(q.z()),
+      xml_number(pose.translation.x()), xml_number(pose.translation.y()), xml_number(pose.translation.z()));
+  if (intensity)
+    out += fmt::format(
+        "      <intensityLimits type=\"Structure\"><intensityMinimum type=\"Float\">{}</intensityMinimum>"
+        "<intensityMaximum type=\"Float\">{}</intensityMaximum></intensityLimits>\n",
+        xml_number(intensity_lo), xml_number(intensity_hi));
+  if (cloud.has_colors()) {
+    out += "      <colorLimits type=\"Structure\">";
+    for (const char* c : {"Red", "Green", "Blue"})
+      out += fmt::format("<color{0}Minimum type=\"Integer\">0</color{0}Minimum><color{0}Maximum type=\"Integer\">255</color{0}Maximum>", c);
+    out += "</colorLimits>\n";
+  }
+  out += fmt::format(
+      "      <points type=\"CompressedVector\" fileOffset=\"{}\" recordCount=\"{}\">\n"
+      "        <prototype type=\"Structure\">\n{}        </prototype>\n"
+      "        <codecs type=\"Vector\" allowHeterogeneousChildren=\"1\"/>\n"
+      "      </points>\n"
+      "    </vectorChild>\n",
+      offset, n, prototype);
+  return out;
+}
+
+void E57Writer::note_skipped_fields() {
   if (!skipped.empty())
     notes.push_back(fmt::format("field(s) {} not written: an E57 field name must be an XML name", fmt::join(skipped, ", ")));
+}
+
+void E57Writer::compose_xml() {
   std::string namespaces = fmt::format("xmlns=\"{}\"", kE57Namespace);
   if (any_normals) namespaces += fmt::format(" xmlns:nor=\"{}\"", kNormalsNamespace);
   if (any_extension) namespaces += fmt::format(" xmlns:pointsurf=\"{}\"", kPointsurfNamespace);
-  const std::string xml = fmt::format(
+  xml = fmt::format(
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       "<e57Root type=\"Structure\" {}>\n"
       "  <formatName type=\"String\"><![CDATA[ASTM E57 3D Imaging Data File]]></formatName>\n"
@@ -312,10 +356,13 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
       "  <images2D type=\"Vector\" allowHeterogeneousChildren=\"1\"/>\n"
       "</e57Root>\n",
       namespaces, cdata(guid(rng)), POINTSURF_VERSION, cloud.crs.wkt.empty() ? std::string() : cdata(cloud.crs.wkt), scans_xml);
-  w.pad_to(4);
-  const std::uint64_t xml_logical = w.size();
-  w.append(xml.data(), xml.size());
-  const std::uint64_t pages = std::max<std::uint64_t>(1, (w.size() + kE57PagePayload - 1) / kE57PagePayload);
+}
+
+void E57Writer::append_xml_and_header() {
+  writer.pad_to(4);
+  xml_logical = writer.size();
+  writer.append(xml.data(), xml.size());
+  const std::uint64_t pages = std::max<std::uint64_t>(1, (writer.size() + kE57PagePayload - 1) / kE57PagePayload);
   unsigned char header[kE57HeaderSize] = {};
   std::memcpy(header, "ASTM-E57", 8);
   const std::uint32_t major = 1, minor = 0;
@@ -327,10 +374,25 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
   std::memcpy(header + 24, &xml_physical, 8);
   std::memcpy(header + 32, &xml_length, 8);
   std::memcpy(header + 40, &page_size, 8);
-  w.patch(0, header, kE57HeaderSize);
+  writer.patch(0, header, kE57HeaderSize);
+}
+
+void E57Writer::save() const {
   FileWriter out(path);
-  w.write_pages(out);
+  writer.write_pages(out);
   out.close();
+}
+
+void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes) {
+  E57Writer e57(path, cloud, options, notes);
+  e57.group_scans();
+  e57.set_intensity_limits();
+  e57.start_file();
+  for (const auto& [scan, indices] : e57.groups) e57.write_scan(scan, indices);
+  e57.note_skipped_fields();
+  e57.compose_xml();
+  e57.append_xml_and_header();
+  e57.save();
 }
 
 }  // namespace pointsurf::io::detail

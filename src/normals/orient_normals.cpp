@@ -16,10 +16,13 @@
 
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
+#include "normals/detail/mst_orientation.h"
 #include "pointsurf/normals/normals.h"
 
 namespace pointsurf {
 namespace {
+
+using detail::DisjointSets;
 
 // A normal that carries no direction (degenerate neighbourhood, or NaN from a file).
 bool has_direction(const Eigen::Vector3d& n) { return n.squaredNorm() > 0.0; }
@@ -32,19 +35,19 @@ void mark_against(const PointCloud& cloud, Towards towards, std::vector<std::uin
   });
 }
 
-// Global sign of a component (step 6 of the MST orientation):
+// Global sign of a component (MstOrientation::decide_component_signs):
 // - mean |n_z| above which a component is made of mostly horizontal surfaces (a plane 1,
 //   terrain with trees and buildings about 0.8, a sphere 0.5, a cube 1/3);
 constexpr double kHorizontalShare = 0.7;
 // - length of the mean unit normal above which it is an open sheet (closed surfaces ~0, a
 //   hemisphere 0.5, a plane 1); a terrain tile whose roofs are still upside down scores ~0.7;
 constexpr double kSheetThreshold = 0.5;
-// - in step 7, share of a region's mean normal along z above which it faces up or down;
+// - in turn_up_level_regions, share of a region's mean normal along z above which it faces up or down;
 constexpr double kVerticalShare = 0.5;
 // - share of agreeing votes (|sum| / sum of |terms|) above which the outward vote decides:
 //   a sphere scores 1, a torus with tube/ring ratio 0.3 about 0.5.
 constexpr double kOutwardVoteThreshold = 0.05;
-// Angle between neighbouring normals above which the forest edge crosses a crease (step 7).
+// Angle between neighbouring normals above which the forest edge crosses a crease (cut_at_creases).
 constexpr double kCreaseAngleDeg = 45.0;
 
 // The next double above a non-negative one (infinity stays).
@@ -60,36 +63,7 @@ constexpr double kDistanceWeight = 0.3;
 // separate objects and are not joined (see connect_components).
 constexpr double kGapInReaches = 3.0;
 
-// Sort keys of graph edges: float weight bits above a 34-bit edge slot.
-constexpr int kSlotBits = 34;
-constexpr std::uint64_t kSlotMask = (std::uint64_t(1) << kSlotBits) - 1;
 constexpr std::uint64_t kNoEdge = ~std::uint64_t(0);
-
-// Union-find with path halving and union by rank, over uint32 to keep it at 5 bytes a point.
-class DisjointSets {
-public:
-  explicit DisjointSets(std::size_t n) : parent_(n), rank_(n, 0) { std::iota(parent_.begin(), parent_.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  bool unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a == b) return false;
-    if (rank_[a] < rank_[b]) std::swap(a, b);
-    parent_[b] = a;
-    if (rank_[a] == rank_[b]) ++rank_[a];
-    return true;
-  }
-
-private:
-  std::vector<std::uint32_t> parent_;
-  std::vector<std::uint8_t> rank_;
-};
 
 // Weight of the graph edge i-j: 1 - |cos| of the angle between the normals (Hoppe 1992), so
 // the spanning forest follows the smoothest paths and crosses sharp creases last, plus
@@ -182,75 +156,83 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> connect_components(const Po
   return joins;
 }
 
-// Marks the normals to flip for a consistent orientation; returns the number of components.
-std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const KdTree* tree,
-                     detail::ProgressReporter& steps, const ProgressCallback& progress, std::vector<std::uint8_t>& flip) {
-  const std::size_t n = cloud.size();
-  if (n == 0) return 0;
-  if (tree == nullptr && n > std::numeric_limits<std::uint32_t>::max())
+}  // namespace
+
+namespace detail {
+
+MstOrientation::MstOrientation(const PointCloud& cloud, const OrientParams& params, const KdTree* tree)
+    : cloud(cloud),
+      params(params),
+      n(cloud.size()),
+      degree(std::min(static_cast<std::size_t>(params.k), n - 1)),
+      slots(n * degree),
+      flip(n, 0),
+      tree_(tree) {
+  if (tree_ == nullptr && n > std::numeric_limits<std::uint32_t>::max())
     throw UsageError(fmt::format("orient_normals: {} points exceed the limit of {}", n,
                                  std::numeric_limits<std::uint32_t>::max()));
-  std::optional<KdTree> own_tree;
-  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
-  const std::vector<Eigen::Vector3d>& normals = cloud.normals;
-
-  // 1. The kNN graph: slot i * degree + t holds the t-th nearest other point of i and the
-  //    weight of that edge.
-  const std::size_t degree = std::min(static_cast<std::size_t>(params.k), n - 1);
-  const std::size_t slots = n * degree;
+  if (tree_ == nullptr) tree_ = &own_tree_.emplace(cloud.positions);
   if (slots > kSlotMask)
     throw UsageError(fmt::format("orient_normals: {} points with k = {} exceed the graph limit of {} edges", n,
                                  params.k, kSlotMask));
-  std::vector<std::uint32_t> target(slots);
-  std::vector<float> weight(slots);
-  std::vector<float> reach(n);  // squared distance to the farthest of the degree + 1 nearest
-  {
-    const std::span<const std::uint32_t> order = tree->spatial_order();
-    detail::ProgressReporter reporter(progress, 0.0, 0.5, n);
-    tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-      if (reporter.cancelled()) return;
-      std::vector<Neighbor>& neighbors = buffers.local();
-      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
-        const std::uint32_t i = order[pos];
-        tree->knn(cloud.positions[i], degree + 1, neighbors);
-        const double farthest = neighbors.back().squared_distance;
-        reach[i] = static_cast<float>(farthest);
-        std::size_t slot = std::size_t(i) * degree;
-        const std::size_t end = slot + degree;
-        // The point itself is normally first, but among duplicates a lower index may precede
-        // it or push it out of the list: skip it wherever it is and keep `degree` others.
-        for (const Neighbor& nb : neighbors) {
-          if (nb.index == i) continue;
-          if (slot == end) break;
-          target[slot] = nb.index;
-          weight[slot++] = edge_weight(normals[i], normals[nb.index], nb.squared_distance, farthest);
-        }
-      }
-      reporter.advance(r.size());
-    });
-    reporter.throw_if_cancelled();
-  }
+}
 
-  // 1b. The shortest edges between the kNN graph's components (Euclidean MST), after the
-  //     slots as extra edges.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> joins;
+MstOrientation::Edge MstOrientation::ends(std::size_t slot) const {
+  return slot < slots ? Edge(static_cast<std::uint32_t>(slot / degree), target[slot]) : joins[slot - slots];
+}
+
+Eigen::Vector3d MstOrientation::oriented(std::uint32_t i) const {
+  return flip[i] ? Eigen::Vector3d(-cloud.normals[i]) : cloud.normals[i];
+}
+
+void MstOrientation::build_knn_graph(const ProgressCallback& progress) {
+  target.assign(slots, 0);
+  weight.assign(slots, 0.0f);
+  reach.assign(n, 0.0f);
+  const std::span<const std::uint32_t> order = tree_->spatial_order();
+  const std::vector<Eigen::Vector3d>& normals = cloud.normals;
+  ProgressReporter reporter(progress, 0.0, 0.5, n);
+  tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
+    std::vector<Neighbor>& neighbors = buffers.local();
+    for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
+      const std::uint32_t i = order[pos];
+      tree_->knn(cloud.positions[i], degree + 1, neighbors);
+      const double farthest = neighbors.back().squared_distance;
+      reach[i] = static_cast<float>(farthest);
+      std::size_t slot = std::size_t(i) * degree;
+      const std::size_t end = slot + degree;
+      // The point itself is normally first, but among duplicates a lower index may precede
+      // it or push it out of the list: skip it wherever it is and keep `degree` others.
+      for (const Neighbor& nb : neighbors) {
+        if (nb.index == i) continue;
+        if (slot == end) break;
+        target[slot] = nb.index;
+        weight[slot++] = edge_weight(normals[i], normals[nb.index], nb.squared_distance, farthest);
+      }
+    }
+    reporter.advance(r.size());
+  });
+  reporter.throw_if_cancelled();
+}
+
+void MstOrientation::join_components() {
   {
     DisjointSets knn_sets(n);
     for (std::size_t slot = 0; slot < slots; ++slot) knn_sets.unite(static_cast<std::uint32_t>(slot / degree), target[slot]);
-    joins = connect_components(cloud, *tree, knn_sets, reach, kGapInReaches);
+    joins = connect_components(cloud, *tree_, knn_sets, reach, kGapInReaches);
   }
   if (slots + joins.size() > kSlotMask)
     throw UsageError(fmt::format("orient_normals: {} points with k = {} exceed the graph limit of {} edges", n, params.k, kSlotMask));
-  const auto ends = [&](std::size_t slot) {
-    return slot < slots ? std::pair(static_cast<std::uint32_t>(slot / degree), target[slot]) : joins[slot - slots];
-  };
+}
 
-  // 2. Sort keys: the weight's bits above the slot. Weights lie in [0, 2), whose float bit
-  //    patterns are below 2^30 and ordered like the values, so one uint64 sorts by (weight,
-  //    slot): deterministic, and cheaper to sort than (weight, a, b) records. An edge found
-  //    from both ends is kept once, from the end with the lower index.
-  std::vector<std::uint64_t> keys(slots);
+// The weight's bits above the slot: weights lie in [0, 2), whose float bit patterns are below
+// 2^30 and ordered like the values, so one uint64 sorts by (weight, slot): deterministic, and
+// cheaper to sort than (weight, a, b) records. An edge found from both ends is kept once,
+// from the end with the lower index.
+void MstOrientation::sort_edges() {
+  keys.assign(slots, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       for (std::size_t slot = i * degree; slot < (i + 1) * degree; ++slot) {
@@ -265,94 +247,94 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
   std::vector<float>().swap(weight);
   for (std::size_t e = 0; e < joins.size(); ++e) {
     const auto [a, b] = joins[e];
-    const float w = edge_weight(normals[a], normals[b], (cloud.positions[a] - cloud.positions[b]).squaredNorm(), std::max(reach[a], reach[b]));
+    const float w = edge_weight(cloud.normals[a], cloud.normals[b], (cloud.positions[a] - cloud.positions[b]).squaredNorm(),
+                                std::max(reach[a], reach[b]));
     keys.push_back((std::uint64_t(std::bit_cast<std::uint32_t>(w)) << kSlotBits) | (slots + e));
   }
   keys.erase(std::remove(keys.begin(), keys.end(), kNoEdge), keys.end());
   tbb::parallel_sort(keys.begin(), keys.end());
-  steps.report(0.75);
-  steps.throw_if_cancelled();
+}
 
-  // 3. Minimum spanning forest (Kruskal).
-  DisjointSets sets(n);
-  std::vector<std::size_t> degree_of(n + 1, 0);  // becomes the CSR offsets
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> forest;
+void MstOrientation::span_forest() {
+  sets = DisjointSets(n);
+  forest.clear();
   forest.reserve(n - 1);
   for (const std::uint64_t key : keys) {
     const auto [a, b] = ends(key & kSlotMask);
     if (!sets.unite(a, b)) continue;
     forest.emplace_back(a, b);
-    ++degree_of[a + 1];
-    ++degree_of[b + 1];
     if (forest.size() == n - 1) break;
   }
   std::vector<std::uint64_t>().swap(keys);
   std::vector<std::uint32_t>().swap(target);
-  steps.report(0.85);
-  steps.throw_if_cancelled();
+}
 
-  // Forest adjacency in compressed rows.
-  std::vector<std::size_t>& offsets = degree_of;
+void MstOrientation::build_adjacency() {
+  offsets.assign(n + 1, 0);  // degrees first, then their prefix sums
+  for (const auto& [a, b] : forest) {
+    ++offsets[a + 1];
+    ++offsets[b + 1];
+  }
   for (std::size_t i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
-  std::vector<std::uint32_t> adjacency(offsets[n]);
-  {
-    std::vector<std::size_t> fill(offsets.begin(), offsets.end() - 1);
-    for (const auto& [a, b] : forest) {
-      adjacency[fill[a]++] = b;
-      adjacency[fill[b]++] = a;
-    }
+  adjacency.assign(offsets[n], 0);
+  std::vector<std::size_t> fill(offsets.begin(), offsets.end() - 1);
+  for (const auto& [a, b] : forest) {
+    adjacency[fill[a]++] = b;
+    adjacency[fill[b]++] = a;
   }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>>().swap(forest);
+  std::vector<Edge>().swap(forest);
+}
 
-  // 4. One seed per component: the point with a normal farthest from the component centroid;
-  //    on a closed surface its outward side faces away from the centroid. The seed only starts
-  //    the propagation: step 6 settles each component's global sign by a vote over all of its
-  //    points. Positions are taken relative to the first point to keep the sums small for
-  //    georeferenced clouds.
-  const Eigen::Vector3d origin = cloud.positions[0];
-  std::vector<std::uint32_t> component(n);
-  std::vector<Eigen::Vector3d> sums;
-  std::vector<std::size_t> counts;
-  {
-    constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> id_of_root(n, kUnset);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t root = sets.find(static_cast<std::uint32_t>(i));
-      if (id_of_root[root] == kUnset) {
-        id_of_root[root] = static_cast<std::uint32_t>(sums.size());
-        sums.push_back(Eigen::Vector3d::Zero());
-        counts.push_back(0);
-      }
-      component[i] = id_of_root[root];
-      sums[component[i]] += cloud.positions[i] - origin;
-      ++counts[component[i]];
-    }
-  }
-  const std::size_t components = sums.size();
-  std::vector<std::uint32_t> seed(components, std::numeric_limits<std::uint32_t>::max());
-  std::vector<double> seed_distance(components, -1.0);
-  for (std::size_t c = 0; c < components; ++c) sums[c] /= double(counts[c]);  // now centroids
+// Positions are taken relative to the first point to keep the sums small for georeferenced
+// clouds.
+void MstOrientation::label_components() {
+  origin = cloud.positions[0];
+  component.assign(n, 0);
+  centroid.clear();
+  count.clear();
+  constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> id_of_root(n, kUnset);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!has_direction(normals[i])) continue;
+    const std::uint32_t root = sets.find(static_cast<std::uint32_t>(i));
+    if (id_of_root[root] == kUnset) {
+      id_of_root[root] = static_cast<std::uint32_t>(centroid.size());
+      centroid.push_back(Eigen::Vector3d::Zero());
+      count.push_back(0);
+    }
+    component[i] = id_of_root[root];
+    centroid[component[i]] += cloud.positions[i] - origin;
+    ++count[component[i]];
+  }
+  for (std::size_t c = 0; c < centroid.size(); ++c) centroid[c] /= double(count[c]);
+}
+
+// On a closed surface the outward side of the farthest point faces away from the centroid.
+// The seed only starts the propagation: the vote settles each component's global sign.
+void MstOrientation::choose_seeds() {
+  seed.assign(components(), std::numeric_limits<std::uint32_t>::max());
+  std::vector<double> seed_distance(components(), -1.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!has_direction(cloud.normals[i])) continue;
     const std::uint32_t c = component[i];
-    const double d = (cloud.positions[i] - origin - sums[c]).squaredNorm();
+    const double d = (cloud.positions[i] - origin - centroid[c]).squaredNorm();
     if (d > seed_distance[c]) {
       seed_distance[c] = d;
       seed[c] = static_cast<std::uint32_t>(i);
     }
   }
+}
 
-  // 5. Propagation from each seed over its tree: a child is flipped when it disagrees with the
-  //    nearest ancestor that has a direction (a zero normal passes its parent's on). Flips are
-  //    only marked here; the caller applies them once the stage can no longer be cancelled.
+// A child is flipped when it disagrees with the nearest ancestor that has a direction (a zero
+// normal passes its parent's on).
+void MstOrientation::propagate_from_seeds() {
+  const std::vector<Eigen::Vector3d>& normals = cloud.normals;
   std::vector<std::uint8_t> visited(n, 0);
   std::vector<std::uint32_t> reference(n);
   std::vector<std::uint32_t> queue;
-  const auto oriented = [&](std::uint32_t i) { return flip[i] ? Eigen::Vector3d(-normals[i]) : normals[i]; };
-  for (std::size_t c = 0; c < components; ++c) {
+  for (std::size_t c = 0; c < components(); ++c) {
     const std::uint32_t s = seed[c];
     if (s == std::numeric_limits<std::uint32_t>::max()) continue;  // no normal to orient
-    flip[s] = normals[s].dot(cloud.positions[s] - origin - sums[c]) < 0.0;
+    flip[s] = normals[s].dot(cloud.positions[s] - origin - centroid[c]) < 0.0;
     queue.assign(1, s);
     visited[s] = 1;
     reference[s] = s;
@@ -373,75 +355,130 @@ std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const 
       }
     }
   }
+}
 
-  // 6. Global sign of each component, decided by all of its points rather than by one possibly
-  //    noisy seed.
-  //    - Terrain-like: mostly horizontal surfaces (mean |n_z| high) forming an open sheet (the
-  //      mean unit normal is long; a closed surface, even a flat closed plate, scores ~0).
-  //      Such data is scanned from above (aerial and ground LiDAR): normals point up (+z).
-  //    - Otherwise, on a closed surface with outward normals, sum n·(p - c) over area-uniform
-  //      samples approximates 3 x volume > 0 (divergence theorem); the same vote settles
-  //      single views of convex-ish objects seen from the side (outward).
-  std::vector<double> signed_sum(components, 0.0), absolute_sum(components, 0.0), horizontal_sum(components, 0.0);
-  std::vector<Eigen::Vector3d> normal_sum(components, Eigen::Vector3d::Zero());
-  std::vector<std::size_t> directed(components, 0);
+void MstOrientation::tally_votes() {
+  const std::size_t components = this->components();
+  votes.signed_sum.assign(components, 0.0);
+  votes.absolute_sum.assign(components, 0.0);
+  votes.horizontal_sum.assign(components, 0.0);
+  votes.normal_sum.assign(components, Eigen::Vector3d::Zero());
+  votes.directed.assign(components, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!has_direction(normals[i])) continue;
+    if (!has_direction(cloud.normals[i])) continue;
     const std::uint32_t c = component[i];
     const Eigen::Vector3d nrm = oriented(static_cast<std::uint32_t>(i)).normalized();
-    const double d = nrm.dot(cloud.positions[i] - origin - sums[c]);
-    signed_sum[c] += d;
-    absolute_sum[c] += std::abs(d);
-    horizontal_sum[c] += std::abs(nrm.z());
-    normal_sum[c] += nrm;
-    ++directed[c];
+    const double d = nrm.dot(cloud.positions[i] - origin - centroid[c]);
+    votes.signed_sum[c] += d;
+    votes.absolute_sum[c] += std::abs(d);
+    votes.horizontal_sum[c] += std::abs(nrm.z());
+    votes.normal_sum[c] += nrm;
+    ++votes.directed[c];
   }
-  std::vector<std::uint8_t> flip_component(components, 0), terrain(components, 0);
+}
+
+// - Terrain-like: mostly horizontal surfaces (mean |n_z| high) forming an open sheet (the mean
+//   unit normal is long; a closed surface, even a flat closed plate, scores ~0). Such data is
+//   scanned from above (aerial and ground LiDAR): normals point up (+z).
+// - Otherwise, on a closed surface with outward normals, sum n·(p - c) over area-uniform
+//   samples approximates 3 x volume > 0 (divergence theorem); the same vote settles single
+//   views of convex-ish objects seen from the side (outward).
+void MstOrientation::decide_component_signs() {
+  const std::size_t components = votes.directed.size();
+  flip_component.assign(components, 0);
+  terrain.assign(components, 0);
   for (std::size_t c = 0; c < components; ++c) {
-    if (directed[c] == 0) continue;
-    const double count = double(directed[c]);
-    const Eigen::Vector3d mean_normal = normal_sum[c] / count;
+    if (votes.directed[c] == 0) continue;
+    const double count = double(votes.directed[c]);
+    const Eigen::Vector3d mean_normal = votes.normal_sum[c] / count;
     const double sheet = mean_normal.norm();  // ~0 closed, 0.5 hemisphere, 1 flat patch
-    terrain[c] = horizontal_sum[c] / count >= kHorizontalShare && sheet >= kSheetThreshold;
+    const double signed_sum = votes.signed_sum[c], absolute_sum = votes.absolute_sum[c];
+    terrain[c] = votes.horizontal_sum[c] / count >= kHorizontalShare && sheet >= kSheetThreshold;
     if (terrain[c]) {
       flip_component[c] = mean_normal.z() < 0.0;
-    } else if (absolute_sum[c] > 0.0 && std::abs(signed_sum[c]) >= kOutwardVoteThreshold * absolute_sum[c]) {
-      flip_component[c] = signed_sum[c] < 0.0;
+    } else if (absolute_sum > 0.0 && std::abs(signed_sum) >= kOutwardVoteThreshold * absolute_sum) {
+      flip_component[c] = signed_sum < 0.0;
     } else if (std::abs(mean_normal.z()) >= 0.5 * sheet && sheet > 0.0) {
       flip_component[c] = mean_normal.z() < 0.0;
     } else {
-      flip_component[c] = signed_sum[c] < 0.0;
+      flip_component[c] = signed_sum < 0.0;
     }
   }
-  for (std::size_t i = 0; i < n; ++i)
-    if (flip_component[component[i]] && has_direction(normals[i])) flip[i] = !flip[i];
+}
 
-  // 7. Inside terrain (ground with buildings), the propagation must cross creases
-  //    such as the walls between ground and a roof, where the sign of nearly perpendicular
-  //    normals is a guess. Cut the forest at creases into smooth regions, and turn up every
-  //    region that faces up or down: a flat roof is as much "terrain" as the ground.
-  if (std::none_of(terrain.begin(), terrain.end(), [](std::uint8_t u) { return u != 0; })) return components;
-  DisjointSets regions(n);
+void MstOrientation::apply_component_signs() {
+  for (std::size_t i = 0; i < n; ++i)
+    if (flip_component[component[i]] && has_direction(cloud.normals[i])) flip[i] = !flip[i];
+}
+
+bool MstOrientation::has_terrain() const {
+  return std::any_of(terrain.begin(), terrain.end(), [](std::uint8_t u) { return u != 0; });
+}
+
+// Inside terrain (ground with buildings), the propagation must cross creases such as the walls
+// between ground and a roof, where the sign of nearly perpendicular normals is a guess. The
+// forest cut at creases falls into smooth regions.
+void MstOrientation::cut_at_creases() {
+  const std::vector<Eigen::Vector3d>& normals = cloud.normals;
+  regions = DisjointSets(n);
   const double crease_cos = std::cos(kCreaseAngleDeg * std::numbers::pi / 180.0);
   for (std::size_t u = 0; u < n; ++u) {
     if (!terrain[component[u]] || !has_direction(normals[u])) continue;
     for (std::size_t e = offsets[u]; e < offsets[u + 1]; ++e) {
       const std::uint32_t v = adjacency[e];
-      if (v > u && has_direction(normals[v]) &&
-          std::abs(normals[u].normalized().dot(normals[v].normalized())) >= crease_cos)
+      if (v > u && has_direction(normals[v]) && std::abs(normals[u].normalized().dot(normals[v].normalized())) >= crease_cos)
         regions.unite(static_cast<std::uint32_t>(u), v);
     }
   }
+}
+
+// Every smooth region of terrain that faces up or down is turned up: a flat roof is as much
+// "terrain" as the ground.
+void MstOrientation::turn_up_level_regions() {
   std::vector<Eigen::Vector3d> region_sum(n, Eigen::Vector3d::Zero());
   for (std::size_t i = 0; i < n; ++i)
-    if (terrain[component[i]] && has_direction(normals[i]))
+    if (terrain[component[i]] && has_direction(cloud.normals[i]))
       region_sum[regions.find(static_cast<std::uint32_t>(i))] += oriented(static_cast<std::uint32_t>(i)).normalized();
   for (std::size_t i = 0; i < n; ++i) {
-    if (!terrain[component[i]] || !has_direction(normals[i])) continue;
+    if (!terrain[component[i]] || !has_direction(cloud.normals[i])) continue;
     const Eigen::Vector3d& mean = region_sum[regions.find(static_cast<std::uint32_t>(i))];
     if (mean.z() < 0.0 && std::abs(mean.z()) >= kVerticalShare * mean.norm()) flip[i] = !flip[i];
   }
-  return components;
+}
+
+}  // namespace detail
+
+namespace {
+
+// Marks the normals to flip for a consistent orientation; returns the number of components.
+// Flips are only marked here; the caller applies them once the stage can no longer be cancelled.
+std::size_t mark_mst(const PointCloud& cloud, const OrientParams& params, const KdTree* tree,
+                     detail::ProgressReporter& steps, const ProgressCallback& progress, std::vector<std::uint8_t>& flip) {
+  if (cloud.size() == 0) return 0;
+  detail::MstOrientation mst(cloud, params, tree);
+  mst.build_knn_graph(progress);
+  mst.join_components();
+  mst.sort_edges();
+  steps.report(0.75);
+  steps.throw_if_cancelled();
+  mst.span_forest();
+  steps.report(0.85);
+  steps.throw_if_cancelled();
+  mst.build_adjacency();
+  mst.label_components();
+  mst.choose_seeds();
+  mst.propagate_from_seeds();
+  // The global sign of each component is decided by all of its points rather than by one
+  // possibly noisy seed; then terrain regions are turned up.
+  mst.tally_votes();
+  mst.decide_component_signs();
+  mst.apply_component_signs();
+  if (mst.has_terrain()) {
+    mst.cut_at_creases();
+    mst.turn_up_level_regions();
+  }
+  flip = std::move(mst.flip);
+  return mst.components();
 }
 
 }  // namespace

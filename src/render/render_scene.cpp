@@ -27,6 +27,7 @@
 #include <tbb/parallel_for.h>
 
 #include "pointsurf/core/error.h"
+#include "render/detail/scene_renderer.h"
 #include "render/detail/text.h"
 
 namespace pointsurf {
@@ -98,12 +99,15 @@ void RenderParams::validate() const {
 namespace {
 
 using Rgb = std::array<std::uint8_t, 3>;
-constexpr float kNoDepth = std::numeric_limits<float>::infinity();
-constexpr int kBandRows = 32;  // sample rows per band: a few dozen bands keep two to 64 cores busy
-
-struct Basis {
-  Vector3d right, up, forward;  // forward: from the eye into the scene
-};
+using detail::Basis;
+using detail::Buffers;
+using detail::kBandRows;
+using detail::kNoDepth;
+using detail::Layout;
+using detail::Lights;
+using detail::pack;
+using detail::Projection;
+using detail::unpack;
 
 Basis basis_of(const Vector3d& forward_in, const Vector3d& up_in) {
   Basis b;
@@ -125,32 +129,6 @@ Basis view_basis(View v) {
   return basis_of(Vector3d(-1, 1, -1), Vector3d::UnitZ());
 }
 
-// Projection from centred coordinates to sample coordinates (x right, y down) and depth.
-struct Projection {
-  Basis basis;
-  Vector3d eye = Vector3d::Zero();  // perspective: eye relative to the centre
-  bool perspective = false;
-  double scale = 1.0;               // orthographic: samples per unit; perspective: focal length in samples
-  double cx = 0.0, cy = 0.0;        // sample coordinates of the optical axis
-  double near = 0.0;                // perspective: nearer points are not drawn
-
-  // x, y in samples; z: distance along the view direction (ortho: from the centre plane).
-  Eigen::Vector3f operator()(const Vector3d& q) const {
-    const Vector3d d = perspective ? Vector3d(q - eye) : q;
-    const double x = d.dot(basis.right), y = d.dot(basis.up), z = d.dot(basis.forward);
-    if (perspective) {
-      if (z <= near) return {0.f, 0.f, kNoDepth};
-      return {float(cx + scale * x / z), float(cy - scale * y / z), float(z)};
-    }
-    return {float(cx + scale * x), float(cy - scale * y), float(z)};
-  }
-};
-
-struct Layout {
-  int plot_x0 = 0, plot_y0 = 0, plot_w = 0, plot_h = 0;  // picture pixels for the data
-  int legend_x = 0;                                       // left edge of the legend column
-};
-
 // Per-vertex colour (0..255, as float for interpolation).
 std::vector<Eigen::Vector3f> vertex_colors(const PointCloud& cloud, const RenderParams& p, bool mesh, ColorScale& scale,
                                            const std::vector<double>* field) {
@@ -170,10 +148,6 @@ std::vector<Eigen::Vector3f> vertex_colors(const PointCloud& cloud, const Render
   (void)p;
   return out;
 }
-
-struct Lights {
-  Eigen::Vector3f key, fill, half;  // camera space: x right, y up, z towards the viewer
-};
 
 Lights make_lights() {
   Lights l;
@@ -196,22 +170,6 @@ inline Eigen::Vector3f shade(Eigen::Vector3f n, const Eigen::Vector3f& base, con
   Eigen::Vector3f c = base * (0.22f + 0.68f * diffuse + 0.18f * fill) + Eigen::Vector3f::Constant(70.f * spec);
   return c.cwiseMin(255.f);
 }
-
-// A sample's colour packed in 4 bytes (R, G, B; 8 bits each): a quarter of three floats, which
-// at 9 samples per pixel is most of the renderer's memory and of its fixed cost.
-inline std::uint32_t pack(const Eigen::Vector3f& c) {
-  auto q = [](float v) { return std::uint32_t(std::clamp(v + 0.5f, 0.f, 255.f)); };
-  return q(c.x()) | q(c.y()) << 8 | q(c.z()) << 16;
-}
-inline Eigen::Vector3f unpack(std::uint32_t c) { return Eigen::Vector3f(float(c & 255u), float((c >> 8) & 255u), float((c >> 16) & 255u)); }
-
-struct Buffers {
-  int w = 0, h = 0;
-  std::vector<float> depth;
-  std::vector<std::uint32_t> color;  // packed RGB, meaningful where depth is set
-  Buffers(int width, int height) : w(width), h(height), depth(std::size_t(width) * std::size_t(height), kNoDepth), color(depth.size()) {}
-  std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(w) + std::size_t(x); }
-};
 
 // Bins primitive i into the bands its rows [lo, hi] span.
 struct Bins {
@@ -455,38 +413,38 @@ void draw_scale_bar(Image& img, const Layout& lay, double pixels_per_unit, detai
 
 }  // namespace
 
-RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& triangles, const RenderParams& p) {
+namespace detail {
+
+SceneRenderer::SceneRenderer(const PointCloud& cloud, const std::vector<Triangle>& triangles, const RenderParams& params)
+    : cloud(cloud), triangles(triangles), params(params), mesh(!triangles.empty()), n(cloud.size()), s(params.supersample) {
   if (cloud.empty()) throw InputError("render: nothing to draw: the cloud is empty");
-  p.validate();
-  const bool mesh = !triangles.empty();
-  const std::size_t n = cloud.size();
+  params.validate();
   for (const Triangle& t : triangles)
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || std::size_t(t[k]) >= n)
         throw InputError(fmt::format("render: a face uses vertex {}, but there are {} vertices", t[k], n));
+}
 
-  RenderResult result;
-  // The field, or x/y/z.
-  std::vector<double> axis_values;
-  const std::vector<double>* field = nullptr;
-  if (!p.field.empty()) {
-    if (p.field == "x" || p.field == "y" || p.field == "z") {
-      const int a = p.field[0] - 'x';
-      axis_values.resize(n);
-      for (std::size_t i = 0; i < n; ++i) axis_values[i] = cloud.positions[i][a];
-      field = &axis_values;
-    } else if (const ScalarField* f = cloud.fields.find(p.field)) {
-      field = &f->values;
-    } else {
-      std::string names = "x, y, z";
-      for (const ScalarField& f2 : cloud.fields) names += ", " + f2.name;
-      throw InputError(fmt::format("field: the data has no field \"{}\" (it has {})", p.field, names));
-    }
-    result.scale = p.scale ? *p.scale : default_color_scale(*field, p.field);
+void SceneRenderer::select_field() {
+  const std::string& name = params.field;
+  if (name.empty()) return;
+  if (name == "x" || name == "y" || name == "z") {
+    const int a = name[0] - 'x';
+    axis_values.resize(n);
+    for (std::size_t i = 0; i < n; ++i) axis_values[i] = cloud.positions[i][a];
+    field = &axis_values;
+  } else if (const ScalarField* f = cloud.fields.find(name)) {
+    field = &f->values;
+  } else {
+    std::string names = "x, y, z";
+    for (const ScalarField& f2 : cloud.fields) names += ", " + f2.name;
+    throw InputError(fmt::format("field: the data has no field \"{}\" (it has {})", name, names));
   }
+  out.scale = params.scale ? *params.scale : default_color_scale(*field, name);
+}
 
-  // Which points are drawn: a mesh's used vertices frame the view; a cloud's points all do.
-  std::vector<char> used;
+// A mesh's used vertices frame the view; a cloud's points all do.
+void SceneRenderer::frame_box() {
   if (mesh) {
     used.assign(n, 0);
     for (const Triangle& t : triangles)
@@ -498,190 +456,227 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
     if (!cloud.positions[i].allFinite()) throw InputError(fmt::format("render: point {} is not finite", i));
     box.extend(cloud.positions[i]);
   }
-  const Vector3d centre = box.center();
-  const double diagonal = std::max(box.diagonal(), 1e-300);
+  centre = box.center();
+  diagonal = std::max(box.diagonal(), 1e-300);
+}
 
-  // Layout: a legend column on the right when colouring by a field, a title row on top.
-  detail::TextPainter text(p.font_file);
-  if (!text.ok()) result.warnings.push_back(text.error());
-  Layout lay;
-  const bool legend = field && p.legend;
-  // The legend's column: wide enough for its longest text.
+// A legend column on the right when colouring by a field, wide enough for its longest text;
+// a title row on top.
+void SceneRenderer::lay_out() {
+  text.emplace(params.font_file);
+  if (!text->ok()) out.warnings.push_back(text->error());
+  legend = field && params.legend;
   int legend_w = 0;
   if (legend) {
-    const int font = legend_font(p.size.height);
-    legend_w = std::max({110, p.size.width / 6, text.width(legend_head(p.field, result.scale), font) + 2 * font,
-                         text.width(legend_band(result.scale), std::max(9, font - 2)) + 2 * font});
-    legend_w = std::min(legend_w, p.size.width / 2);
+    const int font = legend_font(params.size.height);
+    legend_w = std::max({110, params.size.width / 6, text->width(legend_head(params.field, out.scale), font) + 2 * font,
+                         text->width(legend_band(out.scale), std::max(9, font - 2)) + 2 * font});
+    legend_w = std::min(legend_w, params.size.width / 2);
   }
-  const int title_h = p.title.empty() ? 0 : std::max(16, p.size.height / 22);
-  lay.plot_x0 = 0;
-  lay.plot_y0 = title_h;
-  lay.plot_w = p.size.width - legend_w;
-  lay.plot_h = p.size.height - title_h;
-  lay.legend_x = lay.plot_w;
+  title_h = params.title.empty() ? 0 : std::max(16, params.size.height / 22);
+  layout.plot_x0 = 0;
+  layout.plot_y0 = title_h;
+  layout.plot_w = params.size.width - legend_w;
+  layout.plot_h = params.size.height - title_h;
+  layout.legend_x = layout.plot_w;
+}
 
-  const int s = p.supersample;
-  Projection proj;
-  if (p.camera) {
-    const Camera& c = *p.camera;
-    if ((c.target - c.eye).norm() <= 0.0) throw key_error("camera", "eye and target coincide");
-    proj.basis = basis_of(c.target - c.eye, c.up);
-    proj.eye = c.eye - centre;
-    proj.cx = 0.5 * s * lay.plot_w;
-    proj.cy = s * lay.plot_y0 + 0.5 * s * lay.plot_h;
-    if (c.fov_deg > 0.0) {
-      if (c.fov_deg >= 179.0) throw key_error("camera", fmt::format("field of view {} degrees is not below 179", c.fov_deg));
-      proj.perspective = true;
-      proj.scale = 0.5 * s * lay.plot_h / std::tan(0.5 * c.fov_deg * M_PI / 180.0);
-      proj.near = 1e-6 * diagonal;
-    } else {
-      if (!(c.ortho_height > 0.0)) throw key_error("camera", "ortho_height must be positive for an orthographic camera");
-      proj.scale = s * lay.plot_h / c.ortho_height;
-      proj.eye = Vector3d::Zero();
-      // Centre the picture on the target.
-      const Vector3d t = c.target - centre;
-      proj.cx -= proj.scale * t.dot(proj.basis.right);
-      proj.cy += proj.scale * t.dot(proj.basis.up);
-    }
+void SceneRenderer::choose_projection() {
+  if (params.camera)
+    aim_camera(*params.camera);
+  else
+    frame_view();
+  if (params.camera && !projection.perspective) out.pixels_per_unit = projection.scale / s;
+}
+
+void SceneRenderer::aim_camera(const Camera& c) {
+  Projection& proj = projection;
+  if ((c.target - c.eye).norm() <= 0.0) throw key_error("camera", "eye and target coincide");
+  proj.basis = basis_of(c.target - c.eye, c.up);
+  proj.eye = c.eye - centre;
+  proj.cx = 0.5 * s * layout.plot_w;
+  proj.cy = s * layout.plot_y0 + 0.5 * s * layout.plot_h;
+  if (c.fov_deg > 0.0) {
+    if (c.fov_deg >= 179.0) throw key_error("camera", fmt::format("field of view {} degrees is not below 179", c.fov_deg));
+    proj.perspective = true;
+    proj.scale = 0.5 * s * layout.plot_h / std::tan(0.5 * c.fov_deg * M_PI / 180.0);
+    proj.near = 1e-6 * diagonal;
   } else {
-    proj.basis = view_basis(p.view);
-    // Frame: the extent of the data across the view.
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (mesh && !used[i]) continue;
-      const Vector3d q = cloud.positions[i] - centre;
-      const double x = q.dot(proj.basis.right), y = q.dot(proj.basis.up);
-      xmin = std::min(xmin, x);
-      xmax = std::max(xmax, x);
-      ymin = std::min(ymin, y);
-      ymax = std::max(ymax, y);
-    }
-    const double ext_x = std::max(xmax - xmin, 1e-9 * diagonal), ext_y = std::max(ymax - ymin, 1e-9 * diagonal);
-    const double fit = (1.0 - 2.0 * p.margin);
-    const double px_per_unit = std::min(fit * lay.plot_w / ext_x, fit * lay.plot_h / ext_y);
-    proj.scale = s * px_per_unit;
-    proj.cx = s * (0.5 * lay.plot_w) - proj.scale * 0.5 * (xmin + xmax);
-    proj.cy = s * (lay.plot_y0 + 0.5 * lay.plot_h) + proj.scale * 0.5 * (ymin + ymax);
-    result.pixels_per_unit = px_per_unit;
+    if (!(c.ortho_height > 0.0)) throw key_error("camera", "ortho_height must be positive for an orthographic camera");
+    proj.scale = s * layout.plot_h / c.ortho_height;
+    proj.eye = Vector3d::Zero();
+    // Centre the picture on the target.
+    const Vector3d t = c.target - centre;
+    proj.cx -= proj.scale * t.dot(proj.basis.right);
+    proj.cy += proj.scale * t.dot(proj.basis.up);
   }
-  if (p.camera && !proj.perspective) result.pixels_per_unit = proj.scale / s;
+}
 
-  // Vertices to sample space.
-  std::vector<Eigen::Vector3f> screen(n);
+// Frames the extent of the data across the view.
+void SceneRenderer::frame_view() {
+  Projection& proj = projection;
+  proj.basis = view_basis(params.view);
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (mesh && !used[i]) continue;
+    const Vector3d q = cloud.positions[i] - centre;
+    const double x = q.dot(proj.basis.right), y = q.dot(proj.basis.up);
+    xmin = std::min(xmin, x);
+    xmax = std::max(xmax, x);
+    ymin = std::min(ymin, y);
+    ymax = std::max(ymax, y);
+  }
+  const double ext_x = std::max(xmax - xmin, 1e-9 * diagonal), ext_y = std::max(ymax - ymin, 1e-9 * diagonal);
+  const double fit = (1.0 - 2.0 * params.margin);
+  const double px_per_unit = std::min(fit * layout.plot_w / ext_x, fit * layout.plot_h / ext_y);
+  proj.scale = s * px_per_unit;
+  proj.cx = s * (0.5 * layout.plot_w) - proj.scale * 0.5 * (xmin + xmax);
+  proj.cy = s * (layout.plot_y0 + 0.5 * layout.plot_h) + proj.scale * 0.5 * (ymin + ymax);
+  out.pixels_per_unit = px_per_unit;
+}
+
+void SceneRenderer::project_vertices() {
+  screen.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) screen[i] = proj(cloud.positions[i] - centre);
+    for (std::size_t i = r.begin(); i != r.end(); ++i) screen[i] = projection(cloud.positions[i] - centre);
   });
-  ColorScale scale = result.scale;
-  const std::vector<Eigen::Vector3f> colors = vertex_colors(cloud, p, mesh, scale, field);
+  scale = out.scale;
+  colors = vertex_colors(cloud, params, mesh, scale, field);
+  buf = Buffers(params.size.width * s, params.size.height * s);
+  bands = (buf.h + kBandRows - 1) / kBandRows;
+  lights = make_lights();
+}
 
-  Buffers buf(p.size.width * s, p.size.height * s);
-  const int bands = (buf.h + kBandRows - 1) / kBandRows;
-  const Lights lights = make_lights();
-  auto to_camera = [&](const Vector3d& v) {
-    return Eigen::Vector3f(float(v.dot(proj.basis.right)), float(v.dot(proj.basis.up)), float(-v.dot(proj.basis.forward)));
-  };
+Eigen::Vector3f SceneRenderer::to_camera(const Vector3d& v) const {
+  const Basis& b = projection.basis;
+  return Eigen::Vector3f(float(v.dot(b.right)), float(v.dot(b.up)), float(-v.dot(b.forward)));
+}
 
-  if (mesh) {
-    const std::size_t f = triangles.size();
-    std::vector<Eigen::Vector3f> normals(p.flat_shading ? f : n, Eigen::Vector3f::Zero());
-    std::vector<Vector3d> face_normals(f);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t t = r.begin(); t != r.end(); ++t) {
-        const Vector3d& a = cloud.positions[std::size_t(triangles[t][0])];
-        face_normals[t] = (cloud.positions[std::size_t(triangles[t][1])] - a).cross(cloud.positions[std::size_t(triangles[t][2])] - a);
-      }
-    });
-    if (p.flat_shading) {
-      for (std::size_t t = 0; t < f; ++t) normals[t] = to_camera(face_normals[t]);
-    } else {
-      // Area-weighted vertex normals (the cross product's length is twice the area).
-      std::vector<Vector3d> sum(n, Vector3d::Zero());
-      for (std::size_t t = 0; t < f; ++t)
-        for (int k = 0; k < 3; ++k) sum[std::size_t(triangles[t][k])] += face_normals[t];
-      for (std::size_t i = 0; i < n; ++i) normals[i] = to_camera(sum[i]);
+void SceneRenderer::compute_normals() {
+  const std::size_t f = triangles.size();
+  normals.assign(params.flat_shading ? f : n, Eigen::Vector3f::Zero());
+  std::vector<Vector3d> face_normals(f);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const Vector3d& a = cloud.positions[std::size_t(triangles[t][0])];
+      face_normals[t] = (cloud.positions[std::size_t(triangles[t][1])] - a).cross(cloud.positions[std::size_t(triangles[t][2])] - a);
     }
-    std::vector<std::array<std::int32_t, 2>> rows(f);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t t = r.begin(); t != r.end(); ++t) {
-        const Eigen::Vector3f& a = screen[std::size_t(triangles[t][0])];
-        const Eigen::Vector3f& b = screen[std::size_t(triangles[t][1])];
-        const Eigen::Vector3f& c = screen[std::size_t(triangles[t][2])];
-        if (a.z() == kNoDepth || b.z() == kNoDepth || c.z() == kNoDepth) {
-          rows[t] = {1, 0};  // behind the eye: not drawn (no clipping)
-          continue;
-        }
-        const float lo = std::min({a.y(), b.y(), c.y()}), hi = std::max({a.y(), b.y(), c.y()});
-        const float left = std::min({a.x(), b.x(), c.x()}), right = std::max({a.x(), b.x(), c.x()});
-        if (hi < 0.f || lo >= float(buf.h) || right < 0.f || left >= float(buf.w)) {
-          rows[t] = {1, 0};
-          continue;
-        }
-        rows[t] = {std::max(0, int(std::floor(lo))), std::min(buf.h - 1, int(std::ceil(hi)))};
-      }
-    });
-    const Bins bins = bin_by_rows(f, bands, rows);
-    MeshInputs in{&triangles, &screen, &colors, &normals, p.flat_shading, proj.perspective, p.wireframe, 0.55f * float(s)};
-    tbb::parallel_for(0, bands, [&](int band) { raster_triangles_band(in, bins, band, buf, lights); });
-    for (const auto& r : rows) result.triangles_drawn += r[0] <= r[1] ? 1 : 0;
+  });
+  if (params.flat_shading) {
+    for (std::size_t t = 0; t < f; ++t) normals[t] = to_camera(face_normals[t]);
   } else {
-    // Splat size from the projected density: the points spread over the framed area.
-    float lo_x = 1e30f, hi_x = -1e30f, lo_y = 1e30f, hi_y = -1e30f;
-    for (const Eigen::Vector3f& q : screen)
-      if (q.z() != kNoDepth) {
-        lo_x = std::min(lo_x, q.x());
-        hi_x = std::max(hi_x, q.x());
-        lo_y = std::min(lo_y, q.y());
-        hi_y = std::max(hi_y, q.y());
-      }
-    const double area_px = std::max(1.0, double(hi_x - lo_x) * double(hi_y - lo_y)) / double(s * s);
-    const double diameter_px = p.point_size_px > 0.0 ? p.point_size_px : std::clamp(3.0 * std::sqrt(area_px / double(n)), 1.5, 24.0);
-    const float radius = float(0.5 * diameter_px * s);
-    std::vector<std::array<std::int32_t, 2>> rows(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const Eigen::Vector3f& q = screen[i];
-        if (q.z() == kNoDepth || q.y() + radius < 0.f || q.y() - radius >= float(buf.h) || q.x() + radius < 0.f || q.x() - radius >= float(buf.w)) {
-          rows[i] = {1, 0};
-          continue;
-        }
-        rows[i] = {std::max(0, int(std::floor(q.y() - radius))), std::min(buf.h - 1, int(std::ceil(q.y() + radius)))};
-      }
-    });
-    std::vector<float> light;
-    if (cloud.has_normals()) {
-      light.resize(n);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          const Eigen::Vector3f nn = to_camera(cloud.normals[i]);
-          light[i] = nn.squaredNorm() > 0.f ? 0.45f + 0.55f * std::abs(nn.normalized().dot(lights.key)) : 1.f;
-        }
-      });
-    }
-    const Bins bins = bin_by_rows(n, bands, rows);
-    PointInputs in{&screen, &colors, light.empty() ? nullptr : &light, radius};
-    tbb::parallel_for(0, bands, [&](int band) { raster_points_band(in, bins, band, buf); });
-    for (const auto& r : rows) result.points_drawn += r[0] <= r[1] ? 1 : 0;
-    if (p.eye_dome) {
-      float zmin = kNoDepth, zmax = -kNoDepth;
-      for (const Eigen::Vector3f& q : screen)
-        if (q.z() != kNoDepth) {
-          zmin = std::min(zmin, q.z());
-          zmax = std::max(zmax, q.z());
-        }
-      // A splat's diameter in depth units (perspective: at the middle depth).
-      const float ignore = float(2.0 * radius / proj.scale * (proj.perspective ? 0.5 * (zmin + zmax) : 1.0));
-      eye_dome(buf, s, std::max(zmax - zmin, float(1e-6 * diagonal)), ignore);
-    }
+    // Area-weighted vertex normals (the cross product's length is twice the area).
+    std::vector<Vector3d> sum(n, Vector3d::Zero());
+    for (std::size_t t = 0; t < f; ++t)
+      for (int k = 0; k < 3; ++k) sum[std::size_t(triangles[t][k])] += face_normals[t];
+    for (std::size_t i = 0; i < n; ++i) normals[i] = to_camera(sum[i]);
   }
+}
 
-  // Down to the picture: the mean of each pixel's samples, the background where none is covered.
-  Image img(p.size.width, p.size.height);
+// The sample rows each face spans, {1, 0} for a face not drawn.
+std::vector<std::array<std::int32_t, 2>> SceneRenderer::triangle_rows() const {
+  std::vector<std::array<std::int32_t, 2>> rows(triangles.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), 65536), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const Eigen::Vector3f& a = screen[std::size_t(triangles[t][0])];
+      const Eigen::Vector3f& b = screen[std::size_t(triangles[t][1])];
+      const Eigen::Vector3f& c = screen[std::size_t(triangles[t][2])];
+      if (a.z() == kNoDepth || b.z() == kNoDepth || c.z() == kNoDepth) {
+        rows[t] = {1, 0};  // behind the eye: not drawn (no clipping)
+        continue;
+      }
+      const float lo = std::min({a.y(), b.y(), c.y()}), hi = std::max({a.y(), b.y(), c.y()});
+      const float left = std::min({a.x(), b.x(), c.x()}), right = std::max({a.x(), b.x(), c.x()});
+      if (hi < 0.f || lo >= float(buf.h) || right < 0.f || left >= float(buf.w)) {
+        rows[t] = {1, 0};
+        continue;
+      }
+      rows[t] = {std::max(0, int(std::floor(lo))), std::min(buf.h - 1, int(std::ceil(hi)))};
+    }
+  });
+  return rows;
+}
+
+void SceneRenderer::raster_mesh() {
+  const std::vector<std::array<std::int32_t, 2>> rows = triangle_rows();
+  const Bins bins = bin_by_rows(triangles.size(), bands, rows);
+  MeshInputs in{&triangles, &screen, &colors, &normals, params.flat_shading, projection.perspective, params.wireframe, 0.55f * float(s)};
+  tbb::parallel_for(0, bands, [&](int band) { raster_triangles_band(in, bins, band, buf, lights); });
+  for (const auto& r : rows) out.triangles_drawn += r[0] <= r[1] ? 1 : 0;
+}
+
+// From the projected density: the points spread over the framed area.
+void SceneRenderer::size_splats() {
+  float lo_x = 1e30f, hi_x = -1e30f, lo_y = 1e30f, hi_y = -1e30f;
+  for (const Eigen::Vector3f& q : screen)
+    if (q.z() != kNoDepth) {
+      lo_x = std::min(lo_x, q.x());
+      hi_x = std::max(hi_x, q.x());
+      lo_y = std::min(lo_y, q.y());
+      hi_y = std::max(hi_y, q.y());
+    }
+  const double area_px = std::max(1.0, double(hi_x - lo_x) * double(hi_y - lo_y)) / double(s * s);
+  const double diameter_px = params.point_size_px > 0.0 ? params.point_size_px : std::clamp(3.0 * std::sqrt(area_px / double(n)), 1.5, 24.0);
+  radius = float(0.5 * diameter_px * s);
+}
+
+void SceneRenderer::light_points() {
+  light.clear();
+  if (!cloud.has_normals()) return;
+  light.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Eigen::Vector3f nn = to_camera(cloud.normals[i]);
+      light[i] = nn.squaredNorm() > 0.f ? 0.45f + 0.55f * std::abs(nn.normalized().dot(lights.key)) : 1.f;
+    }
+  });
+}
+
+// The sample rows each splat spans, {1, 0} for a splat not drawn.
+std::vector<std::array<std::int32_t, 2>> SceneRenderer::splat_rows() const {
+  std::vector<std::array<std::int32_t, 2>> rows(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Eigen::Vector3f& q = screen[i];
+      if (q.z() == kNoDepth || q.y() + radius < 0.f || q.y() - radius >= float(buf.h) || q.x() + radius < 0.f || q.x() - radius >= float(buf.w)) {
+        rows[i] = {1, 0};
+        continue;
+      }
+      rows[i] = {std::max(0, int(std::floor(q.y() - radius))), std::min(buf.h - 1, int(std::ceil(q.y() + radius)))};
+    }
+  });
+  return rows;
+}
+
+void SceneRenderer::raster_points() {
+  const std::vector<std::array<std::int32_t, 2>> rows = splat_rows();
+  const Bins bins = bin_by_rows(n, bands, rows);
+  PointInputs in{&screen, &colors, light.empty() ? nullptr : &light, radius};
+  tbb::parallel_for(0, bands, [&](int band) { raster_points_band(in, bins, band, buf); });
+  for (const auto& r : rows) out.points_drawn += r[0] <= r[1] ? 1 : 0;
+}
+
+void SceneRenderer::apply_eye_dome() {
+  float zmin = kNoDepth, zmax = -kNoDepth;
+  for (const Eigen::Vector3f& q : screen)
+    if (q.z() != kNoDepth) {
+      zmin = std::min(zmin, q.z());
+      zmax = std::max(zmax, q.z());
+    }
+  // A splat's diameter in depth units (perspective: at the middle depth).
+  const float ignore = float(2.0 * radius / projection.scale * (projection.perspective ? 0.5 * (zmin + zmax) : 1.0));
+  eye_dome(buf, s, std::max(zmax - zmin, float(1e-6 * diagonal)), ignore);
+}
+
+// The mean of each pixel's samples, the background where none is covered.
+void SceneRenderer::downsample() {
+  const int width = params.size.width, height = params.size.height;
+  image = Image(width, height);
   const float inv = 1.f / float(s * s);
-  tbb::parallel_for(tbb::blocked_range<int>(0, p.size.height, 8), [&](const tbb::blocked_range<int>& rows) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, height, 8), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y != rows.end(); ++y) {
-      const Eigen::Vector3f bg = background(y, p.size.height);
-      for (int x = 0; x < p.size.width; ++x) {
+      const Eigen::Vector3f bg = background(y, height);
+      for (int x = 0; x < width; ++x) {
         Eigen::Vector3f sum = Eigen::Vector3f::Zero();
         for (int j = 0; j < s; ++j)
           for (int i = 0; i < s; ++i) {
@@ -689,17 +684,45 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
             sum += buf.depth[k] == kNoDepth ? bg : unpack(buf.color[k]);
           }
         sum *= inv;
-        std::uint8_t* px = img.at(x, y);
+        std::uint8_t* px = image.at(x, y);
         for (int c = 0; c < 3; ++c) px[c] = std::uint8_t(std::clamp(std::lround(sum[c]), 0l, 255l));
       }
     }
   });
+}
 
-  if (legend) draw_legend(img, lay, scale, p.field, text);
-  if (!p.title.empty()) text.draw(img, 10, title_h - title_h / 4, p.title, std::max(12, title_h * 2 / 3), {20, 20, 20});
-  if (result.pixels_per_unit > 0.0) draw_scale_bar(img, lay, result.pixels_per_unit, text);
-  result.image = std::move(img);
-  return result;
+void SceneRenderer::annotate() {
+  if (legend) draw_legend(image, layout, scale, params.field, *text);
+  if (!params.title.empty()) text->draw(image, 10, title_h - title_h / 4, params.title, std::max(12, title_h * 2 / 3), {20, 20, 20});
+  if (out.pixels_per_unit > 0.0) draw_scale_bar(image, layout, out.pixels_per_unit, *text);
+}
+
+RenderResult SceneRenderer::result() && {
+  out.image = std::move(image);
+  return std::move(out);
+}
+
+}  // namespace detail
+
+RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& triangles, const RenderParams& p) {
+  detail::SceneRenderer r(cloud, triangles, p);
+  r.select_field();
+  r.frame_box();
+  r.lay_out();
+  r.choose_projection();
+  r.project_vertices();
+  if (r.mesh) {
+    r.compute_normals();
+    r.raster_mesh();
+  } else {
+    r.size_splats();
+    r.light_points();
+    r.raster_points();
+    if (p.eye_dome) r.apply_eye_dome();
+  }
+  r.downsample();
+  r.annotate();
+  return std::move(r).result();
 }
 
 }  // namespace pointsurf

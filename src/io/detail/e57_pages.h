@@ -75,6 +75,8 @@ public:
   /// Overwrites bytes already written at `logical`.
   void patch(std::uint64_t logical, const void* data, std::size_t size);
   void reserve(std::size_t size) { bytes_.reserve(size); }
+  /// The logical bytes written so far.
+  std::string_view bytes() const noexcept { return {bytes_.data(), bytes_.size()}; }
   /// Writes the physical file: the logical bytes padded to whole pages, each followed by its CRC.
   void write_pages(FileWriter& out) const;
 
