@@ -81,7 +81,7 @@ Refine everywhere() {
 
 TriangleMesh to_mesh(const IsoSurface& s) {
   TriangleMesh m;
-  m.vertices.positions = s.vertices.positions;
+  m.vertices.positions = s.vertices;
   m.vertices.normals = s.normals;
   for (const auto& t : s.triangles) m.triangles.emplace_back(int(t[0]), int(t[1]), int(t[2]));
   return m;
@@ -131,7 +131,7 @@ MeshTopology expect_closed_manifold(const IsoSurface& s, bool smooth = true) {
 
 double max_abs(const IsoSurface& s, const Field& distance) {
   double worst = 0.0;
-  for (const Vector3d& v : s.vertices.positions) worst = std::max(worst, std::abs(distance(v)));
+  for (const Vector3d& v : s.vertices) worst = std::max(worst, std::abs(distance(v)));
   return worst;
 }
 
@@ -156,8 +156,8 @@ TEST(IsoSurface, SphereNearSurfaceOctreeIsClosedGenusZeroAndOnTheSurface) {
   refined.root_refinement_steps = 8;
   EXPECT_LE(max_abs(extract_iso_surface(iso, lattice, refined), f), 1e-9);
   // Normals point away from the centre.
-  for (std::size_t i = 0; i < s.vertices.positions.size(); ++i)
-    EXPECT_GT(s.normals[i].dot((s.vertices.positions[i] - Vector3d(0.05, -0.02, 0.03)).normalized()), 0.999);
+  for (std::size_t i = 0; i < s.vertices.size(); ++i)
+    EXPECT_GT(s.normals[i].dot((s.vertices[i] - Vector3d(0.05, -0.02, 0.03)).normalized()), 0.999);
 }
 
 TEST(IsoSurface, UniformAndNearSurfaceOctreesGiveTheSameMesh) {
@@ -165,7 +165,7 @@ TEST(IsoSurface, UniformAndNearSurfaceOctreesGiveTheSameMesh) {
   const IsoLattice lattice = unit_lattice(5);
   const IsoSurface a = extract_iso_surface(AnalyticIso(f, lattice, near_surface(f, 5)), lattice, {});
   const IsoSurface b = extract_iso_surface(AnalyticIso(f, lattice, everywhere()), lattice, {});
-  EXPECT_EQ(a.vertices.positions, b.vertices.positions);
+  EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.triangles, b.triangles);
 }
 
@@ -228,7 +228,7 @@ TEST(IsoSurface, OctreeShallowerThanTheLatticeIsMeshedAtItsDeepestLevel) {
   const IsoSurface a = extract_iso_surface(AnalyticIso(f, deep, near_surface(f, 5)), deep, {});
   const IsoSurface b = extract_iso_surface(AnalyticIso(f, shallow, near_surface(f, 5)), shallow, {});
   EXPECT_EQ(a.triangles, b.triangles);
-  EXPECT_EQ(a.vertices.positions, b.vertices.positions);
+  EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(expect_closed_manifold(a).genus(), 1);
 }
 
@@ -305,7 +305,7 @@ TEST(IsoSurface, RandomCornerValuesGiveClosedManifoldSurfaces) {
       const IsoSurface s = extract_iso_surface(iso, lattice, {});
       EXPECT_GT(expect_closed_manifold(s, false).triangles, 100u);
       // Every vertex is a crossing on a lattice edge (or a loop centre inside a cell).
-      for (std::size_t i = 0; i < s.vertices.positions.size(); ++i) EXPECT_NEAR(iso.value(s.vertices.positions[i]), 0.0, 0.6);
+      for (std::size_t i = 0; i < s.vertices.size(); ++i) EXPECT_NEAR(iso.value(s.vertices[i]), 0.0, 0.6);
     }
 }
 
@@ -354,7 +354,7 @@ TEST(IsoSurface, SameMeshUnderAnyThreadCount) {
   IsoSurface one, many;
   tbb::task_arena(1).execute([&] { one = extract_iso_surface(iso, lattice, params); });
   tbb::task_arena(8).execute([&] { many = extract_iso_surface(iso, lattice, params); });
-  EXPECT_EQ(one.vertices.positions, many.vertices.positions);
+  EXPECT_EQ(one.vertices, many.vertices);
   EXPECT_EQ(one.normals, many.normals);
   EXPECT_EQ(one.triangles, many.triangles);
 }
@@ -368,7 +368,7 @@ TEST(IsoSurface, SurfaceLeavingTheLatticeIsOpenOnlyAtItsFaces) {
   EXPECT_EQ(topo.non_manifold_edges, 0u);
   EXPECT_EQ(topo.non_manifold_vertices, 0u);
   EXPECT_EQ(topo.boundary_loops.size(), 1u);
-  for (int v : topo.boundary_loops.at(0).vertices) EXPECT_NEAR(s.vertices.positions[v].x(), 1.0, 1e-12);
+  for (int v : topo.boundary_loops.at(0).vertices) EXPECT_NEAR(s.vertices[v].x(), 1.0, 1e-12);
 }
 
 TEST(IsoSurface, CancelsAndRejectsBadLattices) {

@@ -60,7 +60,7 @@ HtmlReportView view() {
   m.positions = {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f};
   m.indices = {0, 1, 2};
   m.colors = {1, 2, 3, 4, 5, 6, 7, 8, 9};
-  m.vertices.positions = 3;
+  m.vertices = 3;
   m.triangles = 1;
   m.original_triangles = 1;
   v.mesh = m;

@@ -157,7 +157,7 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   EXPECT_NEAR(v.centre[1], 4e6, 0.1);
   EXPECT_NEAR(v.radius, std::sqrt(3.0), 0.1);
   ASSERT_TRUE(v.mesh);
-  EXPECT_EQ(v.mesh->vertices.positions, sphere.vertices.positions.size());
+  EXPECT_EQ(v.mesh->vertices, sphere.vertices.positions.size());
   EXPECT_EQ(v.mesh->triangles, sphere.triangles.size());
   EXPECT_EQ(v.mesh->positions.size(), 3 * sphere.vertices.positions.size());
   EXPECT_EQ(v.mesh->indices.size(), 3 * sphere.triangles.size());
@@ -206,7 +206,7 @@ TEST(HtmlReportView, TheBrowsersLimitsAreKeptAndSaid) {
   EXPECT_TRUE(v.mesh_decimated);
   EXPECT_LE(v.mesh->triangles, 1000u);
   EXPECT_EQ(v.mesh->original_triangles, 5120u);
-  EXPECT_EQ(v.mesh->positions.size(), 3 * v.mesh->vertices.positions);
+  EXPECT_EQ(v.mesh->positions.size(), 3 * v.mesh->vertices);
   ASSERT_TRUE(v.cloud);
   EXPECT_TRUE(v.cloud_subsampled);
   EXPECT_EQ(v.cloud->points, 400u);
