@@ -583,9 +583,9 @@ double DelaunayExtraction::orientation_score(std::size_t begin, std::size_t end)
 }
 
 void DelaunayExtraction::build_mesh() {
-  mesh.mean_spacing = setup.spacing;
+  reconstruction.mean_spacing = setup.spacing;
   if (cloud.has_normals()) {
-    mesh.mesh = TriangleMesh::from_cloud(cloud, std::move(out_tris));
+    reconstruction.mesh = TriangleMesh::from_cloud(cloud, std::move(out_tris));
     return;
   }
   // Area-weighted face normals per vertex decide the sign of each pole vector; samples without
@@ -615,19 +615,19 @@ void DelaunayExtraction::build_mesh() {
   });
   PointCloud copy = cloud;
   copy.normals = std::move(normals);
-  mesh.mesh = TriangleMesh::from_cloud(std::move(copy), std::move(out_tris));
+  reconstruction.mesh = TriangleMesh::from_cloud(std::move(copy), std::move(out_tris));
 }
 
 // Undersampled spots (random samples, thin parts) leave holes where the candidates missed a
 // triangle or the walk met a conflict: the hole filler every reconstruction shares closes those
 // up to the perimeter limit, by the vertex normals of build_mesh.
 void DelaunayExtraction::fill_small_holes() {
-  const HoleFillStats filled = fill_holes(mesh.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
+  const HoleFillStats filled = fill_holes(reconstruction.mesh, HoleFillParams{params.max_hole_perimeter_in_spacings});
   stats.holes_filled = filled.holes_filled;
   stats.fill_triangles = filled.triangles_added;
   stats.fill_triangles_removed = filled.triangles_removed;
-  mesh.topology = analyze_topology(mesh.mesh);
-  mesh.unused_points = mesh.topology.isolated_vertices;
+  reconstruction.topology = analyze_topology(reconstruction.mesh);
+  reconstruction.unused_points = reconstruction.topology.isolated_vertices;
 }
 
 ReconstructionResult extract_delaunay_surface(const PointCloud& cloud, const DelaunaySetup& setup,

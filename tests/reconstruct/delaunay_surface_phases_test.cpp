@@ -272,13 +272,13 @@ TEST(DelaunayExtractionPhases, MeshNormalsAreThePoleVectorsSignedByTheFaces) {
   walk(x);
   x.orient_pieces();
   x.build_mesh();
-  const TriangleMesh& mesh = x.mesh.mesh;
+  const TriangleMesh& mesh = x.reconstruction.mesh;
   ASSERT_EQ(mesh.triangles.size(), 4u);
   ASSERT_EQ(mesh.vertex_normals.size(), 4u);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(mesh.vertex_normals[i], pts[i].normalized()) << i;
   // The three faces at a vertex of a regular tetrahedron sum to the direction of the vertex.
   EXPECT_NEAR((mesh.vertex_normals[3] - pts[3].normalized()).norm(), 0.0, 1e-12);
-  EXPECT_EQ(x.mesh.mean_spacing, 1.0);
+  EXPECT_EQ(x.reconstruction.mean_spacing, 1.0);
 }
 
 TEST(DelaunayExtractionPhases, SmallHoleFillingClosesAMissingFace) {
@@ -294,13 +294,13 @@ TEST(DelaunayExtractionPhases, SmallHoleFillingClosesAMissingFace) {
   DelaunayExtraction x(cloud, setup, three, params, stats);
   walk(x);
   x.build_mesh();
-  ASSERT_EQ(x.mesh.mesh.triangles.size(), 3u);
+  ASSERT_EQ(x.reconstruction.mesh.triangles.size(), 3u);
   x.fill_small_holes();
   EXPECT_EQ(stats.holes_filled, 1u);
   EXPECT_EQ(stats.fill_triangles, 1u);
-  EXPECT_EQ(x.mesh.mesh.triangles.size(), 4u);
-  EXPECT_TRUE(x.mesh.topology.watertight());
-  EXPECT_EQ(x.mesh.unused_points, 0u);
+  EXPECT_EQ(x.reconstruction.mesh.triangles.size(), 4u);
+  EXPECT_TRUE(x.reconstruction.topology.watertight());
+  EXPECT_EQ(x.reconstruction.unused_points, 0u);
 }
 
 }  // namespace

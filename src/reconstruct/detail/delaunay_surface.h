@@ -93,14 +93,14 @@ public:
   /// Reads out_* (and cloud normals or the poles); flips the pieces facing inwards in out_tris;
   /// stats.flipped_pieces.
   void orient_pieces();
-  /// Reads out_tris (moved out) and the poles; produces mesh.mesh through the input points,
-  /// with vertex normals from the signed pole vectors when the cloud has none.
+  /// Reads out_tris (moved out) and the poles; produces reconstruction.mesh through the input
+  /// points, with vertex normals from the signed pole vectors when the cloud has none.
   void build_mesh();
-  /// Reads mesh.mesh; closes its small holes (fill_holes) and fills mesh.topology,
-  /// mesh.unused_points and the stats' hole counts.
+  /// Reads reconstruction.mesh; closes its small holes (fill_holes) and fills its topology and
+  /// unused_points and the stats' hole counts.
   void fill_small_holes();
   /// The reconstruction built by the phases.
-  ReconstructionResult result() && { return std::move(mesh); }
+  ReconstructionResult result() && { return std::move(reconstruction); }
 
   const PointCloud& cloud;
   const DelaunaySetup& setup;
@@ -120,7 +120,7 @@ public:
   std::vector<Triangle> out_tris;
   std::vector<int> out_piece;  // piece of each output triangle
   std::vector<int> out_src;    // candidate triangle of each output triangle
-  ReconstructionResult mesh;
+  ReconstructionResult reconstruction;
 
 private:
   int seed_of(int k) const;
