@@ -25,6 +25,7 @@
 #include "reconstruct/detail/exact_copies.h"
 #include "pointsurf/core/error.h"
 #include "reconstruct/detail/hole_filling.h"
+#include "reconstruct/detail/region_growing.h"
 #include "reconstruct/detail/triangulate_half_edges.h"
 
 namespace pointsurf {
@@ -70,12 +71,8 @@ constexpr double kLineReachFactor = 4.0;
 
 double radians(double degrees) { return degrees * std::numbers::pi / 180.0; }
 
-// A triangle proposed by an umbrella, as (smallest index, next, next) in its orientation.
-struct Candidate {
-  std::array<std::uint32_t, 3> v;
-  float min_angle_deg;
-  std::uint8_t votes;
-};
+using Candidate = detail::GrowthCandidate;  // reconstruct/detail/region_growing.h
+using detail::CandidateEdge;
 
 Candidate make_candidate(std::uint32_t a, std::uint32_t b, std::uint32_t c, double min_angle_deg) {
   Candidate cand{};
@@ -86,13 +83,6 @@ Candidate make_candidate(std::uint32_t a, std::uint32_t b, std::uint32_t c, doub
   cand.votes = 1;
   return cand;
 }
-
-// A directed edge (from, to) of candidate `id`, whose third vertex is `third`; key: the kd-tree
-// rank of `from` (high half) and `to`.
-struct CandidateEdge {
-  std::uint64_t key;
-  std::uint32_t id, third;
-};
 
 // Inner angles of triangle abc, degrees; false if it is degenerate.
 bool inner_angles(const Vector3d& a, const Vector3d& b, const Vector3d& c, double& smallest, double& largest) {
@@ -467,6 +457,25 @@ bool hole_holds_unused_point(const std::vector<std::uint32_t>& loop, const std::
   return false;
 }
 
+// The perimeter limit factor of a hole loop: where the density changes abruptly along it, the
+// limit follows the sparsest corner's spacing, not the mean; a hole that holds an unused point
+// (see hole_holds_unused_point) gets kHoldingPointFactor.
+detail::LoopLimit loop_limit(const std::vector<std::uint32_t>& loop, const std::vector<Vector3d>& positions,
+                             const std::vector<Vector3d>& normals, const std::vector<double>& local_spacing,
+                             const std::vector<std::uint8_t>& unused, const KdTree& tree, std::vector<Vector2d>& polygon,
+                             std::vector<Neighbor>& neighbors) {
+  double sum = 0.0, largest = 0.0;
+  for (std::uint32_t v : loop) {
+    sum += local_spacing[v];
+    largest = std::max(largest, local_spacing[v]);
+  }
+  double sparsest = largest * double(loop.size()) / sum;
+  if (sparsest < kAbruptDensityRatio) sparsest = 1.0;
+  if (hole_holds_unused_point(loop, positions, normals, unused, tree, polygon, neighbors))
+    return detail::LoopLimit{std::max(sparsest, kHoldingPointFactor), true};
+  return detail::LoopLimit{sparsest, false};
+}
+
 // Inserts the usable points that no triangle uses (their umbrella triangles lost to
 // neighbouring ones, or they sat in a hole that was filled without them) into the mesh: into
 // the triangle whose plane they project into (along its normal), split in three, or else onto
@@ -639,30 +648,26 @@ void TriangulateParams::validate() const {
   fields().validate(*this, "reconstruct_region_growing");
 }
 
-TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
-                                             const ProgressCallback& progress) {
-  const auto t_start = std::chrono::steady_clock::now();
-  check_params(cloud, params, tree);
-  const std::size_t n = cloud.size();
-  std::optional<KdTree> own_tree;
-  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
-  detail::ProgressReporter reporter(progress, 0.0, 1.0, 0);
+namespace detail {
 
-  TriangulateResult result;
-  result.mean_spacing = mean_spacing(*tree);
-  const double duplicate2 = std::pow(kDuplicateFraction * result.mean_spacing, 2);
+RegionGrowing::RegionGrowing(const PointCloud& cloud, const TriangulateParams& params, const KdTree& tree,
+                             const ProgressCallback& progress)
+    : cloud(cloud), params(params), tree(tree), reporter(progress, 0.0, 1.0, 0), n(cloud.size()),
+      order(tree.spatial_order()), min_dihedral_cos(std::cos(radians(params.max_dihedral_deg))), progress_(progress) {
+  out.mean_spacing = mean_spacing(tree);
+}
 
-  // Pass 1: unit normals, duplicates, local spacing.
-  std::vector<Vector3d> normals(n);
-  std::vector<double> local_spacing(n, result.mean_spacing);
-  std::vector<std::uint8_t> usable(n, 0), line_like(n, 0), on_line(n, 0);
-  // The two nearest distinct neighbours of each point (kNone where missing).
-  std::vector<std::array<std::uint32_t, 2>> nearest(n, {kNone, kNone});
-  const std::span<const std::uint32_t> order = tree->spatial_order();
+void RegionGrowing::measure_points() {
+  const double duplicate2 = std::pow(kDuplicateFraction * out.mean_spacing, 2);
+  normals.assign(n, Vector3d::Zero());
+  local_spacing.assign(n, out.mean_spacing);
+  usable.assign(n, 0);
+  line_like.assign(n, 0);
+  nearest.assign(n, {kNone, kNone});
   {
     // Exact copies by sorting: a stack of more copies than the kNN below sees stays one point.
     const std::vector<std::uint8_t> copies = detail::later_exact_copies(cloud.positions);
-    detail::ProgressReporter pass(progress, 0.0, 0.1, n);
+    detail::ProgressReporter pass(progress_, 0.0, 0.1, n);
     tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
       if (pass.cancelled()) return;
@@ -670,7 +675,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
       std::vector<double> angles;
       for (std::size_t pos = r.begin(); pos != r.end(); ++pos) {
         const std::uint32_t i = order[pos];
-        tree->knn(cloud.positions[i], kSpacingNeighbours, nb);
+        tree.knn(cloud.positions[i], kSpacingNeighbours, nb);
         bool duplicate = copies[i] != 0;
         double sum = 0.0;
         std::size_t count = 0;
@@ -687,7 +692,7 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
         const double length = cloud.normals[i].norm();
         const bool has_normal = length > 0.0 && std::isfinite(length);
         normals[i] = has_normal ? Vector3d(cloud.normals[i] / length) : Vector3d::Zero();
-        usable[i] = static_cast<std::uint8_t>(has_normal && !duplicate && result.mean_spacing > 0.0);
+        usable[i] = static_cast<std::uint8_t>(has_normal && !duplicate && out.mean_spacing > 0.0);
         line_like[i] = static_cast<std::uint8_t>(usable[i] && lies_on_line(cloud.positions, i, normals[i], nb, angles));
       }
       pass.advance(r.size());
@@ -698,26 +703,31 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   for (std::size_t i = 0; i < n; ++i) {
     spacing_sum += local_spacing[i];
     // Duplicates are counted by their later copies: the first of a group stays usable.
-    if (!usable[i] && normals[i] != Vector3d::Zero()) ++result.duplicate_points;
+    if (!usable[i] && normals[i] != Vector3d::Zero()) ++out.duplicate_points;
   }
-  result.local_spacing_mean = spacing_sum / double(n);
+  out.local_spacing_mean = spacing_sum / double(n);
+}
 
-  // A point is on a scan line when it and one of its two nearest neighbours look so (see
-  // kLineGapDeg). An explicit radius is the user's reach: nothing is widened then.
+// A point is on a scan line when it and one of its two nearest neighbours look so (see
+// kLineGapDeg). An explicit radius is the user's reach: nothing is widened then.
+void RegionGrowing::widen_scan_lines() {
+  on_line.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     on_line[i] = static_cast<std::uint8_t>(params.radius.in_spacings() && line_like[i] && ((nearest[i][0] != kNone && line_like[nearest[i][0]]) ||
                                                                                     (nearest[i][1] != kNone && line_like[nearest[i][1]])));
-  std::vector<double> radius_of(n);
+  radius_of.assign(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     radius_of[i] = params.radius.resolve(local_spacing[i]);
     if (on_line[i]) radius_of[i] *= kLineReachFactor;
   }
+}
 
-  // Pass 2: umbrellas, in parallel; candidates gathered per thread.
-  const Setup setup{cloud, params, *tree, normals, local_spacing, usable, radius_of, on_line};
+// Umbrellas in parallel; candidates gathered per thread.
+void RegionGrowing::propose_umbrellas() {
+  const Setup setup{cloud, params, tree, normals, local_spacing, usable, radius_of, on_line};
   tbb::enumerable_thread_specific<UmbrellaBuffers> umbrella_buffers;
   {
-    detail::ProgressReporter pass(progress, 0.1, 0.7, n);
+    detail::ProgressReporter pass(progress_, 0.1, 0.7, n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
       if (pass.cancelled()) return;
       UmbrellaBuffers& b = umbrella_buffers.local();
@@ -726,20 +736,18 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     });
     pass.throw_if_cancelled();
   }
-  std::vector<Candidate> candidates;
-  {
-    std::size_t total = 0;
-    for (const UmbrellaBuffers& b : umbrella_buffers) total += b.candidates.size();
-    candidates.reserve(total);
-    for (UmbrellaBuffers& b : umbrella_buffers) {
-      candidates.insert(candidates.end(), b.candidates.begin(), b.candidates.end());
-      std::vector<Candidate>().swap(b.candidates);
-    }
+  candidates.clear();
+  std::size_t total = 0;
+  for (const UmbrellaBuffers& b : umbrella_buffers) total += b.candidates.size();
+  candidates.reserve(total);
+  for (UmbrellaBuffers& b : umbrella_buffers) {
+    candidates.insert(candidates.end(), b.candidates.begin(), b.candidates.end());
+    std::vector<Candidate>().swap(b.candidates);
   }
-  reporter.report(0.72);
-  reporter.throw_if_cancelled();
+}
 
-  // Merge the proposals of the three umbrellas of each triangle: votes = how many proposed it.
+// Merges the proposals of the three umbrellas of each triangle: votes = how many proposed it.
+void RegionGrowing::merge_candidates() {
   tbb::parallel_sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) { return x.v < y.v; });
   std::size_t unique = 0;
   for (std::size_t i = 0; i < candidates.size();) {
@@ -751,29 +759,23 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
     i = j;
   }
   candidates.resize(unique);
-  result.candidate_triangles = unique;
+  out.candidate_triangles = unique;
   tbb::parallel_sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
     if (x.votes != y.votes) return x.votes > y.votes;
     if (x.min_angle_deg != y.min_angle_deg) return x.min_angle_deg > y.min_angle_deg;
     return x.v < y.v;
   });
-  reporter.report(0.8);
-  reporter.throw_if_cancelled();
+}
 
-  // Pass 3: region growing over the candidates. Seeds are taken best first among candidates
-  // whose vertices are all new; from each accepted triangle the front grows, best candidate
-  // first, across its edges. A triangle is accepted when none of its directed edges is used
-  // yet (every edge then has at most two triangles, traversed in opposite directions:
-  // edge-manifold and consistently oriented by construction), when at every vertex already in
-  // the mesh it continues that vertex's fan across an edge (no pinched vertex, no tunnel), and
-  // when its normal is within max_dihedral_deg of each neighbour across a shared edge.
-  // Each directed edge of each candidate, with its other vertex, filed by the kd-tree leaf rank
-  // of its first vertex: the growing front is compact in space, so its look-ups here and in the
-  // half-edge map (laid out the same way, see HalfEdgeMap) stay within a few cache lines instead
-  // of one miss each. The edges leaving rank r are by_edge[edges_from[r] .. edges_from[r + 1]).
-  std::vector<std::uint32_t> rank(n);
+// Each directed edge of each candidate, with its other vertex, filed by the kd-tree leaf rank
+// of its first vertex: the growing front is compact in space, so its look-ups here and in the
+// half-edge map (laid out the same way, see HalfEdgeMap) stay within a few cache lines instead
+// of one miss each.
+void RegionGrowing::index_candidate_edges() {
+  const std::size_t unique = candidates.size();
+  rank.assign(n, 0);
   for (std::size_t pos = 0; pos < n; ++pos) rank[order[pos]] = static_cast<std::uint32_t>(pos);
-  std::vector<CandidateEdge> by_edge(3 * unique);
+  by_edge.assign(3 * unique, {});
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, unique, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c)
       for (int e = 0; e < 3; ++e) {
@@ -784,117 +786,120 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
   tbb::parallel_sort(by_edge.begin(), by_edge.end(), [](const CandidateEdge& x, const CandidateEdge& y) {
     return x.key != y.key ? x.key < y.key : x.id < y.id;
   });
-  std::vector<std::uint32_t> edges_from(n + 1, 0);
+  edges_from.assign(n + 1, 0);
   for (const CandidateEdge& entry : by_edge) ++edges_from[std::size_t(entry.key >> 32) + 1];
   for (std::size_t r = 0; r < n; ++r) edges_from[r + 1] += edges_from[r];
-  Selection sel(std::min<std::size_t>(unique, 2 * n + 16), &rank);
-  std::vector<std::uint8_t> in_mesh(n, 0), accepted(unique, 0);
-  const double min_dihedral_cos = std::cos(radians(params.max_dihedral_deg));
-  // mode 0: seed (all vertices new); 1: growth (fans continue at every old vertex);
-  // 2: closing (attached by at least one edge; closes fronts that met out of step).
-  const auto try_accept = [&](std::uint32_t id, const std::array<std::uint32_t, 3>& v, int mode) {
-    const bool seed = mode == 0;
-    if (!sel.free_edges(v[0], v[1], v[2])) return false;
-    std::array<std::uint32_t, 3> twin{};
-    for (int e = 0; e < 3; ++e) twin[std::size_t(e)] = sel.edges.find(v[(e + 1) % 3], v[e]);
-    for (int c = 0; c < 3; ++c) {
-      if (!in_mesh[v[c]]) continue;
-      if (seed) return false;
-      // Corner c lies on edges c-1 -> c and c -> c+1.
-      if (mode == 1 && twin[std::size_t((c + 2) % 3)] == kNone && twin[std::size_t(c)] == kNone) return false;
-    }
-    if (mode == 2 && twin[0] == kNone && twin[1] == kNone && twin[2] == kNone) return false;
-    for (int c = 0; c < 3; ++c)
-      if (in_mesh[v[c]] && !fits_gap(cloud.positions, normals, sel, v[c], v[(c + 1) % 3], v[(c + 2) % 3])) return false;
-    const Vector3d face =
-        (cloud.positions[v[1]] - cloud.positions[v[0]]).cross(cloud.positions[v[2]] - cloud.positions[v[0]]).normalized();
-    for (std::uint32_t t : twin)
-      if (t != kNone && face.dot(sel.normals[t]) < min_dihedral_cos) return false;
-    sel.add(v[0], v[1], v[2], face);
-    for (std::uint32_t w : v) in_mesh[w] = 1;
-    accepted[id] = 1;
-    return true;
-  };
-  // Candidates sit in priority order, so a smaller id is a better one: a min-heap of ids, each
-  // with its vertices (from by_edge, not from the candidate list, which the front visits at random).
-  struct FrontEntry {
-    std::uint32_t id;
-    std::array<std::uint32_t, 3> v;
-    bool operator>(const FrontEntry& other) const { return id > other.id; }
-  };
-  std::priority_queue<FrontEntry, std::vector<FrontEntry>, std::greater<>> front;
-  const auto push_neighbours = [&](const std::array<std::uint32_t, 3>& v) {
-    for (int e = 0; e < 3; ++e) {
-      const std::uint32_t from = v[(e + 1) % 3], to = v[e], r = rank[from];
-      const std::uint64_t key = (std::uint64_t{r} << 32) | to;
-      for (std::uint32_t i = edges_from[r]; i < edges_from[r + 1]; ++i) {
-        const CandidateEdge& entry = by_edge[i];
-        if (entry.key == key && !accepted[entry.id]) front.push({entry.id, make_candidate(from, to, entry.third, 0.0).v});
-      }
-    }
-  };
-  // Progress of the serial growth: accepted triangles against the about 2 N a closed surface
-  // has, reported every few thousand so that the bar moves through this pass.
-  std::size_t grown = 0;
-  const auto report_growth = [&] {
-    if ((++grown & 4095u) == 0) reporter.report(0.8 + 0.1 * std::min(1.0, double(grown) / double(2 * std::max<std::size_t>(n, 1))));
-  };
+  sel = Selection(std::min<std::size_t>(unique, 2 * n + 16), &rank);
+  in_mesh.assign(n, 0);
+  accepted.assign(unique, 0);
+}
+
+// Seeds are taken best first among candidates whose vertices are all new; from each accepted
+// triangle the front grows, best candidate first, across its edges (see try_accept).
+void RegionGrowing::grow_regions() {
+  const auto unique = static_cast<std::uint32_t>(candidates.size());
   for (std::uint32_t seed = 0; seed < unique; ++seed) {
     if (accepted[seed] || !try_accept(seed, candidates[seed].v, 0)) continue;
     push_neighbours(candidates[seed].v);
     report_growth();
-    while (!front.empty()) {
-      const FrontEntry top = front.top();
-      front.pop();
+    while (!front_.empty()) {
+      const FrontEntry top = front_.top();
+      front_.pop();
       if (accepted[top.id] || !try_accept(top.id, top.v, 1)) continue;
       push_neighbours(top.v);
       report_growth();
     }
   }
-  // Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
-  // them with the remaining candidates that share an edge with the mesh.
+}
+
+// Fronts that met out of step leave channels whose two sides only touch at vertices: bridge
+// them with the remaining candidates that share an edge with the mesh.
+void RegionGrowing::bridge_channels() {
+  const auto unique = static_cast<std::uint32_t>(candidates.size());
   for (std::uint32_t id = 0; id < unique; ++id)
     if (!accepted[id]) try_accept(id, candidates[id].v, 2);
   std::vector<Candidate>().swap(candidates);
-  result.selected_triangles = sel.triangles.size();
-  reporter.report(0.9);
-  reporter.throw_if_cancelled();
+  out.selected_triangles = sel.triangles.size();
+}
 
-  // Pass 4: zip up the front where it turns sharply, then close small holes.
-  result.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
-  {
-    // Fill, then open the pinches that remain (vertices where fans touch) and fill again.
-    // Points left out of the mesh so far: a hole holding one gets a larger perimeter limit.
-    std::vector<std::uint8_t> unused(usable);
-    for (const Triangle& t : sel.triangles)
-      for (int c = 0; c < 3; ++c) unused[std::size_t(t[c])] = 0;
-    std::vector<Vector2d> polygon;
-    std::vector<Neighbor> neighbors;
-    // Where the density changes abruptly along a loop, its limit follows the sparsest corner's
-    // spacing, not the mean.
-    const detail::LoopLimitFactor holding_factor = [&](const std::vector<std::uint32_t>& loop) {
-      double sum = 0.0, largest = 0.0;
-      for (std::uint32_t v : loop) {
-        sum += local_spacing[v];
-        largest = std::max(largest, local_spacing[v]);
-      }
-      double sparsest = largest * double(loop.size()) / sum;
-      if (sparsest < kAbruptDensityRatio) sparsest = 1.0;
-      if (hole_holds_unused_point(loop, cloud.positions, normals, unused, *tree, polygon, neighbors))
-        return detail::LoopLimit{std::max(sparsest, kHoldingPointFactor), true};
-      return detail::LoopLimit{sparsest, false};
-    };
-    detail::HoleClosing closing;
-    detail::close_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel, {}, closing,
-                        [&](int round) { reporter.report(0.9 + 0.05 * double(round + 1) / 4.0); }, holding_factor);
-    result.holes_filled = closing.holes_filled;
-    result.fill_triangles = closing.fill_triangles;
-    result.pinch_triangles_removed = closing.pinch_triangles_removed;
+// A triangle is accepted when none of its directed edges is used yet (every edge then has at
+// most two triangles, traversed in opposite directions: edge-manifold and consistently oriented
+// by construction), when at every vertex already in the mesh it continues that vertex's fan
+// across an edge (no pinched vertex, no tunnel), and when its normal is within max_dihedral_deg
+// of each neighbour across a shared edge. mode 0: seed (all vertices new); 1: growth (fans
+// continue at every old vertex); 2: closing (attached by at least one edge; closes fronts that
+// met out of step).
+bool RegionGrowing::try_accept(std::uint32_t id, const std::array<std::uint32_t, 3>& v, int mode) {
+  const bool seed = mode == 0;
+  if (!sel.free_edges(v[0], v[1], v[2])) return false;
+  std::array<std::uint32_t, 3> twin{};
+  for (int e = 0; e < 3; ++e) twin[std::size_t(e)] = sel.edges.find(v[(e + 1) % 3], v[e]);
+  for (int c = 0; c < 3; ++c) {
+    if (!in_mesh[v[c]]) continue;
+    if (seed) return false;
+    // Corner c lies on edges c-1 -> c and c -> c+1.
+    if (mode == 1 && twin[std::size_t((c + 2) % 3)] == kNone && twin[std::size_t(c)] == kNone) return false;
   }
-  reporter.report(0.95);
-  result.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, *tree, sel);
-  reporter.report(0.98);
+  if (mode == 2 && twin[0] == kNone && twin[1] == kNone && twin[2] == kNone) return false;
+  for (int c = 0; c < 3; ++c)
+    if (in_mesh[v[c]] && !fits_gap(cloud.positions, normals, sel, v[c], v[(c + 1) % 3], v[(c + 2) % 3])) return false;
+  const Vector3d face =
+      (cloud.positions[v[1]] - cloud.positions[v[0]]).cross(cloud.positions[v[2]] - cloud.positions[v[0]]).normalized();
+  for (std::uint32_t t : twin)
+    if (t != kNone && face.dot(sel.normals[t]) < min_dihedral_cos) return false;
+  sel.add(v[0], v[1], v[2], face);
+  for (std::uint32_t w : v) in_mesh[w] = 1;
+  accepted[id] = 1;
+  return true;
+}
 
+// Pushes the candidates across each edge of triangle v onto the front.
+void RegionGrowing::push_neighbours(const std::array<std::uint32_t, 3>& v) {
+  for (int e = 0; e < 3; ++e) {
+    const std::uint32_t from = v[(e + 1) % 3], to = v[e], r = rank[from];
+    const std::uint64_t key = (std::uint64_t{r} << 32) | to;
+    for (std::uint32_t i = edges_from[r]; i < edges_from[r + 1]; ++i) {
+      const CandidateEdge& entry = by_edge[i];
+      if (entry.key == key && !accepted[entry.id]) front_.push({entry.id, make_candidate(from, to, entry.third, 0.0).v});
+    }
+  }
+}
+
+// Progress of the serial growth: accepted triangles against the about 2 N a closed surface
+// has, reported every few thousand so that the bar moves through this pass.
+void RegionGrowing::report_growth() {
+  if ((++grown_ & 4095u) == 0) reporter.report(0.8 + 0.1 * std::min(1.0, double(grown_) / double(2 * std::max<std::size_t>(n, 1))));
+}
+
+void RegionGrowing::close_front_corners() {
+  out.front_triangles = close_front(cloud, normals, radius_of, params.max_front_angle_deg, min_dihedral_cos, sel);
+}
+
+// Fill, then open the pinches that remain (vertices where fans touch) and fill again.
+void RegionGrowing::close_small_holes() {
+  // Points left out of the mesh so far: a hole holding one gets a larger perimeter limit.
+  std::vector<std::uint8_t> unused(usable);
+  for (const Triangle& t : sel.triangles)
+    for (int c = 0; c < 3; ++c) unused[std::size_t(t[c])] = 0;
+  std::vector<Vector2d> polygon;
+  std::vector<Neighbor> neighbors;
+  const detail::LoopLimitFactor holding_factor = [&](const std::vector<std::uint32_t>& loop) {
+    return loop_limit(loop, cloud.positions, normals, local_spacing, unused, tree, polygon, neighbors);
+  };
+  detail::HoleClosing closing;
+  detail::close_holes(cloud.positions, normals, local_spacing, params.max_hole_perimeter_in_spacings, sel, {}, closing,
+                      [&](int round) { reporter.report(0.9 + 0.05 * double(round + 1) / 4.0); }, holding_factor);
+  out.holes_filled = closing.holes_filled;
+  out.fill_triangles = closing.fill_triangles;
+  out.pinch_triangles_removed = closing.pinch_triangles_removed;
+}
+
+void RegionGrowing::insert_points() {
+  out.inserted_points = insert_unused_points(cloud.positions, normals, usable, radius_of, tree, sel);
+}
+
+TriangulateResult RegionGrowing::result() && {
+  TriangulateResult result = std::move(out);
   result.mesh = TriangleMesh{cloud, std::move(sel.triangles), {}};
   result.topology = analyze_topology(result.mesh);
   std::vector<std::uint8_t> used(n, 0);
@@ -912,7 +917,39 @@ TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const Tria
                   {"pinch_triangles_removed", result.pinch_triangles_removed},
                   {"inserted_points", result.inserted_points}};
   stats.figures = {{"local_spacing_mean", result.local_spacing_mean}};
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return result;
+}
+
+}  // namespace detail
+
+TriangulateResult reconstruct_region_growing(const PointCloud& cloud, const TriangulateParams& params, const KdTree* tree,
+                                             const ProgressCallback& progress) {
+  const auto t_start = std::chrono::steady_clock::now();
+  check_params(cloud, params, tree);
+  std::optional<KdTree> own_tree;
+  if (tree == nullptr) tree = &own_tree.emplace(cloud.positions);
+  detail::RegionGrowing g(cloud, params, *tree, progress);
+  detail::ProgressReporter& reporter = g.reporter;
+  g.measure_points();
+  g.widen_scan_lines();
+  g.propose_umbrellas();
+  reporter.report(0.72);
+  reporter.throw_if_cancelled();
+  g.merge_candidates();
+  reporter.report(0.8);
+  reporter.throw_if_cancelled();
+  g.index_candidate_edges();
+  g.grow_regions();
+  g.bridge_channels();
+  reporter.report(0.9);
+  reporter.throw_if_cancelled();
+  g.close_front_corners();
+  g.close_small_holes();
+  reporter.report(0.95);
+  g.insert_points();
+  reporter.report(0.98);
+  TriangulateResult result = std::move(g).result();
+  result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return result;
