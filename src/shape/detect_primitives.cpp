@@ -18,6 +18,7 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/kd_tree.h"
 #include "shape/detail/point_octree.h"
+#include "shape/detail/primitive_detection.h"
 #include "shape/detail/primitive_models.h"
 #include "spatial/detail/morton.h"
 
@@ -35,16 +36,23 @@ constexpr std::size_t kMaxDraws = 400000;     // per extraction: a cap that ends
 constexpr int kMaxFailures = 2000;            // extractions in a row that fall below min_points (a cap)
 constexpr std::size_t kSameProbes = 9;        // points compared by `same_shape`
 
-struct Candidate {
-  Primitive shape;                  // in the shifted frame
-  int level = 0;                    // octree level its minimal set came from
-  int subsets = 0;                  // scoring subsets evaluated
-  std::vector<std::uint32_t> hits;  // compatible unassigned points in the evaluated subsets
-  double low = 0.0, estimate = 0.0, high = 0.0;  // its support among the remaining points
-};
+// The objective distance of `s`, for the octrees' culling.
+auto distance_to(const Primitive& s) {
+  return [&s](const Vector3d& x) { return residual(s, x, Vector3d::Zero()).distance; };
+}
 
-// The largest connected component of `idx` on a grid of cells of `cell`: points in cells that
-// touch (26-neighbourhood) are connected. Ties go to the component found first (Morton order).
+// Evenly spaced picks from `points`, for Schnabel et al.'s / CGAL's test of two candidates
+// describing one shape (most of a few of each one's points fit the other).
+std::vector<std::uint32_t> probes(const std::vector<std::uint32_t>& points) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t j = 0; j < kSameProbes && !points.empty(); ++j) out.push_back(points[j * points.size() / kSameProbes]);
+  return out;
+}
+
+}  // namespace
+
+namespace detail {
+
 std::vector<std::uint32_t> largest_component(const std::vector<Vector3d>& pts, const std::vector<std::uint32_t>& idx, double cell) {
   if (idx.empty()) return {};
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -123,7 +131,7 @@ std::vector<std::uint32_t> largest_component(const std::vector<Vector3d>& pts, c
   return out;
 }
 
-}  // namespace
+}  // namespace detail
 
 const EnumNames<PrimitiveType>& primitive_type_names() {
   static const EnumNames<PrimitiveType> names{{{PrimitiveType::Plane, "plane"},
@@ -184,40 +192,42 @@ void PrimitiveParams::validate() const {
   fields().validate(*this, fn);
 }
 
-PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams& params, const ProgressCallback& progress) {
-  constexpr std::string_view fn = "detect_primitives";
-  params.validate();
-  const std::size_t n_all = cloud.size();
-  PrimitiveResult result;
-  result.labels.assign(n_all, -1);
-  result.unassigned = n_all;
-  if (n_all > 0 && !cloud.has_normals())
-    throw UsageError(fmt::format("{}: the cloud has no normals (estimate them first: pointsurf normals)", fn));
-  if (n_all < 3) return result;
-  const double spacing = (params.epsilon.in_spacings() || params.cluster_epsilon.in_spacings()) ? mean_spacing(cloud.positions) : 0.0;
-  const double eps = params.epsilon.resolve(spacing);
-  const double cluster = params.cluster_epsilon.resolve(spacing);
-  const unsigned types = primitive_mask(params.types);
-  const std::size_t min_points = params.min_points > 0 ? params.min_points : std::max<std::size_t>(30, n_all / 200);
-  result.epsilon_used = eps;
-  result.cluster_epsilon_used = cluster;
-  result.min_points_used = min_points;
-  if (!(eps > 0.0) || !(cluster > 0.0)) return result;  // every point at one place: nothing to fit
-  const double cos_max = std::cos(params.max_normal_angle_deg * kDeg);
-  const double band = params.band_in_epsilons * eps;
-  const int samples = (types & kTori) ? 4 : 3;  // a torus needs a fourth oriented point
+namespace detail {
 
-  // Points relative to the box centre, in Morton order, so that sampling does not depend on the
-  // input order.
+PrimitiveDetection::PrimitiveDetection(const PointCloud& cloud_, const PrimitiveParams& params_)
+    : cloud(cloud_), params(params_), n_all(cloud_.size()), stream(mix(params_.seed ^ 0x6a09e667f3bcc909ULL)), drawn(kBatch) {
+  out.labels.assign(n_all, -1);
+  out.unassigned = n_all;
+}
+
+bool PrimitiveDetection::resolve_parameters() {
+  const double spacing = (params.epsilon.in_spacings() || params.cluster_epsilon.in_spacings()) ? mean_spacing(cloud.positions) : 0.0;
+  eps = params.epsilon.resolve(spacing);
+  cluster = params.cluster_epsilon.resolve(spacing);
+  types = primitive_mask(params.types);
+  min_points = params.min_points > 0 ? params.min_points : std::max<std::size_t>(30, n_all / 200);
+  out.epsilon_used = eps;
+  out.cluster_epsilon_used = cluster;
+  out.min_points_used = min_points;
+  if (!(eps > 0.0) || !(cluster > 0.0)) return false;  // every point at one place: nothing to fit
+  cos_max = std::cos(params.max_normal_angle_deg * kDeg);
+  band = params.band_in_epsilons * eps;
+  samples = (types & kTori) ? 4 : 3;  // a torus needs a fourth oriented point
+  return true;
+}
+
+// Points relative to the box centre, in Morton order, so that sampling does not depend on the
+// input order.
+void PrimitiveDetection::sort_in_morton_order() {
   const BoundingBox box = bounding_box(cloud.positions);
-  const Vector3d centre = box.center();
-  const double side = std::max(box.extent().maxCoeff(), 1e-300);
-  const double scene = 10.0 * box.diagonal();
+  centre = box.center();
+  side = std::max(box.extent().maxCoeff(), 1e-300);
+  scene = 10.0 * box.diagonal();
   std::vector<std::uint64_t> codes(n_all);
   tbb::parallel_for(std::size_t(0), n_all, [&](std::size_t i) {
     const Eigen::Array3d t = ((cloud.positions[i] - box.min).array() / side * double((1 << kMortonBits) - 1)).round();
     const auto q = t.cast<std::uint64_t>();
-    codes[i] = detail::morton_code(q.x(), q.y(), q.z());
+    codes[i] = morton_code(q.x(), q.y(), q.z());
   });
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n_all);
   for (std::uint32_t i = 0; i < n_all; ++i) keyed[i] = {codes[i], i};
@@ -230,12 +240,12 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
     if (na != nb) return std::lexicographical_compare(na.data(), na.data() + 3, nb.data(), nb.data() + 3);
     return a.second < b.second;
   });
-  std::vector<std::uint32_t> order(n_all);
+  order.resize(n_all);
   for (std::size_t r = 0; r < n_all; ++r) order[r] = keyed[r].second;
   keyed = {};
-  std::vector<Vector3d> pts(n_all), nrm(n_all);
-  std::vector<std::uint64_t> sorted_codes(n_all);
-  std::vector<std::uint8_t> usable(n_all);
+  pts.resize(n_all), nrm.resize(n_all);
+  sorted_codes.resize(n_all);
+  usable.resize(n_all);
   tbb::parallel_for(std::size_t(0), n_all, [&](std::size_t r) {
     pts[r] = cloud.positions[order[r]] - centre;
     const Vector3d& nn = cloud.normals[order[r]];
@@ -244,268 +254,322 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
     nrm[r] = usable[r] ? Vector3d(nn / l) : Vector3d::Zero();
     sorted_codes[r] = codes[order[r]];
   });
+}
 
-  // Scoring subsets: subset 0 about kSmallestSubset points, each next one about twice as large
-  // (the last holds about half); a point's subset comes from the seed and its rank. Each gets
-  // an octree, and so do all points (for extraction).
-  int subset_count = 1;
+// Subset 0 about kSmallestSubset points, each next one about twice as large (the last holds
+// about half); a point's subset comes from the seed and its rank.
+void PrimitiveDetection::draw_scoring_subsets() {
+  subset_count = 1;
   while (subset_count < 16 && (n_all >> subset_count) >= kSmallestSubset) ++subset_count;
-  std::vector<std::vector<std::uint32_t>> subset_ranks(static_cast<std::size_t>(subset_count));
-  std::vector<std::int8_t> subset_of(n_all, -1);
-  std::vector<std::uint32_t> remaining;
-  std::uint64_t state = detail::mix(params.seed);
+  subset_ranks.assign(static_cast<std::size_t>(subset_count), {});
+  subset_of.assign(n_all, -1);
+  remaining.clear();
+  std::uint64_t state = mix(params.seed);
   for (std::uint32_t r = 0; r < n_all; ++r) {
     if (!usable[r]) continue;
-    const double u = detail::uniform01(state);
+    const double u = uniform01(state);
     int j = subset_count - 1;
     while (j > 0 && u < std::ldexp(1.0, -(subset_count - j))) --j;
     subset_ranks[std::size_t(j)].push_back(r);
     subset_of[r] = std::int8_t(j);
     remaining.push_back(r);
   }
-  std::vector<PointOctree> trees;
-  std::vector<std::uint32_t> leaf_in_subset(n_all), leaf_in_all(n_all);
+}
+
+void PrimitiveDetection::build_octrees() {
+  leaf_in_subset.assign(n_all, 0);
+  leaf_in_all.assign(n_all, 0);
+  trees.clear();
   for (auto& ranks : subset_ranks) trees.emplace_back(std::move(ranks), pts, sorted_codes, kMortonBits, leaf_in_subset);
-  PointOctree all(remaining, pts, sorted_codes, kMortonBits, leaf_in_all);
-  std::vector<std::size_t> evaluated(std::size_t(subset_count) + 1, 0);  // unassigned points in subsets [0, k)
-  auto count_subsets = [&] {
-    for (int j = 0; j < subset_count; ++j) evaluated[std::size_t(j) + 1] = evaluated[std::size_t(j)] + trees[std::size_t(j)].alive();
-  };
+  all.emplace(remaining, pts, sorted_codes, kMortonBits, leaf_in_all);
+  evaluated.assign(std::size_t(subset_count) + 1, 0);
   count_subsets();
-  std::vector<std::uint8_t> assigned(n_all, 0);
-
+  assigned.assign(n_all, 0);
   // Octree levels: from the whole box down to cells of a few cluster cells.
-  int levels = 1;
+  levels = 1;
   while (levels < kMortonBits && side / std::ldexp(1.0, levels + 1) > 2.0 * cluster) ++levels;
-  std::vector<double> level_weight(std::size_t(levels) + 1, 1.0);
+  level_weight.assign(std::size_t(levels) + 1, 1.0);
   level_weight[0] = 0.0;
+}
 
-  auto compatible = [&](const Primitive& s, std::uint32_t r, double reach) {
-    const detail::Residual res = residual(s, pts[r], nrm[r]);
-    return res.distance <= reach && res.cosine >= cos_max;
-  };
-  auto distance_to = [](const Primitive& s) { return [&s](const Vector3d& x) { return residual(s, x, Vector3d::Zero()).distance; }; };
-  // One more subset (at least kSmallestSubset unassigned points in all, when there are).
-  auto refine = [&](Candidate& c) {
-    do {
-      trees[std::size_t(c.subsets++)].visit(distance_to(c.shape), eps, [&](const std::uint32_t* r, const std::uint32_t* end) {
-        for (; r != end; ++r)
-          if (!assigned[*r] && compatible(c.shape, *r, eps)) c.hits.push_back(*r);
-      });
-    } while (c.subsets < subset_count && evaluated[std::size_t(c.subsets)] < kSmallestSubset);
-  };
-  // The support among the remaining points: estimate and an interval of about two standard
-  // deviations of the hypergeometric draw (Schnabel et al. 2007, section 4.4).
-  auto bound = [&](Candidate& c) {
-    const double left = double(remaining.size());
-    const double m = double(evaluated[std::size_t(c.subsets)]), k = double(c.hits.size());
-    if (!(m > 0.0)) {
-      c.low = c.estimate = 0.0, c.high = left;
-      return;
-    }
-    c.estimate = k / m * left;
-    const double p = (k + 1.0) / (m + 2.0);
-    const double sd = c.subsets == subset_count ? 0.0 : left * std::sqrt(p * (1.0 - p) / m * std::max(0.0, (left - m) / std::max(left - 1.0, 1.0)));
-    c.low = c.estimate - 2.0 * sd;
-    c.high = c.estimate + 2.0 * sd;
-  };
-  // All compatible unassigned points within `reach`, in Morton order; parallel over leaves.
-  auto collect = [&](const Primitive& s, double reach) {
-    std::vector<std::uint32_t> leaves;
-    all.leaves(distance_to(s), reach, leaves);
-    constexpr std::size_t kChunk = 64;
-    std::vector<std::vector<std::uint32_t>> parts((leaves.size() + kChunk - 1) / kChunk);
-    tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
-      for (std::size_t l = c * kChunk; l < std::min(leaves.size(), (c + 1) * kChunk); ++l)
-        for (const std::uint32_t* r = all.leaf_begin(leaves[l]); r != all.leaf_end(leaves[l]); ++r)
-          if (!assigned[*r] && compatible(s, *r, reach)) parts[c].push_back(*r);
-    });
-    std::vector<std::uint32_t> idx;
-    for (const auto& part : parts) idx.insert(idx.end(), part.begin(), part.end());
-    return idx;
-  };
-  // Schnabel et al.'s / CGAL's test for two candidates describing one shape: most of a few of
-  // each one's points fit the other. `probes` are evenly spaced picks from the points.
-  auto probes = [](const std::vector<std::uint32_t>& points) {
-    std::vector<std::uint32_t> out;
-    for (std::size_t j = 0; j < kSameProbes && !points.empty(); ++j) out.push_back(points[j * points.size() / kSameProbes]);
-    return out;
-  };
-  auto fit_count = [&](const Primitive& s, const std::vector<std::uint32_t>& probe) {
-    std::size_t fit = 0;
-    for (std::uint32_t r : probe) fit += compatible(s, r, eps);
-    return fit;
-  };
-  auto same_shape = [&](const Primitive& a, const std::vector<std::uint32_t>& probes_a, const Primitive& b, const std::vector<std::uint32_t>& probes_b) {
-    if (a.type != b.type || probes_a.empty() || probes_b.empty()) return false;
-    return 3 * fit_count(b, probes_a) >= 2 * probes_a.size() && 3 * fit_count(a, probes_b) >= 2 * probes_b.size();
-  };
-  struct Failed {
-    Primitive shape;
-    std::vector<std::uint32_t> probes;
-  };
-  std::vector<Failed> failed;  // candidates whose points are scattered: their kind is not drawn again
+bool PrimitiveDetection::searching() const { return remaining.size() >= min_points && failures < kMaxFailures; }
 
-  detail::ProgressReporter reporter(progress, 0.0, 1.0, n_all);
-  const std::uint64_t stream = detail::mix(params.seed ^ 0x6a09e667f3bcc909ULL);
-  std::vector<Candidate> candidates;
-  std::vector<std::vector<Candidate>> drawn(kBatch);
-  std::size_t draws = 0, total_draws = 0;
-  int failures = 0;
-  // Chance that `draws` draws all miss a primitive of n points: its first point on it, and
-  // (about) the right level with the other points on it as well; a conservative estimate.
-  auto miss = [&](double n) {
-    const double hit = n / (double(remaining.size()) * double(levels) * 4.0);
-    return std::pow(1.0 - std::min(hit, 1.0), double(draws));
-  };
-  while (remaining.size() >= min_points && failures < kMaxFailures) {
-    reporter.report(1.0 - double(remaining.size()) / double(n_all));
-    if (reporter.cancelled()) break;
-    // A batch of minimal sets, in parallel, each from its own random stream: the first point
-    // uniformly among the unassigned ones, the others from its octree cell at a level chosen by
-    // the levels' past success. Each candidate is scored on the first subset.
-    const double total_weight = std::accumulate(level_weight.begin(), level_weight.end(), 0.0);
-    tbb::parallel_for(std::size_t(0), kBatch, [&](std::size_t b) {
-      drawn[b].clear();
-      std::uint64_t st = detail::mix(stream ^ detail::mix(total_draws + b));
-      const std::uint32_t r0 = remaining[std::size_t(detail::uniform01(st) * double(remaining.size()))];
-      double pick = detail::uniform01(st) * total_weight;
-      int level = 1;
-      while (level < levels && pick >= level_weight[std::size_t(level)]) pick -= level_weight[std::size_t(level++)];
-      const int shift = 3 * (kMortonBits - level);
-      const std::uint64_t lo_code = (sorted_codes[r0] >> shift) << shift;
-      const std::uint64_t hi_code = lo_code | ((std::uint64_t(1) << shift) - 1);
-      const std::size_t lo = std::size_t(std::lower_bound(sorted_codes.begin(), sorted_codes.end(), lo_code) - sorted_codes.begin());
-      const std::size_t hi = std::size_t(std::upper_bound(sorted_codes.begin(), sorted_codes.end(), hi_code) - sorted_codes.begin());
-      if (hi - lo < std::size_t(samples)) return;
-      std::uint32_t rs[4] = {r0, r0, r0, r0};
-      for (int k = 1; k < samples; ++k) {
-        bool ok = false;
-        for (int attempt = 0; attempt < 8 && !ok; ++attempt) {
-          const std::uint32_t r = std::uint32_t(lo + std::size_t(detail::uniform01(st) * double(hi - lo)));
-          ok = usable[r] && !assigned[r] && std::find(rs, rs + k, r) == rs + k;
-          if (ok) rs[k] = r;
-        }
-        if (!ok) return;
-      }
-      Vector3d p[4], nn[4];
-      for (int k = 0; k < samples; ++k) p[k] = pts[rs[k]], nn[k] = nrm[rs[k]];
-      std::vector<Primitive> made;
-      detail::make_candidates(p, nn, samples, types, eps, cos_max, scene, made);
-      for (const Primitive& s : made) {
-        Candidate c;
-        c.shape = s;
-        c.level = level;
-        refine(c);
-        const std::vector<std::uint32_t> mine = probes(c.hits);
-        if (std::any_of(failed.begin(), failed.end(), [&](const Failed& f) { return same_shape(f.shape, f.probes, s, mine); })) continue;
-        drawn[b].push_back(std::move(c));
-      }
-    });
-    draws += kBatch;
-    total_draws += kBatch;
-    for (auto& batch : drawn)
-      for (Candidate& c : batch) {
-        bound(c);
-        if (c.high >= double(min_points)) candidates.push_back(std::move(c));
-      }
-    result.candidates = total_draws;
-    if (candidates.empty()) {
-      if (miss(double(min_points)) < params.probability || draws > kMaxDraws) break;
-      continue;
-    }
-    // Lazy scoring: refine the candidate with the best estimate and those whose interval
-    // overlaps its, one subset at a time, until the best stands apart.
-    std::size_t best = 0;
-    std::vector<std::size_t> todo;
-    for (;;) {
-      for (Candidate& c : candidates) bound(c);
-      best = 0;
-      for (std::size_t i = 1; i < candidates.size(); ++i)
-        if (candidates[i].estimate > candidates[best].estimate) best = i;
-      todo.clear();
-      for (std::size_t i = 0; i < candidates.size(); ++i)
-        if (i != best && candidates[i].subsets < subset_count && candidates[i].high >= candidates[best].low) todo.push_back(i);
-      if (todo.empty()) break;
-      if (candidates[best].subsets < subset_count) todo.push_back(best);
-      tbb::parallel_for(std::size_t(0), todo.size(), [&](std::size_t t) { refine(candidates[todo[t]]); });
-    }
-    const double found = candidates[best].estimate;
-    if (found < double(min_points)) {
-      if (miss(double(min_points)) < params.probability || draws > kMaxDraws) break;
-      continue;
-    }
-    if (miss(found) >= params.probability && draws <= kMaxDraws) continue;
+double PrimitiveDetection::assigned_share() const { return 1.0 - double(remaining.size()) / double(n_all); }
 
-    // Extract: compatible points, their largest connected component, a least-squares refit,
-    // and twice again with the refitted primitive and the wider band.
-    const Candidate chosen = std::move(candidates[best]);
-    candidates.erase(candidates.begin() + std::ptrdiff_t(best));
-    Primitive shape = chosen.shape;
-    std::vector<std::uint32_t> idx = largest_component(pts, collect(shape, eps), cluster);
-    auto settle = [&](Primitive& s, std::vector<std::uint32_t>& points) {
-      for (int pass = 0; pass < 2 && points.size() >= min_points; ++pass) {
-        const std::optional<Primitive> fitted = detail::refit(s, pts, nrm, points);
-        if (!fitted) break;
-        std::vector<std::uint32_t> again = largest_component(pts, collect(*fitted, band), cluster);
-        if (again.size() < points.size() * 9 / 10) break;  // the refit lost its points: keep the sample's fit
-        s = *fitted;
-        points = std::move(again);
-      }
-    };
-    settle(shape, idx);
-    if (shape.type != PrimitiveType::Plane && (types & kPlanes) && idx.size() >= min_points) {
-      // A curved primitive can stand in for a noisy plane (a flat cone, a wide cylinder): the
-      // plane, the simpler model, is taken when it holds at least as many points.
-      Primitive plane;
-      plane.type = PrimitiveType::Plane;
-      if (std::optional<Primitive> fitted = detail::refit(plane, pts, nrm, idx)) {
-        std::vector<std::uint32_t> flat = largest_component(pts, collect(*fitted, band), cluster);
-        settle(*fitted, flat);
-        if (flat.size() >= idx.size()) shape = *fitted, idx = std::move(flat);
-      }
-    }
-    if (idx.size() < min_points) {
-      // Its points are scattered (Schnabel et al.: the score is the largest component): it and
-      // the candidates describing the same shape are dropped, and so are later draws of it.
-      Failed f{chosen.shape, probes(chosen.hits)};
-      std::erase_if(candidates, [&](const Candidate& c) { return same_shape(f.shape, f.probes, c.shape, probes(c.hits)); });
-      failed.push_back(std::move(f));
-      ++failures;
-      continue;
-    }
-    failures = 0;
-    level_weight[std::size_t(chosen.level)] += 1.0;
-    double squares = 0.0;
-    for (std::uint32_t r : idx) {
-      const double d = residual(shape, pts[r], nrm[r]).distance;
-      squares += d * d;
-      assigned[r] = 1;
-      all.remove(leaf_in_all[r]);
-      trees[std::size_t(subset_of[r])].remove(leaf_in_subset[r]);
-      result.labels[order[r]] = std::int32_t(result.primitives.size());
-    }
-    shape.inliers = idx.size();
-    shape.rms = std::sqrt(squares / double(idx.size()));
-    shape.point += centre;
-    result.primitives.push_back(shape);
-    // The earlier draws still count, as that many draws among the fewer points left would miss
-    // a primitive as often (the chance of a hit grows as 1 / remaining).
-    const std::size_t before = remaining.size();
-    std::erase_if(remaining, [&](std::uint32_t r) { return assigned[r] != 0; });
-    draws = std::size_t(double(draws) * double(remaining.size()) / double(before));
-    count_subsets();
-    tbb::parallel_for(std::size_t(0), candidates.size(), [&](std::size_t i) {
-      std::erase_if(candidates[i].hits, [&](std::uint32_t r) { return assigned[r] != 0; });
+bool PrimitiveDetection::compatible(const Primitive& s, std::uint32_t r, double reach) const {
+  const Residual res = residual(s, pts[r], nrm[r]);
+  return res.distance <= reach && res.cosine >= cos_max;
+}
+
+void PrimitiveDetection::count_subsets() {
+  for (int j = 0; j < subset_count; ++j) evaluated[std::size_t(j) + 1] = evaluated[std::size_t(j)] + trees[std::size_t(j)].alive();
+}
+
+// One more subset (at least kSmallestSubset unassigned points in all, when there are).
+void PrimitiveDetection::refine(PrimitiveCandidate& c) const {
+  do {
+    trees[std::size_t(c.subsets++)].visit(distance_to(c.shape), eps, [&](const std::uint32_t* r, const std::uint32_t* end) {
+      for (; r != end; ++r)
+        if (!assigned[*r] && compatible(c.shape, *r, eps)) c.hits.push_back(*r);
     });
-    std::erase_if(candidates, [&](Candidate& c) {
+  } while (c.subsets < subset_count && evaluated[std::size_t(c.subsets)] < kSmallestSubset);
+}
+
+// The support among the remaining points: estimate and an interval of about two standard
+// deviations of the hypergeometric draw (Schnabel et al. 2007, section 4.4).
+void PrimitiveDetection::bound(PrimitiveCandidate& c) const {
+  const double left = double(remaining.size());
+  const double m = double(evaluated[std::size_t(c.subsets)]), k = double(c.hits.size());
+  if (!(m > 0.0)) {
+    c.low = c.estimate = 0.0, c.high = left;
+    return;
+  }
+  c.estimate = k / m * left;
+  const double p = (k + 1.0) / (m + 2.0);
+  const double sd = c.subsets == subset_count ? 0.0 : left * std::sqrt(p * (1.0 - p) / m * std::max(0.0, (left - m) / std::max(left - 1.0, 1.0)));
+  c.low = c.estimate - 2.0 * sd;
+  c.high = c.estimate + 2.0 * sd;
+}
+
+// All compatible unassigned points within `reach`, in Morton order; parallel over leaves.
+std::vector<std::uint32_t> PrimitiveDetection::collect(const Primitive& s, double reach) const {
+  std::vector<std::uint32_t> leaves;
+  all->leaves(distance_to(s), reach, leaves);
+  constexpr std::size_t kChunk = 64;
+  std::vector<std::vector<std::uint32_t>> parts((leaves.size() + kChunk - 1) / kChunk);
+  tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t c) {
+    for (std::size_t l = c * kChunk; l < std::min(leaves.size(), (c + 1) * kChunk); ++l)
+      for (const std::uint32_t* r = all->leaf_begin(leaves[l]); r != all->leaf_end(leaves[l]); ++r)
+        if (!assigned[*r] && compatible(s, *r, reach)) parts[c].push_back(*r);
+  });
+  std::vector<std::uint32_t> idx;
+  for (const auto& part : parts) idx.insert(idx.end(), part.begin(), part.end());
+  return idx;
+}
+
+std::size_t PrimitiveDetection::fit_count(const Primitive& s, const std::vector<std::uint32_t>& probe) const {
+  std::size_t fit = 0;
+  for (std::uint32_t r : probe) fit += compatible(s, r, eps);
+  return fit;
+}
+
+bool PrimitiveDetection::same_shape(const Primitive& a, const std::vector<std::uint32_t>& probes_a, const Primitive& b,
+                                    const std::vector<std::uint32_t>& probes_b) const {
+  if (a.type != b.type || probes_a.empty() || probes_b.empty()) return false;
+  return 3 * fit_count(b, probes_a) >= 2 * probes_a.size() && 3 * fit_count(a, probes_b) >= 2 * probes_b.size();
+}
+
+// Chance that `draws` draws all miss a primitive of n points: its first point on it, and
+// (about) the right level with the other points on it as well; a conservative estimate.
+double PrimitiveDetection::miss(double n) const {
+  const double hit = n / (double(remaining.size()) * double(levels) * 4.0);
+  return std::pow(1.0 - std::min(hit, 1.0), double(draws));
+}
+
+bool PrimitiveDetection::gave_up() const { return miss(double(min_points)) < params.probability || draws > kMaxDraws; }
+
+// A minimal set from the random stream of draw `draw`: the first point uniformly among the
+// unassigned ones, the others from its octree cell at a level chosen by the levels' past success.
+bool PrimitiveDetection::draw_minimal_set(std::size_t draw, double total_weight, std::uint32_t (&rs)[4], int& level) const {
+  std::uint64_t st = mix(stream ^ mix(draw));
+  const std::uint32_t r0 = remaining[std::size_t(uniform01(st) * double(remaining.size()))];
+  double pick = uniform01(st) * total_weight;
+  level = 1;
+  while (level < levels && pick >= level_weight[std::size_t(level)]) pick -= level_weight[std::size_t(level++)];
+  const int shift = 3 * (kMortonBits - level);
+  const std::uint64_t lo_code = (sorted_codes[r0] >> shift) << shift;
+  const std::uint64_t hi_code = lo_code | ((std::uint64_t(1) << shift) - 1);
+  const std::size_t lo = std::size_t(std::lower_bound(sorted_codes.begin(), sorted_codes.end(), lo_code) - sorted_codes.begin());
+  const std::size_t hi = std::size_t(std::upper_bound(sorted_codes.begin(), sorted_codes.end(), hi_code) - sorted_codes.begin());
+  if (hi - lo < std::size_t(samples)) return false;
+  rs[0] = rs[1] = rs[2] = rs[3] = r0;
+  for (int k = 1; k < samples; ++k) {
+    bool ok = false;
+    for (int attempt = 0; attempt < 8 && !ok; ++attempt) {
+      const std::uint32_t r = std::uint32_t(lo + std::size_t(uniform01(st) * double(hi - lo)));
+      ok = usable[r] && !assigned[r] && std::find(rs, rs + k, r) == rs + k;
+      if (ok) rs[k] = r;
+    }
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// The candidates of minimal set `b` of the batch, scored on the first subset, less those that
+// describe a failed shape.
+void PrimitiveDetection::draw_one(std::size_t b, double total_weight) {
+  drawn[b].clear();
+  std::uint32_t rs[4];
+  int level = 0;
+  if (!draw_minimal_set(total_draws + b, total_weight, rs, level)) return;
+  Vector3d p[4], nn[4];
+  for (int k = 0; k < samples; ++k) p[k] = pts[rs[k]], nn[k] = nrm[rs[k]];
+  std::vector<Primitive> made;
+  make_candidates(p, nn, samples, types, eps, cos_max, scene, made);
+  for (const Primitive& s : made) {
+    PrimitiveCandidate c;
+    c.shape = s;
+    c.level = level;
+    refine(c);
+    const std::vector<std::uint32_t> mine = probes(c.hits);
+    if (std::any_of(failed.begin(), failed.end(), [&](const FailedShape& f) { return same_shape(f.shape, f.probes, s, mine); })) continue;
+    drawn[b].push_back(std::move(c));
+  }
+}
+
+// A batch of minimal sets, in parallel, each from its own random stream.
+void PrimitiveDetection::draw_candidates() {
+  const double total_weight = std::accumulate(level_weight.begin(), level_weight.end(), 0.0);
+  tbb::parallel_for(std::size_t(0), kBatch, [&](std::size_t b) { draw_one(b, total_weight); });
+  draws += kBatch;
+  total_draws += kBatch;
+  for (auto& batch : drawn)
+    for (PrimitiveCandidate& c : batch) {
       bound(c);
-      return c.high < double(min_points);
-    });
+      if (c.high >= double(min_points)) candidates.push_back(std::move(c));
+    }
+  out.candidates = total_draws;
+}
+
+// Lazy scoring: refine the candidate with the best estimate and those whose interval overlaps
+// its, one subset at a time, until the best stands apart.
+std::size_t PrimitiveDetection::score_lazily() {
+  std::size_t top = 0;
+  std::vector<std::size_t> todo;
+  for (;;) {
+    for (PrimitiveCandidate& c : candidates) bound(c);
+    top = 0;
+    for (std::size_t i = 1; i < candidates.size(); ++i)
+      if (candidates[i].estimate > candidates[top].estimate) top = i;
+    todo.clear();
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+      if (i != top && candidates[i].subsets < subset_count && candidates[i].high >= candidates[top].low) todo.push_back(i);
+    if (todo.empty()) break;
+    if (candidates[top].subsets < subset_count) todo.push_back(top);
+    tbb::parallel_for(std::size_t(0), todo.size(), [&](std::size_t t) { refine(candidates[todo[t]]); });
+  }
+  return top;
+}
+
+PrimitiveDetection::Next PrimitiveDetection::choose_best() {
+  if (candidates.empty()) return gave_up() ? Next::Stop : Next::Draw;
+  best = score_lazily();
+  const double found = candidates[best].estimate;
+  if (found < double(min_points)) return gave_up() ? Next::Stop : Next::Draw;
+  if (miss(found) >= params.probability && draws <= kMaxDraws) return Next::Draw;
+  return Next::Extract;
+}
+
+// A least-squares refit and the compatible points of the refit within the band, twice, unless
+// the refit loses its points.
+void PrimitiveDetection::settle(Primitive& s, std::vector<std::uint32_t>& points) const {
+  for (int pass = 0; pass < 2 && points.size() >= min_points; ++pass) {
+    const std::optional<Primitive> fitted = refit(s, pts, nrm, points);
+    if (!fitted) break;
+    std::vector<std::uint32_t> again = largest_component(pts, collect(*fitted, band), cluster);
+    if (again.size() < points.size() * 9 / 10) break;  // the refit lost its points: keep the sample's fit
+    s = *fitted;
+    points = std::move(again);
+  }
+}
+
+ExtractedShape PrimitiveDetection::extract_points(const Primitive& shape) const {
+  ExtractedShape e{shape, largest_component(pts, collect(shape, eps), cluster)};
+  settle(e.shape, e.points);
+  return e;
+}
+
+// A curved primitive can stand in for a noisy plane (a flat cone, a wide cylinder): the plane,
+// the simpler model, is taken when it holds at least as many points.
+void PrimitiveDetection::prefer_plane(ExtractedShape& e) const {
+  if (e.shape.type == PrimitiveType::Plane || !(types & kPlanes) || e.points.size() < min_points) return;
+  Primitive plane;
+  plane.type = PrimitiveType::Plane;
+  if (std::optional<Primitive> fitted = refit(plane, pts, nrm, e.points)) {
+    std::vector<std::uint32_t> flat = largest_component(pts, collect(*fitted, band), cluster);
+    settle(*fitted, flat);
+    if (flat.size() >= e.points.size()) e.shape = *fitted, e.points = std::move(flat);
+  }
+}
+
+// Its points are scattered (Schnabel et al.: the score is the largest component): it and the
+// candidates describing the same shape are dropped, and so are later draws of it.
+void PrimitiveDetection::drop_scattered(const PrimitiveCandidate& chosen) {
+  FailedShape f{chosen.shape, probes(chosen.hits)};
+  std::erase_if(candidates, [&](const PrimitiveCandidate& c) { return same_shape(f.shape, f.probes, c.shape, probes(c.hits)); });
+  failed.push_back(std::move(f));
+  ++failures;
+}
+
+void PrimitiveDetection::assign_points(ExtractedShape e, int level) {
+  failures = 0;
+  level_weight[std::size_t(level)] += 1.0;
+  double squares = 0.0;
+  for (std::uint32_t r : e.points) {
+    const double d = residual(e.shape, pts[r], nrm[r]).distance;
+    squares += d * d;
+    assigned[r] = 1;
+    all->remove(leaf_in_all[r]);
+    trees[std::size_t(subset_of[r])].remove(leaf_in_subset[r]);
+    out.labels[order[r]] = std::int32_t(out.primitives.size());
+  }
+  e.shape.inliers = e.points.size();
+  e.shape.rms = std::sqrt(squares / double(e.points.size()));
+  e.shape.point += centre;
+  out.primitives.push_back(e.shape);
+  // The earlier draws still count, as that many draws among the fewer points left would miss
+  // a primitive as often (the chance of a hit grows as 1 / remaining).
+  const std::size_t before = remaining.size();
+  std::erase_if(remaining, [&](std::uint32_t r) { return assigned[r] != 0; });
+  draws = std::size_t(double(draws) * double(remaining.size()) / double(before));
+  count_subsets();
+  tbb::parallel_for(std::size_t(0), candidates.size(), [&](std::size_t i) {
+    std::erase_if(candidates[i].hits, [&](std::uint32_t r) { return assigned[r] != 0; });
+  });
+  std::erase_if(candidates, [&](PrimitiveCandidate& c) {
+    bound(c);
+    return c.high < double(min_points);
+  });
+}
+
+// Extract: compatible points, their largest connected component, a least-squares refit, and
+// twice again with the refitted primitive and the wider band.
+void PrimitiveDetection::extract_best() {
+  const PrimitiveCandidate chosen = std::move(candidates[best]);
+  candidates.erase(candidates.begin() + std::ptrdiff_t(best));
+  ExtractedShape e = extract_points(chosen.shape);
+  prefer_plane(e);
+  if (e.points.size() < min_points) return drop_scattered(chosen);
+  assign_points(std::move(e), chosen.level);
+}
+
+PrimitiveResult PrimitiveDetection::result() && {
+  out.unassigned = static_cast<std::size_t>(std::count(out.labels.begin(), out.labels.end(), -1));
+  return std::move(out);
+}
+
+}  // namespace detail
+
+PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams& params, const ProgressCallback& progress) {
+  params.validate();
+  if (cloud.size() > 0 && !cloud.has_normals())
+    throw UsageError("detect_primitives: the cloud has no normals (estimate them first: pointsurf normals)");
+  detail::PrimitiveDetection x(cloud, params);
+  if (cloud.size() < 3 || !x.resolve_parameters()) return std::move(x).result();
+  x.sort_in_morton_order();
+  x.draw_scoring_subsets();
+  x.build_octrees();
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, cloud.size());
+  while (x.searching()) {
+    reporter.report(x.assigned_share());
+    if (reporter.cancelled()) break;
+    x.draw_candidates();
+    const detail::PrimitiveDetection::Next next = x.choose_best();
+    if (next == detail::PrimitiveDetection::Next::Stop) break;
+    if (next == detail::PrimitiveDetection::Next::Extract) x.extract_best();
   }
   reporter.throw_if_cancelled();
-  result.unassigned = static_cast<std::size_t>(std::count(result.labels.begin(), result.labels.end(), -1));
-  return result;
+  return std::move(x).result();
 }
 
 }  // namespace pointsurf
