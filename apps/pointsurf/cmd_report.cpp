@@ -97,8 +97,8 @@ void write_html_report(const std::string& run_json, const std::string& origin, c
   const std::filesystem::path dir = std::filesystem::path(origin).parent_path();
   if (!sources.mesh_file.empty()) {
     MeshReadResult m = read_mesh(locate(sources.mesh_file, dir));
-    in.mesh_vertices.positions = std::move(m.mesh.vertices.positions);
-    in.mesh_triangles = std::move(m.mesh.triangles);
+    in.mesh.vertices.positions = std::move(m.mesh.vertices.positions);  // its shape: the page colours it by deviation
+    in.mesh.triangles = std::move(m.mesh.triangles);
   }
   if (!sources.cloud_file.empty()) in.cloud = read_point_cloud(locate(sources.cloud_file, dir)).cloud;
   in.three_js = javascript("three/three.min.js", "libjs-three");

@@ -65,12 +65,7 @@ void run_read(StageRun& run) {
     encoding = r.encoding;
     if (r.dropped_faces > 0) warnings.push_back(fmt::format("{} dropped (degenerate or on dropped vertices)", plural(r.dropped_faces, "face")));
     if (r.polygons_triangulated > 0) warnings.push_back(fmt::format("{} split into triangles", plural(r.polygons_triangulated, "polygon")));
-    item.cloud().positions = std::move(r.mesh.vertices.positions);
-    item.cloud().normals = std::move(r.mesh.vertices.normals);
-    item.cloud().colors = std::move(r.mesh.vertices.colors);
-    item.cloud().fields = std::move(r.mesh.vertices.fields);
-    item.mesh.triangles = std::move(r.mesh.triangles);
-    item.mesh.face_fields = std::move(r.mesh.face_fields);
+    item.mesh = std::move(r.mesh);
     item.is_mesh = !item.mesh.triangles.empty();
   } else {
     CloudReadResult r = read_point_cloud(file, options);

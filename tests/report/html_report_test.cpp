@@ -46,8 +46,8 @@ HtmlReportInputs inputs() {
   in.run_json = run_json();
   in.origin = "run.json";
   const TriangleMesh sphere = test::icosphere_mesh(4, 1.0, Vector3d(5e5, 4e6, 100));
-  in.mesh_vertices.positions = sphere.vertices.positions;
-  in.mesh_triangles = sphere.triangles;
+  in.mesh.vertices.positions = sphere.vertices.positions;
+  in.mesh.triangles = sphere.triangles;
   in.cloud = test::sample_sphere(2000, 1.01, Vector3d(5e5, 4e6, 100));
   ScalarField& d = in.cloud.fields.add("deviation", in.cloud.size());
   for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] = 0.01 * ((in.cloud.positions[i].z() - 100) > 0 ? 1 : -1);
@@ -102,15 +102,15 @@ TEST(HtmlReport, HasEverySectionAndAValidPayload) {
   EXPECT_EQ(pictures, 5u);
 
   const json p = payload_of(r.html);
-  EXPECT_EQ(p["mesh"]["triangles"].get<std::size_t>(), in.mesh_triangles.size());
-  EXPECT_EQ(unbase64(p["mesh"]["positions"].get<std::string>()).size(), 12 * in.mesh_vertices.size());
-  EXPECT_EQ(unbase64(p["mesh"]["indices"].get<std::string>()).size(), 12 * in.mesh_triangles.size());
+  EXPECT_EQ(p["mesh"]["triangles"].get<std::size_t>(), in.mesh.triangles.size());
+  EXPECT_EQ(unbase64(p["mesh"]["positions"].get<std::string>()).size(), 12 * in.mesh.vertices.size());
+  EXPECT_EQ(unbase64(p["mesh"]["indices"].get<std::string>()).size(), 12 * in.mesh.triangles.size());
   EXPECT_EQ(unbase64(p["cloud"]["colors"].get<std::string>()).size(), 3 * in.cloud.size());
   // Positions are about the centre: float32 keeps them although the data sit at 4e6 m.
   const std::vector<std::uint8_t> pos = unbase64(p["mesh"]["positions"].get<std::string>());
   float first[3];
   std::memcpy(first, pos.data(), sizeof first);
-  EXPECT_NEAR(first[0], in.mesh_vertices.positions[0].x() - p["centre"][0].get<double>(), 1e-6);
+  EXPECT_NEAR(first[0], in.mesh.vertices.positions[0].x() - p["centre"][0].get<double>(), 1e-6);
   EXPECT_NEAR(p["centre"][1].get<double>(), 4e6, 0.1);
   EXPECT_EQ(p["histogram"]["counts"], json({100, 1800, 100}));
   EXPECT_EQ(p["stages"].size(), 5u);
@@ -123,8 +123,8 @@ TEST(HtmlReport, HasEverySectionAndAValidPayload) {
 TEST(HtmlReport, DecimatesForTheBrowserAboveTheLimits) {
   HtmlReportInputs in = inputs();
   const TriangleMesh big = test::icosphere_mesh(6);  // 81,920 triangles
-  in.mesh_vertices.positions = big.vertices.positions;
-  in.mesh_triangles = big.triangles;
+  in.mesh.vertices.positions = big.vertices.positions;
+  in.mesh.triangles = big.triangles;
   in.cloud = test::sample_sphere(30000);
   HtmlReportParams params;
   params.max_browser_triangles = 10000;

@@ -144,8 +144,8 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   HtmlReportInputs in = inputs();
   const Vector3d at(5e5, 4e6, 100);
   const TriangleMesh sphere = test::icosphere_mesh(2, 1.0, at);
-  in.mesh_vertices.positions = sphere.vertices.positions;
-  in.mesh_triangles = sphere.triangles;
+  in.mesh.vertices.positions = sphere.vertices.positions;
+  in.mesh.triangles = sphere.triangles;
   in.cloud = test::sample_sphere(500, 1.0, at);
   ScalarField& d = in.cloud.fields.add("deviation", in.cloud.size());
   for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] = in.cloud.positions[i].z() > at.z() ? 0.01 : -0.01;
@@ -193,8 +193,8 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
 TEST(HtmlReportView, TheBrowsersLimitsAreKeptAndSaid) {
   HtmlReportInputs in = inputs();
   const TriangleMesh sphere = test::icosphere_mesh(4);  // 5120 triangles
-  in.mesh_vertices.positions = sphere.vertices.positions;
-  in.mesh_triangles = sphere.triangles;
+  in.mesh.vertices.positions = sphere.vertices.positions;
+  in.mesh.triangles = sphere.triangles;
   in.cloud = test::sample_sphere(3000);
   HtmlReportParams params;
   params.max_browser_triangles = 1000;

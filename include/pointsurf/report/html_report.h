@@ -28,8 +28,7 @@ ReportSources report_sources(const std::string& run_json, const std::string& ori
 struct HtmlReportInputs {
   std::string run_json;                    // the run report (report_json's text)
   std::string origin;                      // its file name, for messages and the page's title
-  PointCloud mesh_vertices;                // the mesh's vertices (empty: no mesh)
-  std::vector<Triangle> mesh_triangles;
+  TriangleMesh mesh;                       // no triangles: no mesh
   PointCloud cloud;                        // the cloud (with "deviation" when evaluated); may be empty
   std::string three_js, orbit_controls_js, chart_js;  // library sources, inlined as given
 };

@@ -192,13 +192,13 @@ std::vector<double> nearest_deviation(const PointCloud& mesh_vertices, const Poi
 
 BrowserMesh browser_mesh(const HtmlReportInputs& in, const std::vector<double>& mesh_values, const ColorScale& scale, const Vector3d& centre,
                          const HtmlReportParams& params, HtmlReportView& view) {
-  std::vector<Vector3d> v = in.mesh_vertices.positions;
+  std::vector<Vector3d> v = in.mesh.vertices.positions;
   std::vector<double> values = mesh_values;
-  std::vector<Triangle> t = in.mesh_triangles;
+  std::vector<Triangle> t = in.mesh.triangles;
   if (t.size() > params.max_browser_triangles) {
     decimate(v, values, t, params.max_browser_triangles);
     view.mesh_decimated = true;
-    view.notes.push_back(fmt::format("3D view: mesh decimated from {} to {} triangles (vertex clustering; the limit is {})", in.mesh_triangles.size(),
+    view.notes.push_back(fmt::format("3D view: mesh decimated from {} to {} triangles (vertex clustering; the limit is {})", in.mesh.triangles.size(),
                                      t.size(), params.max_browser_triangles));
   }
   BrowserMesh m;
@@ -212,7 +212,7 @@ BrowserMesh browser_mesh(const HtmlReportInputs& in, const std::vector<double>& 
   }
   m.vertices = v.size();
   m.triangles = t.size();
-  m.original_triangles = in.mesh_triangles.size();
+  m.original_triangles = in.mesh.triangles.size();
   return m;
 }
 
@@ -252,8 +252,8 @@ std::vector<PictureView> pictures(const HtmlReportInputs& in, const std::vector<
   RenderParams rp;
   rp.size = {params.view_width, params.view_height};
   rp.supersample = 2;
-  if (!in.mesh_triangles.empty()) {
-    PointCloud verts = in.mesh_vertices;
+  if (!in.mesh.triangles.empty()) {
+    PointCloud verts = in.mesh.vertices;
     if (!mesh_values.empty()) {
       verts.fields.add("deviation", verts.size()).values = mesh_values;
       rp.field = "deviation";
@@ -262,7 +262,7 @@ std::vector<PictureView> pictures(const HtmlReportInputs& in, const std::vector<
     for (View v : {View::Iso, View::Front, View::Side, View::Top}) {
       rp.view = v;
       out.push_back({fmt::format("mesh, {} view{}", view_names().name(v), rp.field.empty() ? "" : ", deviation"),
-                     encode_png(render_scene(verts, in.mesh_triangles, rp).image)});
+                     encode_png(render_scene(verts, in.mesh.triangles, rp).image)});
     }
   }
   if (!in.cloud.empty()) {
@@ -316,15 +316,15 @@ HtmlReportView html_report_view(const HtmlReportInputs& in, const HtmlReportPara
 
   // Geometry for the browser, about the centre of everything shown.
   BoundingBox box;
-  for (const Vector3d& p : in.mesh_vertices.positions) box.extend(p);
+  for (const Vector3d& p : in.mesh.vertices.positions) box.extend(p);
   for (const Vector3d& p : in.cloud.positions) box.extend(p);
   const Vector3d centre = box.center();
   view.centre = {centre.x(), centre.y(), centre.z()};
   view.radius = 0.5 * box.diagonal();
-  const bool has_mesh = !in.mesh_triangles.empty();
+  const bool has_mesh = !in.mesh.triangles.empty();
   std::vector<double> mesh_values;
   if (has_mesh && deviation) {
-    mesh_values = nearest_deviation(in.mesh_vertices, in.cloud, *deviation);
+    mesh_values = nearest_deviation(in.mesh.vertices, in.cloud, *deviation);
     view.notes.push_back("mesh coloured by the deviation of the nearest measured point");
   }
   if (has_mesh) view.mesh = browser_mesh(in, mesh_values, scale, centre, params, view);
