@@ -24,18 +24,24 @@ const ResultTable<PrimitiveResult>& candidate_counts() {
   }();
   return table;
 }
-// One primitive, under "primitive_<i>": "primitive_<i>_type" and "primitive_<i>".
+// One primitive, a block under "primitive_<i>/".
 const ResultTable<Primitive>& primitive_metrics() {
   static const ResultTable<Primitive> table = [] {
-    ResultTable<Primitive> t;
-    t.computed("_type", ResultType::Text, [](const Primitive& s) { return ResultValue(std::string(primitive_type_name(s.type))); },
-               "Type of primitive i (ransac)");
-    t.computed("", ResultType::Numbers,
-               [](const Primitive& s) {
-                 return ResultValue(std::vector<double>{s.point.x(), s.point.y(), s.point.z(), s.axis.x(), s.axis.y(), s.axis.z(), s.radius,
-                                                        s.angle_deg, double(s.inliers), s.rms, s.minor_radius});
-               },
-               "Primitive i (ransac): point (3), axis (3), radius, half angle (degrees), inliers, RMS, minor radius (torus)");
+    using S = Primitive;
+    const std::string u = "cloud units";
+    ResultTable<S> t;
+    t.computed("type", ResultType::Text, [](const S& s) { return ResultValue(std::string(primitive_type_name(s.type))); },
+               "Type of the primitive: plane, sphere, cylinder, cone or torus");
+    t.computed("point", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.point)); },
+               "Plane: the inliers' centroid; sphere, torus: centre; cylinder: axis point; cone: apex")
+        .with_unit(u);
+    t.computed("axis", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.axis)); },
+               "Plane: unit normal; cylinder, cone, torus: unit axis (cone: from the apex into the cone)");
+    t.number("radius", &S::radius, "Sphere, cylinder: radius; torus: major radius").with_unit(u);
+    t.number("angle_deg", &S::angle_deg, "Cone: half opening angle").with_unit("degrees");
+    t.count("inliers", &S::inliers, "Points assigned to it");
+    t.number("rms", &S::rms, "RMS distance of those points to it").with_unit(u).lower_is_better();
+    t.number("minor_radius", &S::minor_radius, "Torus: tube radius").with_unit(u);
     return t;
   }();
   return table;
@@ -65,7 +71,7 @@ const ResultTable<Labels>& label_metrics() {
 std::vector<ResultSpec> segment_specs() {
   std::vector<ResultSpec> out = zero_normals_specs();
   append(out, counted(candidate_counts().specs()));
-  append(out, prefixed(primitive_metrics().specs(), "primitive_*"));
+  append(out, prefixed(primitive_metrics().specs(), "primitive_*/"));
   append(out, counted(label_counts().specs()));
   append(out, label_metrics().specs());
   return out;
@@ -146,7 +152,7 @@ void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
   rec.set_used("cluster_epsilon_used", r.cluster_epsilon_used);
   rec.set_used("min_points", static_cast<std::int64_t>(r.min_points_used));
   rec.add_counts(candidate_counts(), r);
-  for (std::size_t i = 0; i < r.primitives.size(); ++i) rec.add(primitive_metrics(), r.primitives[i], fmt::format("primitive_{}", i));
+  for (std::size_t i = 0; i < r.primitives.size(); ++i) rec.add(primitive_metrics(), r.primitives[i], fmt::format("primitive_{}/", i));
 }
 
 void run_segment(StageRun& run) {
