@@ -426,7 +426,8 @@ def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] 
     """
 
 SegmentCounts = TypedDict('SegmentCounts', {'zero_normals': int, 'candidates': int, 'points': int, 'segments': int, 'unassigned': int}, total=False)
-SegmentMetrics = TypedDict('SegmentMetrics', {'normals_estimated': bool}, total=False)  # and per item: primitive_*_type: str; primitive_*: list[float]
+SegmentMetricsPrimitive = TypedDict('SegmentMetricsPrimitive', {'type': str, 'point': list[float], 'axis': list[float], 'radius': float, 'angle_deg': float, 'inliers': int, 'rms': float, 'minor_radius': float}, total=False)
+SegmentMetrics = TypedDict('SegmentMetrics', {'normals_estimated': bool}, total=False)  # and per item: primitive_*: SegmentMetricsPrimitive
 class SegmentReport(TypedDict):
     type: str
     parameters: dict[str, Any]
