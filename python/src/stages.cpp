@@ -85,10 +85,11 @@ py::list stage_list() {
     d["shape"] = command_shape_name(s.shape);
     d["measures"] = s.measures();
     d["writes_param"] = s.writes_param;
-    py::list results;  // the declared report metrics (core/results.h)
+    py::list results;  // the declared counts and metrics of the report (core/results.h)
     for (const ResultSpec& r : s.results) {
       py::dict m;
       m["key"] = r.key;
+      m["block"] = result_block_name(r.block);
       m["type"] = result_type_name(r.type);
       m["unit"] = r.unit;
       m["better"] = better_name(r.better);

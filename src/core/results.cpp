@@ -23,9 +23,21 @@ const char* result_type_name(ResultType t) noexcept {
   return "number";
 }
 
+const char* result_block_name(ResultBlock b) noexcept { return b == ResultBlock::Counts ? "counts" : "metrics"; }
+
 std::vector<ResultSpec> prefixed(std::vector<ResultSpec> specs, const std::string& prefix) {
   for (ResultSpec& s : specs) s.key = prefix + s.key;
   return specs;
 }
+
+std::vector<ResultSpec> counted(std::vector<ResultSpec> specs, const std::string& prefix) {
+  for (ResultSpec& s : specs) {
+    s.key = prefix + s.key;
+    s.block = ResultBlock::Counts;
+  }
+  return specs;
+}
+
+void append(std::vector<ResultSpec>& specs, const std::vector<ResultSpec>& more) { specs.insert(specs.end(), more.begin(), more.end()); }
 
 }  // namespace pointsurf

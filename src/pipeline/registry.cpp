@@ -99,10 +99,14 @@ std::string stages_markdown() {
       for (const ParamSpec& p : s.params) out += param_row(p);
     }
     if (!s.results.empty()) {
-      out += "\nReport metrics (`metrics` of the stage's record; `*` stands for a rank or a region):\n";
-      out += "\n| key | type | unit | better | doc |\n|---|---|---|---|---|\n";
-      for (const ResultSpec& r : s.results)
-        out += fmt::format("| `{}` | {} | {} | {} | {} |\n", r.key, result_type_name(r.type), cell(r.unit), better_name(r.better), cell(r.doc));
+      out += "\nReport (the blocks `counts` and `metrics` of the stage's record; `*` stands for a rank, a region, a tag or an "
+             "index; some keys only with some methods or options):\n";
+      out += "\n| key | block | type | unit | better | doc |\n|---|---|---|---|---|---|\n";
+      for (const ResultBlock block : {ResultBlock::Counts, ResultBlock::Metrics})
+        for (const ResultSpec& r : s.results)
+          if (r.block == block)
+            out += fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", r.key, result_block_name(r.block), result_type_name(r.type), cell(r.unit),
+                               better_name(r.better), cell(r.doc));
     }
     if (!s.examples.empty()) {
       out += "\n```bash\n";

@@ -2,6 +2,7 @@
 // The clean stage: outlier removal, duplicates and feature-aware denoising, applied in the
 // order of its method list.
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,129 @@ std::vector<ParamSpec> trilateral_only_params() {
   return out;
 }
 
+// What clean reports, each method's values under "<method>.": an outlier removal's count and
+// threshold (its name says what the threshold is), a smoothing's moves.
+const ResultTable<OutlierResult>& removed_counts() {
+  static const ResultTable<OutlierResult> table = [] {
+    ResultTable<OutlierResult> t;
+    t.count("removed", &OutlierResult::removed, "Points removed as outliers");
+    return t;
+  }();
+  return table;
+}
+// The threshold of each removal method: its key and doc.
+struct ThresholdName {
+  const char* method;
+  const char* key;
+  const char* doc;
+};
+constexpr ThresholdName kThresholds[] = {
+    {"local", "ratio_threshold", "Ratio to the neighbourhood's mean distance above which a point was dropped"},
+    {"sor", "mean_distance_threshold", "Mean neighbour distance above which a point was dropped"},
+    {"radius", "radius_used", "Search radius used"},
+    {"ransac", "distance_used", "Plane distance used"},
+};
+const ThresholdName& threshold_of(const std::string& method) {
+  for (const ThresholdName& t : kThresholds)
+    if (method == t.method) return t;
+  throw std::logic_error("clean: no threshold for " + method);
+}
+const ResultTable<OutlierResult>& threshold_metrics(const std::string& method) {
+  static const std::vector<ResultTable<OutlierResult>> tables = [] {
+    std::vector<ResultTable<OutlierResult>> out;
+    for (const ThresholdName& n : kThresholds) {
+      ResultTable<OutlierResult> t;
+      ResultSpec& spec = t.number(n.key, &OutlierResult::threshold, n.doc);
+      if (std::string(n.method) != "local") spec.with_unit("cloud units");
+      out.push_back(std::move(t));
+    }
+    return out;
+  }();
+  return tables[std::size_t(&threshold_of(method) - kThresholds)];
+}
+const ResultTable<DuplicateResult>& duplicate_counts() {
+  static const ResultTable<DuplicateResult> table = [] {
+    ResultTable<DuplicateResult> t;
+    t.count("removed", &DuplicateResult::removed, "Duplicates merged away");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<DuplicateResult>& duplicate_metrics() {
+  static const ResultTable<DuplicateResult> table = [] {
+    ResultTable<DuplicateResult> t;
+    t.number("max_merge_distance", &DuplicateResult::max_distance, "Largest distance from a removed point to the one it merged into")
+        .with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<SmoothResult>& moved_counts() {
+  static const ResultTable<SmoothResult> table = [] {
+    ResultTable<SmoothResult> t;
+    t.count("moved", &SmoothResult::moved, "Points moved");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<SmoothResult>& moved_metrics() {
+  static const ResultTable<SmoothResult> table = [] {
+    ResultTable<SmoothResult> t;
+    t.number("rms_displacement", &SmoothResult::rms_displacement, "RMS distance the points moved").with_unit("cloud units");
+    t.number("max_displacement", &SmoothResult::max_displacement, "Largest distance a point moved").with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<SmoothResult>& normal_change_counts() {  // trilateral
+  static const ResultTable<SmoothResult> table = [] {
+    ResultTable<SmoothResult> t;
+    t.count("normals_changed", &SmoothResult::normals_changed, "Normals the trilateral pass changed");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<SmoothResult>& normal_change_metrics() {  // trilateral
+  static const ResultTable<SmoothResult> table = [] {
+    ResultTable<SmoothResult> t;
+    t.number("mean_normal_change_deg", &SmoothResult::mean_normal_change_deg, "Mean angle the changed normals turned").with_unit("degrees");
+    return t;
+  }();
+  return table;
+}
+struct CleanCounts {
+  std::size_t input = 0, output = 0;
+};
+const ResultTable<CleanCounts>& clean_counts() {
+  static const ResultTable<CleanCounts> table = [] {
+    ResultTable<CleanCounts> t;
+    t.count("input", &CleanCounts::input, "Points read");
+    t.count("output", &CleanCounts::output, "Points left");
+    return t;
+  }();
+  return table;
+}
+
+std::vector<ResultSpec> clean_specs() {
+  std::vector<ResultSpec> out;
+  for (const ThresholdName& n : kThresholds) {
+    const std::string prefix = std::string(n.method) + ".";
+    append(out, counted(removed_counts().specs(), prefix));
+    append(out, prefixed(threshold_metrics(n.method).specs(), prefix));
+  }
+  append(out, counted(duplicate_counts().specs(), "duplicates."));
+  append(out, prefixed(duplicate_metrics().specs(), "duplicates."));
+  for (const std::string prefix : {"bilateral.", "trilateral."}) {
+    append(out, counted(moved_counts().specs(), prefix));
+    append(out, prefixed(moved_metrics().specs(), prefix));
+  }
+  append(out, counted(normal_change_counts().specs(), "trilateral."));
+  append(out, prefixed(normal_change_metrics().specs(), "trilateral."));
+  append(out, zero_normals_specs());
+  append(out, counted(clean_counts().specs()));
+  return out;
+}
+
 void run_clean(StageRun& run) {
   DataItem& item = run.context.item(run.output);
   StageRecord& rec = run.record;
@@ -53,36 +177,34 @@ void run_clean(StageRun& run) {
     else if (smoothing) check_input_normals(run, name == "bilateral" ? "not moved" : "not moved, normal kept");
     const KdTree& tree = run.context.tree(run.output);
     const std::size_t before = cloud.size();
-    auto removal = [&](const OutlierResult& r, const char* threshold_name) {
+    auto removal = [&](const OutlierResult& r) {
       if (r.removed > 0) {
         drop_faces(item, rec);
         cloud = keep_points(cloud, r.kept);
       }
-      rec.count(name + ".removed", as_count(r.removed));
-      rec.metric(name + "." + threshold_name, r.threshold);
+      rec.add_counts(removed_counts(), r, name + ".");
+      rec.add(threshold_metrics(name), r, name + ".");
       steps += fmt::format("{}{} removed {} ({:.2f} %)", steps.empty() ? "" : ", ", name, r.removed, 100.0 * double(r.removed) / double(before));
     };
     auto smoothed = [&](const SmoothResult& r) {
-      rec.count(name + ".moved", as_count(r.moved));
-      rec.metric(name + ".rms_displacement", r.rms_displacement);
-      rec.metric(name + ".max_displacement", r.max_displacement);
+      rec.add_counts(moved_counts(), r, name + ".");
+      rec.add(moved_metrics(), r, name + ".");
       rec.set_used(name + ".radius_used", r.radius_used);
       rec.set_used(name + ".height_sigma_used", r.height_sigma_used);
       steps += fmt::format("{}{} moved {} (rms {:.4g}, max {:.4g})", steps.empty() ? "" : ", ", name, r.moved, r.rms_displacement, r.max_displacement);
     };
     if (name == "local") {
-      removal(remove_local_outliers(cloud, local_params(a), &tree, progress), "ratio_threshold");
+      removal(remove_local_outliers(cloud, local_params(a), &tree, progress));
     } else if (name == "sor") {
-      removal(remove_statistical_outliers(cloud, sor_params(a), &tree, progress),
-              "mean_distance_threshold");
+      removal(remove_statistical_outliers(cloud, sor_params(a), &tree, progress));
     } else if (name == "radius") {
       const OutlierResult r = remove_radius_outliers(cloud, radius_params(a), &tree, progress);
       rec.set_used("radius.radius_used", r.threshold);
-      removal(r, "radius_used");
+      removal(r);
     } else if (name == "ransac") {
       const OutlierResult r = remove_ransac_outliers(cloud, ransac_params(a), &tree, progress);
       rec.set_used("ransac.distance_used", r.threshold);
-      removal(r, "distance_used");
+      removal(r);
     } else if (name == "duplicates") {
       const DuplicateParams p = duplicate_params(a);
       const std::size_t faces = item.mesh.triangles.size();
@@ -91,8 +213,8 @@ void run_clean(StageRun& run) {
         if (faces > 0) drop_faces(item, rec);
         cloud = merge_duplicates(cloud, r);
       }
-      rec.count("duplicates.removed", as_count(r.removed));
-      rec.metric("duplicates.max_merge_distance", r.max_distance);
+      rec.add_counts(duplicate_counts(), r, "duplicates.");
+      rec.add(duplicate_metrics(), r, "duplicates.");
       if (!p.exact) rec.set_used("duplicates.distance_used", r.distance_used);
       steps += fmt::format("{}duplicates merged {} ({})", steps.empty() ? "" : ", ", r.removed,
                            p.exact ? "exact" : fmt::format("within {:.4g}", r.distance_used));
@@ -102,12 +224,11 @@ void run_clean(StageRun& run) {
       const TrilateralParams p = trilateral_params(a);
       const SmoothResult r = smooth_trilateral(cloud, p, &tree, progress);
       smoothed(r);
-      rec.count("trilateral.normals_changed", as_count(r.normals_changed));
-      rec.metric("trilateral.mean_normal_change_deg", r.mean_normal_change_deg);
+      rec.add_counts(normal_change_counts(), r, "trilateral.");
+      rec.add(normal_change_metrics(), r, "trilateral.");
     }
   }
-  rec.count("input", as_count(input_points));
-  rec.count("output", as_count(item.cloud().size()));
+  rec.add_counts(clean_counts(), CleanCounts{input_points, item.cloud().size()});
   rec.summary = fmt::format("clean: {} -> {}; {}", plural(input_points, "point"), plural(item.cloud().size(), "point"), steps);
 }
 
@@ -136,6 +257,7 @@ StageSpec clean_stage() {
   append(s.params, trilateral_only_params());
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only(smooth));
   s.examples = {"pointsurf clean data/b9_training.ply clean.ply --method sor,duplicates", "pointsurf clean data/kitten.xyz smooth.ply --method trilateral --iterations 3"};
+  s.results = clean_specs();
   s.run = run_clean;
   s.check = [](const StageArgs& a) {  // called once per listed method
     if (a.method() == "local") local_params(a).validate();

@@ -100,20 +100,66 @@ const ResultTable<EvaluateTexts>& evaluate_text_results() {
   return table;
 }
 
+// The label field of the per-region deviations, when the reference has one.
+const ResultTable<EvaluateTexts>& region_text_results() {
+  static const ResultTable<EvaluateTexts> table = [] {
+    ResultTable<EvaluateTexts> t;
+    t.text("region_field", &EvaluateTexts::region_field, "The label field of the per-region deviations (segment or region when present)");
+    return t;
+  }();
+  return table;
+}
+
+// What evaluate counts: the data measured, then each block's points as it is recorded.
+struct EvaluateCounts {
+  std::size_t reference_points = 0, mesh_triangles = 0, points_not_vertices = 0, regions = 0, mesh_samples = 0;
+};
+using CountTable = ResultTable<EvaluateCounts>;
+const CountTable& size_counts() {
+  static const CountTable table = [] {
+    CountTable t;
+    t.count("reference_points", &EvaluateCounts::reference_points, "Points of the reference measured");
+    t.count("mesh_triangles", &EvaluateCounts::mesh_triangles, "Triangles of the mesh");
+    return t;
+  }();
+  return table;
+}
+const CountTable& not_vertices_counts() {
+  static const CountTable table = [] {
+    CountTable t;
+    t.count("points_not_vertices", &EvaluateCounts::points_not_vertices, "Reference points that are no vertex of the mesh");
+    return t;
+  }();
+  return table;
+}
+const CountTable& region_counts() {
+  static const CountTable table = [] {
+    CountTable t;
+    t.count("regions", &EvaluateCounts::regions, "Regions of the region field");
+    return t;
+  }();
+  return table;
+}
+const CountTable& sample_counts() {
+  static const CountTable table = [] {
+    CountTable t;
+    t.count("mesh_samples", &EvaluateCounts::mesh_samples, "Area-uniform samples of the mesh");
+    return t;
+  }();
+  return table;
+}
+
 // Every metric evaluate and quality report, for their declarations.
 std::vector<ResultSpec> quality_specs() { return prefixed(MeshQuality::results().specs(), "quality/"); }
 std::vector<ResultSpec> evaluate_specs() {
   std::vector<ResultSpec> out = prefixed(align_results().specs(), "align/");
   for (const ResultSpec& s : evaluate_text_results().specs()) out.push_back(s);
-  ResultSpec region;
-  region.key = "region_field";
-  region.type = ResultType::Text;
-  region.doc = "The label field of the per-region deviations (segment or region when present)";
-  out.push_back(region);
+  append(out, region_text_results().specs());
   for (const char* block : {"deviation/", "deviation_not_vertices/", "deviation_by_region/*/"})
     for (const ResultSpec& s : prefixed(DeviationStats::results().specs(), block)) out.push_back(s);
   for (const ResultSpec& s : prefixed(distance_results().specs(), "distance/")) out.push_back(s);
   for (const ResultSpec& s : quality_specs()) out.push_back(s);
+  for (const CountTable* t : {&size_counts(), &not_vertices_counts(), &region_counts(), &sample_counts()}) append(out, counted(t->specs()));
   return out;
 }
 
@@ -225,8 +271,10 @@ void run_evaluate(StageRun& run) {
     rec.set_used("tolerance", sp.tolerance);
   }
   const DeviationStats stats = summarize_deviation(dist.distances, sp);
-  rec.count("reference_points", as_count(ref.cloud().size()));
-  rec.count("mesh_triangles", as_count(mesh.triangles.size()));
+  EvaluateCounts counts;
+  counts.reference_points = ref.cloud().size();
+  counts.mesh_triangles = mesh.triangles.size();
+  rec.add_counts(size_counts(), counts);
   rec.add(evaluate_text_results(), EvaluateTexts{ref_tag, distance_sign_names().name(dist.sign_used), ""});
   rec.set_used("reference", ref_tag);
   record_deviation(rec, "deviation/", stats);
@@ -248,7 +296,8 @@ void run_evaluate(StageRun& run) {
     vertex_tree.knn(ref.cloud().positions[i], 1, nn);
     if (nn.empty() || nn.front().squared_distance > 0.0) unused.push_back(dist.distances[i]);
   }
-  rec.count("points_not_vertices", as_count(unused.size()));
+  counts.points_not_vertices = unused.size();
+  rec.add_counts(not_vertices_counts(), counts);
   record_deviation(rec, "deviation_not_vertices/", summarize_deviation(unused, sp));
 
   // Per region, when the reference carries labels.
@@ -257,9 +306,10 @@ void run_evaluate(StageRun& run) {
   else if (!ref.cloud().fields.contains(region))
     throw InputError(fmt::format("region_field: the reference \"{}\" has no field \"{}\"", ref_tag, region));
   if (!region.empty()) {
-    rec.metric("region_field", region);
+    rec.add(region_text_results(), EvaluateTexts{"", "", region});
     const std::vector<RegionDeviation> regions = summarize_deviation_by_region(dist.distances, ref.cloud().fields.find(region)->values, sp);
-    rec.count("regions", as_count(regions.size()));
+    counts.regions = regions.size();
+    rec.add_counts(region_counts(), counts);
     for (const RegionDeviation& r : regions) record_deviation(rec, fmt::format("deviation_by_region/{}_{}/", region, r.label), r.stats);
   }
 
@@ -275,7 +325,8 @@ void run_evaluate(StageRun& run) {
   }
   const double forward_max = std::max(stats.max_positive, -stats.max_negative);
   const double back_mean = back.empty() ? 0.0 : back_sum / static_cast<double>(back.size());
-  rec.count("mesh_samples", as_count(on_mesh.size()));
+  counts.mesh_samples = on_mesh.size();
+  rec.add_counts(sample_counts(), counts);
   TwoWayDistance two_way;
   two_way.reference_to_mesh_mean = stats.mean_absolute;
   two_way.reference_to_mesh_max = forward_max;

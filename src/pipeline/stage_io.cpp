@@ -39,6 +39,63 @@ std::string format_titles() {
 
 bool holds_faces(const std::string& format) { return format_holds_faces(format); }
 
+// What read and write report.
+struct FileSummary {
+  std::size_t scans = 0, points = 0, faces = 0, dropped_nonfinite = 0;
+  std::string encoding;
+  bool normals = false, colors = false;
+  std::string fields;           // names of the scalar fields, comma-separated
+  std::string mesh_built_from;  // write: the tag of the cloud a mesh was built from
+};
+using FileTable = ResultTable<FileSummary>;
+// E57: counted when the file has several scans or they keep their own frames.
+const FileTable& scan_counts() {
+  static const FileTable table = [] {
+    FileTable t;
+    t.count("scans", &FileSummary::scans, "Scans in the file (several, or kept in their own frames)");
+    return t;
+  }();
+  return table;
+}
+const FileTable& read_counts() {
+  static const FileTable table = [] {
+    FileTable t;
+    t.count("points", &FileSummary::points, "Points read");
+    t.count("faces", &FileSummary::faces, "Faces read");
+    t.count("dropped_nonfinite", &FileSummary::dropped_nonfinite, "Points with NaN/Inf coordinates dropped").lower_is_better();
+    return t;
+  }();
+  return table;
+}
+const FileTable& read_metrics() {
+  static const FileTable table = [] {
+    FileTable t;
+    t.text("encoding", &FileSummary::encoding, "Encoding of the file (ascii, binary_little_endian, ...)");
+    t.flag("normals", &FileSummary::normals, "The data has normals");
+    t.flag("colors", &FileSummary::colors, "The data has colours");
+    t.text("fields", &FileSummary::fields, "Its scalar fields, comma-separated");
+    return t;
+  }();
+  return table;
+}
+const FileTable& write_counts() {
+  static const FileTable table = [] {
+    FileTable t;
+    t.count("points", &FileSummary::points, "Points written");
+    t.count("faces", &FileSummary::faces, "Faces written (0 where the format holds none)");
+    return t;
+  }();
+  return table;
+}
+const FileTable& write_metrics() {  // a mesh only
+  static const FileTable table = [] {
+    FileTable t;
+    t.text("mesh_built_from", &FileSummary::mesh_built_from, "Tag of the cloud the mesh was built from");
+    return t;
+  }();
+  return table;
+}
+
 void run_read(StageRun& run) {
   const std::string& file = run.args.text("filename");
   ReadOptions options;
@@ -73,7 +130,9 @@ void run_read(StageRun& run) {
     warnings = std::move(r.warnings);
     encoding = r.encoding;
     item.cloud() = std::move(r.cloud);
-    if (r.scans.size() > 1 || !options.apply_poses) rec.count("scans", as_count(r.scans.size()));
+    FileSummary scans;
+    scans.scans = r.scans.size();
+    if (r.scans.size() > 1 || !options.apply_poses) rec.add_counts(scan_counts(), scans);
     if (!options.apply_poses) item.scans = std::move(r.scans);
   }
   for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
@@ -81,17 +140,16 @@ void run_read(StageRun& run) {
     rec.warnings.push_back(fmt::format("{}: {} with NaN/Inf coordinates dropped (strict makes this an error)", file, plural(dropped, "point")));
   if (item.cloud().empty()) throw InputError(fmt::format("{}: no points", file));
   rec.set_used("format", format);
-  rec.count("points", as_count(item.cloud().size()));
-  rec.count("faces", as_count(item.mesh.triangles.size()));
-  rec.count("dropped_nonfinite", as_count(dropped));
-  rec.metric("encoding", encoding);
-  rec.metric("normals", item.cloud().has_normals());
-  rec.metric("colors", item.cloud().has_colors());
-  std::vector<std::string> fields;
-  for (const ScalarField& f : item.cloud().fields) fields.push_back(f.name);
-  std::string field_list;
-  for (const std::string& f : fields) field_list += (field_list.empty() ? "" : ",") + f;
-  rec.metric("fields", field_list);
+  FileSummary read;
+  read.points = item.cloud().size();
+  read.faces = item.mesh.triangles.size();
+  read.dropped_nonfinite = dropped;
+  read.encoding = encoding;
+  read.normals = item.cloud().has_normals();
+  read.colors = item.cloud().has_colors();
+  for (const ScalarField& f : item.cloud().fields) read.fields += (read.fields.empty() ? "" : ",") + f.name;
+  rec.add_counts(read_counts(), read);
+  rec.add(read_metrics(), read);
   rec.summary = fmt::format("read {}{} from {} ({})", plural(item.cloud().size(), "point"),
                             item.mesh.triangles.empty() ? "" : fmt::format(", {}", plural(item.mesh.triangles.size(), "face")), file, format);
   run.context.set(run.output, std::move(item));
@@ -147,9 +205,12 @@ void run_write(StageRun& run) {
                                   : write_mesh(file, item.mesh, w);
   for (const std::string& note : written.notes) rec.warnings.push_back(note);
   const std::size_t faces = holds_faces(format) ? item.mesh.triangles.size() : 0;
-  rec.count("points", as_count(item.cloud().size()));
-  rec.count("faces", as_count(faces));
-  if (item.is_mesh) rec.metric("mesh_built_from", item.source);
+  FileSummary written_counts;
+  written_counts.points = item.cloud().size();
+  written_counts.faces = faces;
+  written_counts.mesh_built_from = item.source;
+  rec.add_counts(write_counts(), written_counts);
+  if (item.is_mesh) rec.add(write_metrics(), written_counts);
   rec.summary = fmt::format("wrote {}{} to {}", plural(item.cloud().size(), "point"), faces > 0 ? fmt::format(", {}", plural(faces, "face")) : "",
                             file);
 }
@@ -178,6 +239,9 @@ StageSpec read_stage() {
           .meta("X0,Y0,Z0,X1,Y1,Z1")
           .unit("cloud units"),
   };
+  s.results = counted(scan_counts().specs());
+  append(s.results, counted(read_counts().specs()));
+  append(s.results, read_metrics().specs());
   s.run = run_read;
   s.check = [](const StageArgs& a) {
     if (a.text("filename").empty()) throw key_error("filename", "missing (the file to read)");
@@ -211,6 +275,8 @@ StageSpec write_stage() {
           .meta("S"),
       P::number("e57_scale", 0.0, "E57: scaled-integer coordinates with this step (default: float64)").unit("cloud units").positive().meta("S"),
   };
+  s.results = counted(write_counts().specs());
+  append(s.results, write_metrics().specs());
   s.run = run_write;
   s.check = [](const StageArgs& a) {
     if (a.text("filename").empty()) throw key_error("filename", "missing (the file to write)");

@@ -46,13 +46,101 @@ std::size_t zero_normal_count(const PointCloud& cloud) {
   return zero;
 }
 
+// What the normals stage reports besides the library's structs.
+struct NormalCounts {
+  std::size_t points = 0, zero_normals = 0;
+};
+const ResultTable<NormalCounts>& point_counts() {
+  static const ResultTable<NormalCounts> table = [] {
+    ResultTable<NormalCounts> t;
+    t.count("points", &NormalCounts::points, "Points");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<NormalCounts>& zero_normal_counts() {
+  static const ResultTable<NormalCounts> table = [] {
+    ResultTable<NormalCounts> t;
+    t.count("zero_normals", &NormalCounts::zero_normals, "Input normals that are zero or not finite").lower_is_better();
+    return t;
+  }();
+  return table;
+}
+const ResultTable<NormalResult>& normal_counts() {
+  static const ResultTable<NormalResult> table = [] {
+    ResultTable<NormalResult> t;
+    t.count("degenerate", &NormalResult::degenerate, "Points with too few neighbours or a degenerate neighbourhood: normal (0,0,0)")
+        .lower_is_better();
+    return t;
+  }();
+  return table;
+}
+struct SpacingValue {
+  double mean_spacing = 0.0;
+};
+const ResultTable<SpacingValue>& spacing_metrics() {
+  static const ResultTable<SpacingValue> table = [] {
+    ResultTable<SpacingValue> t;
+    t.number("mean_spacing", &SpacingValue::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<OrientResult>& flipped_counts() {
+  static const ResultTable<OrientResult> table = [] {
+    ResultTable<OrientResult> t;
+    t.count("flipped", &OrientResult::flipped, "Normals whose sign the orientation changed");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<OrientResult>& component_counts() {  // mst only
+  static const ResultTable<OrientResult> table = [] {
+    ResultTable<OrientResult> t;
+    t.count("components", &OrientResult::components, "Connected components of the orientation graph (orient mst)");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<NormalAgreement>& agreement_counts() {
+  static const ResultTable<NormalAgreement> table = [] {
+    ResultTable<NormalAgreement> t;
+    t.count("input_normals_compared", &NormalAgreement::compared, "Points where the input's and the new normal both have a direction");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<NormalAgreement>& agreement_metrics() {
+  static const ResultTable<NormalAgreement> table = [] {
+    ResultTable<NormalAgreement> t;
+    t.number("mean_angle_to_input_deg", &NormalAgreement::mean_angle_deg, "Mean angle between the new and the input's normal lines")
+        .with_unit("degrees")
+        .lower_is_better();
+    t.number("orientation_agreement_with_input", &NormalAgreement::share, "Share of compared points whose new normal is on the input's side")
+        .higher_is_better();
+    return t;
+  }();
+  return table;
+}
+
+std::vector<ResultSpec> normals_specs() {
+  std::vector<ResultSpec> out = counted(point_counts().specs());
+  append(out, counted(zero_normal_counts().specs()));
+  append(out, counted(normal_counts().specs()));
+  append(out, counted(flipped_counts().specs()));
+  append(out, counted(component_counts().specs()));
+  append(out, counted(agreement_counts().specs()));
+  append(out, spacing_metrics().specs());
+  append(out, agreement_metrics().specs());
+  return out;
+}
+
 // Records how far the estimated normals agree with the ones the input came with.
 NormalAgreement record_agreement(const std::vector<Vector3d>& reference, const std::vector<Vector3d>& estimated, StageRecord& rec) {
   const NormalAgreement agreement = compare_normals(reference, estimated);
   if (agreement.compared == 0) return agreement;
-  rec.count("input_normals_compared", as_count(agreement.compared));
-  rec.metric("mean_angle_to_input_deg", agreement.mean_angle_deg);
-  rec.metric("orientation_agreement_with_input", agreement.share);
+  rec.add_counts(agreement_counts(), agreement);
+  rec.add(agreement_metrics(), agreement);
   return agreement;
 }
 
@@ -88,8 +176,8 @@ void run_keep_normals(StageRun& run) {
   if (!cloud.has_normals()) throw key_error("orient", " keep: the input has no normals to keep (use mst, viewpoint or direction)");
   const std::size_t zero = zero_normal_count(cloud);
   rec.set_used("orient", std::string("keep"));
-  rec.count("points", as_count(cloud.size()));
-  rec.count("zero_normals", as_count(zero));
+  rec.add_counts(point_counts(), NormalCounts{cloud.size(), zero});
+  rec.add_counts(zero_normal_counts(), NormalCounts{cloud.size(), zero});
   if (zero == cloud.size()) throw InputError(fmt::format("orient keep: all {} of the input's normals are zero or not finite", cloud.size()));
   if (zero > 0)
     rec.warnings.push_back(fmt::format("{} of the input's normals ({:.2f} %) are zero or not finite, kept as they are", zero,
@@ -119,9 +207,9 @@ void run_normals(StageRun& run) {
   rec.set_used("orient", orientation);
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", estimated.radius_used);
-  rec.count("points", as_count(cloud.size()));
-  rec.count("degenerate", as_count(estimated.degenerate));
-  rec.metric("mean_spacing", spacing);
+  rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
+  rec.add_counts(normal_counts(), estimated);
+  rec.add(spacing_metrics(), SpacingValue{spacing});
   const bool by_radius = params.neighborhood != NeighborhoodKind::Knn;
   if (estimated.degenerate == cloud.size()) {
     if (by_radius)
@@ -141,12 +229,12 @@ void run_normals(StageRun& run) {
   std::string oriented_text = "not oriented";
   if (orientation == "input") {
     const OrientResult r = orient_to_reference(cloud, input_normals);
-    rec.count("flipped", as_count(r.flipped));
+    rec.add_counts(flipped_counts(), r);
     oriented_text = fmt::format("oriented to the input's normals ({} flipped)", r.flipped);
   } else if (orient.method != Orientation::None) {
     const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
-    rec.count("flipped", as_count(r.flipped));
-    if (orient.method == Orientation::Mst) rec.count("components", as_count(r.components));
+    rec.add_counts(flipped_counts(), r);
+    if (orient.method == Orientation::Mst) rec.add_counts(component_counts(), r);
     oriented_text = orient.method == Orientation::Mst ? fmt::format("oriented mst ({}, {} flipped)", plural(r.components, "component"), r.flipped)
                                                       : fmt::format("oriented by {} ({} flipped)", orientation_name(orient.method), r.flipped);
   }
@@ -176,6 +264,53 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
   run.record.warnings.push_back(fmt::format("no normals in the input; estimated (PCA, k = {}) and MST-oriented", k));
 }
 
+// What curvature reports.
+const ResultTable<CurvatureScale>& scale_metrics() {  // k = 0 (the scale chosen from the noise)
+  static const ResultTable<CurvatureScale> table = [] {
+    using S = CurvatureScale;
+    ResultTable<S> t;
+    t.number("noise", &S::noise, "Noise: median RMS residual of the jet fits at the chosen k").with_unit("cloud units");
+    t.computed("radius_in_noise", ResultType::Number, [](const S& s) { return ResultValue(s.noise > 0.0 ? s.radius / s.noise : 0.0); },
+               "Median neighbourhood radius in noise units");
+    t.flag("scale_capped", &S::capped, "k stopped at max_k before the radius reached scale_in_noise times the noise").lower_is_better();
+    return t;
+  }();
+  return table;
+}
+const ResultTable<CurvatureResult>& curvature_counts() {
+  static const ResultTable<CurvatureResult> table = [] {
+    using R = CurvatureResult;
+    ResultTable<R> t;
+    t.count("degenerate", &R::degenerate, "Points with no curvature (zero normal, too few neighbours, singular fit)").lower_is_better();
+    for (int type = 0; type < kSurfaceTypeCount; ++type)
+      t.computed(surface_type_name(static_cast<SurfaceType>(type)), ResultType::Integer,
+                 [type](const R& r) { return ResultValue(as_count(r.type_counts[std::size_t(type)])); }, "Points of this HK surface type");
+    return t;
+  }();
+  return table;
+}
+struct CurvatureValues {
+  double median_residual = 0.0;
+  bool normals_estimated = false;
+};
+const ResultTable<CurvatureValues>& curvature_metrics() {
+  static const ResultTable<CurvatureValues> table = [] {
+    ResultTable<CurvatureValues> t;
+    t.number("median_residual", &CurvatureValues::median_residual, "Median RMS residual of the jet fits").with_unit("cloud units");
+    t.flag("normals_estimated", &CurvatureValues::normals_estimated, "The input had no normals: they were estimated");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> curvature_specs() {
+  std::vector<ResultSpec> out = scale_metrics().specs();
+  append(out, counted(zero_normal_counts().specs()));
+  append(out, counted(point_counts().specs()));
+  append(out, counted(curvature_counts().specs()));
+  append(out, curvature_metrics().specs());
+  return out;
+}
+
 void run_curvature(StageRun& run) {
   const StageArgs& a = run.args;
   PointCloud& cloud = run.context.item(run.output).cloud();
@@ -197,9 +332,7 @@ void run_curvature(StageRun& run) {
   const CurvatureResult r = estimate_curvature(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
   StageRecord& rec = run.record;
   if (scale) {
-    rec.metric("noise", scale->noise);
-    rec.metric("radius_in_noise", scale->noise > 0.0 ? scale->radius / scale->noise : 0.0);
-    rec.metric("scale_capped", scale->capped);
+    rec.add(scale_metrics(), *scale);
     if (scale->capped)
       rec.warnings.push_back(fmt::format("the noise ({:.3g}) needs a neighbourhood radius of {:.3g} ({} times it), but k stopped at {} "
                                          "(radius {:.3g}; max_k {}, {}): the curvature may be noise-dominated (check the share "
@@ -211,11 +344,9 @@ void run_curvature(StageRun& run) {
   if (params.neighborhood != NeighborhoodKind::Radius) rec.set_used("k", std::int64_t{r.k_used});
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", r.radius_used);
   rec.set_used("zero_curvature", r.zero_curvature);
-  rec.count("points", as_count(cloud.size()));
-  rec.count("degenerate", as_count(r.degenerate));
-  for (int t = 0; t < kSurfaceTypeCount; ++t) rec.count(surface_type_name(static_cast<SurfaceType>(t)), as_count(r.type_counts[std::size_t(t)]));
-  rec.metric("median_residual", r.median_residual);
-  rec.metric("normals_estimated", estimated);
+  rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
+  rec.add_counts(curvature_counts(), r);
+  rec.add(curvature_metrics(), CurvatureValues{r.median_residual, estimated});
   if (r.degenerate > 0)
     rec.warnings.push_back(fmt::format("{} a zero normal, too few neighbours or a singular jet fit: curvature 0, surface_type 0 (undefined)",
                                        r.degenerate == 1 ? "1 point has" : fmt::format("{} points have", r.degenerate)));
@@ -227,6 +358,57 @@ void run_curvature(StageRun& run) {
                             params.neighborhood == NeighborhoodKind::Radius ? fmt::format("radius {:.4g}", r.radius_used) : fmt::format("k {}", r.k_used),
                             estimated ? ", normals estimated" : "", r.zero_curvature, surface_type_name(static_cast<SurfaceType>(best)),
                             100.0 * double(r.type_counts[best]) / double(std::max<std::size_t>(cloud.size(), 1)), r.degenerate);
+}
+
+// What features reports.
+const ResultTable<FeatureResult>& feature_counts() {
+  static const ResultTable<FeatureResult> table = [] {
+    ResultTable<FeatureResult> t;
+    t.count("candidates", &FeatureResult::candidates, "Points whose variation exceeded the threshold");
+    t.count("edges", &FeatureResult::edges, "Points labelled edge");
+    t.count("corners", &FeatureResult::corners, "Points labelled corner");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<FeatureResult>& feature_metrics() {
+  static const ResultTable<FeatureResult> table = [] {
+    ResultTable<FeatureResult> t;
+    t.number("mean_spacing", &FeatureResult::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+// Against truth_field, when given.
+struct FeatureScore {
+  std::size_t truth_points = 0;
+  double precision = 0.0, recall = 0.0;
+};
+const ResultTable<FeatureScore>& score_counts() {
+  static const ResultTable<FeatureScore> table = [] {
+    ResultTable<FeatureScore> t;
+    t.count("truth_points", &FeatureScore::truth_points, "Points marked in truth_field");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<FeatureScore>& score_metrics() {
+  static const ResultTable<FeatureScore> table = [] {
+    ResultTable<FeatureScore> t;
+    t.number("precision", &FeatureScore::precision, "Share of labelled points that truth_field marks").higher_is_better();
+    t.number("recall", &FeatureScore::recall, "Share of marked points that are labelled").higher_is_better();
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> features_specs() {
+  std::vector<ResultSpec> out = counted(zero_normal_counts().specs());
+  append(out, counted(point_counts().specs()));
+  append(out, counted(feature_counts().specs()));
+  append(out, feature_metrics().specs());
+  append(out, counted(score_counts().specs()));
+  append(out, score_metrics().specs());
+  return out;
 }
 
 void run_features(StageRun& run) {
@@ -250,11 +432,9 @@ void run_features(StageRun& run) {
   StageRecord& rec = run.record;
   rec.set_used("variation_threshold", r.variation_threshold_used);
   rec.set_used("plane_distance_used", r.dd_used);
-  rec.count("points", as_count(cloud.size()));
-  rec.count("candidates", as_count(r.candidates));
-  rec.count("edges", as_count(r.edges));
-  rec.count("corners", as_count(r.corners));
-  rec.metric("mean_spacing", r.mean_spacing);
+  rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
+  rec.add_counts(feature_counts(), r);
+  rec.add(feature_metrics(), r);
   std::string scored;
   if (!truth_name.empty()) {
     const std::vector<double>& truth = cloud.fields.find(truth_name)->values;
@@ -268,9 +448,8 @@ void run_features(StageRun& run) {
     }
     const double precision = labelled == 0 ? 0.0 : double(both) / double(labelled);
     const double recall = expected == 0 ? 0.0 : double(both) / double(expected);
-    rec.count("truth_points", as_count(expected));
-    rec.metric("precision", precision);
-    rec.metric("recall", recall);
+    rec.add_counts(score_counts(), FeatureScore{expected, precision, recall});
+    rec.add(score_metrics(), FeatureScore{expected, precision, recall});
     scored = fmt::format(", precision {:.3f} recall {:.3f} against '{}'", precision, recall, truth_name);
   }
   rec.summary = fmt::format("features: {}, {}, {} edge and {} corner {} (threshold {:.4g}, dd {:.4g}){}", plural(cloud.size(), "point"),
@@ -291,11 +470,13 @@ std::size_t check_input_normals(StageRun& run, const std::string& skipped) {
     throw InputError(fmt::format("all {} normals of the input are (0,0,0) or not finite; estimate them again with more "
                                  "neighbours (normals --k, or a --radius of a few mean spacings)",
                                  cloud.size()));
-  run.record.count("zero_normals", as_count(zero));
+  run.record.add_counts(zero_normal_counts(), NormalCounts{cloud.size(), zero});
   run.record.warnings.push_back(fmt::format("{} ({:.2f} %) a zero or non-finite normal in the input: {}", zero == 1 ? "1 point has" : fmt::format("{} points have", zero),
                                             100.0 * double(zero) / double(cloud.size()), skipped));
   return zero;
 }
+
+std::vector<ResultSpec> zero_normals_specs() { return counted(zero_normal_counts().specs()); }
 
 StageSpec normals_stage() {
   StageSpec s;
@@ -320,6 +501,7 @@ StageSpec normals_stage() {
     }
   s.examples = {"pointsurf normals data/kitten.xyz oriented.ply --k 30 --orient mst",
                 "pointsurf normals data/b9_training.ply b9_oriented.ply --orient viewpoint --viewpoint 596693,243676,300"};
+  s.results = normals_specs();
   s.run = run_normals;
   s.check = [](const StageArgs& a) {
     check_neighborhood(a);
@@ -349,6 +531,7 @@ StageSpec curvature_stage() {
   s.params = params_of(CurvatureParams::fields());
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3));
   s.examples = {"pointsurf curvature data/kitten.xyz kitten_curvature.ply --degree 3"};
+  s.results = curvature_specs();
   s.run = run_curvature;
   s.check = [](const StageArgs& a) {
     check_neighborhood(a);
@@ -372,6 +555,7 @@ StageSpec features_stage() {
   s.params = params_of(FeatureParams::fields());
   s.params.push_back(P::text("truth_field", "", "Field marking true feature points (non-zero): report precision and recall").meta("NAME"));
   s.examples = {"pointsurf features data/b9_training.ply b9_features.ply --report features.json"};
+  s.results = features_specs();
   s.run = run_features;
   s.check = [](const StageArgs& a) {
     if (a.integer("min_cluster_points") > a.integer("k"))

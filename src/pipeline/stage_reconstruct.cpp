@@ -3,6 +3,9 @@
 // cocone, Crust, ball pivoting or screened Poisson), with its topology reported.
 #include <algorithm>
 #include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -53,34 +56,210 @@ LoopKinds classify_loops(const MeshTopology& t, const PointCloud& cloud, const K
 }
 
 // The counts every method reports (ReconstructionStats), then its own.
-void record_stats(const ReconstructionStats& stats, StageRecord& rec) {
-  rec.count("duplicate_points", as_count(stats.duplicate_points));
-  rec.count("candidate_triangles", as_count(stats.candidate_triangles));
-  rec.count("holes_filled", as_count(stats.holes_filled));
-  rec.count("fill_triangles", as_count(stats.fill_triangles));
-  for (const auto& [name, value] : stats.counts) rec.count(name, as_count(value));
-  for (const auto& [name, value] : stats.figures) rec.metric(name, value);
-  rec.metric("method_seconds", stats.seconds);
+const ResultTable<ReconstructionStats>& stats_counts() {
+  static const ResultTable<ReconstructionStats> table = [] {
+    using S = ReconstructionStats;
+    ResultTable<S> t;
+    t.count("duplicate_points", &S::duplicate_points, "Exact duplicates of earlier points, left unused");
+    t.count("candidate_triangles", &S::candidate_triangles, "Triangles the method proposed before choosing");
+    t.count("holes_filled", &S::holes_filled, "Holes the hole filler closed");
+    t.count("fill_triangles", &S::fill_triangles, "Triangles the hole filler added");
+    return t;
+  }();
+  return table;
+}
+
+// Each method's own counts and figures (ReconstructionStats::counts and figures), in the order
+// the library lists them: the test of the declarations checks that each run reports these.
+struct MethodValues {
+  std::string method;
+  std::vector<std::string> counts, figures;
+};
+const std::vector<MethodValues>& method_values() {
+  static const std::vector<MethodValues> values = [] {
+    const std::vector<std::string> delaunay = {"delaunay_cells", "hull_points", "normal_filtered", "pruned", "open_pieces",
+                                               "closed_pieces", "walk_dropped", "rim_peeled", "flipped_pieces", "fill_triangles_removed"};
+    std::vector<std::string> crust = delaunay;
+    crust.insert(crust.end(), {"poles", "second_delaunay_vertices", "second_delaunay_cells"});
+    return std::vector<MethodValues>{
+        {"triangulate", {"selected_triangles", "front_triangles", "pinch_triangles_removed", "inserted_points"}, {"local_spacing_mean"}},
+        {"cocone", delaunay, {"seconds_delaunay"}},
+        {"crust", crust, {"seconds_delaunay"}},
+        {"ball-pivot", {"fill_triangles_removed"}, {}},
+        {"poisson",
+         {"skipped_normals", "depth", "finest_level", "finest_nodes", "trimmed_triangles", "trim_cut_triangles", "trim_removed_islands",
+          "unsupported_pieces", "unsupported_triangles"},
+         {"iso_value", "peak_megabytes"}},
+    };
+  }();
+  return values;
+}
+
+template <class V>
+V named_value(const std::vector<std::pair<std::string, V>>& list, const std::string& name) {
+  for (const auto& [key, value] : list)
+    if (key == name) return value;
+  throw std::logic_error("reconstruct: the method reported no \"" + name + "\"");
+}
+
+// The method's own counts (`counts`) or figures and method_seconds, from method_values().
+const ResultTable<ReconstructionStats>& method_table(const std::string& method, bool counts) {
+  static const std::map<std::pair<std::string, bool>, ResultTable<ReconstructionStats>> tables = [] {
+    using S = ReconstructionStats;
+    std::map<std::pair<std::string, bool>, ResultTable<S>> out;
+    for (const MethodValues& m : method_values()) {
+      ResultTable<S>& c = out[{m.method, true}];
+      for (const std::string& name : m.counts)
+        c.computed(name, ResultType::Integer, [name](const S& s) { return ResultValue(as_count(named_value(s.counts, name))); },
+                   "Count of the " + m.method + " method");
+      ResultTable<S>& f = out[{m.method, false}];
+      for (const std::string& name : m.figures)
+        f.computed(name, ResultType::Number, [name](const S& s) { return ResultValue(named_value(s.figures, name)); },
+                   "Figure of the " + m.method + " method");
+      f.number("method_seconds", &S::seconds, "Wall time of the method").with_unit("seconds");
+    }
+    return out;
+  }();
+  return tables.at({method, counts});
+}
+
+void record_stats(const std::string& method, const ReconstructionStats& stats, StageRecord& rec) {
+  rec.add_counts(stats_counts(), stats);
+  rec.add_counts(method_table(method, true), stats);
+  rec.add(method_table(method, false), stats);
+}
+
+// The Poisson figures beyond the common ones: the octree per level, the solver.
+struct PoissonLevels {
+  std::vector<double> nodes_per_level, relative_residual_per_level;
+};
+const ResultTable<PoissonLevels>& poisson_metrics() {
+  static const ResultTable<PoissonLevels> table = [] {
+    ResultTable<PoissonLevels> t;
+    t.numbers("nodes_per_level", &PoissonLevels::nodes_per_level, "Octree nodes per level, from level 1");
+    t.numbers("relative_residual_per_level", &PoissonLevels::relative_residual_per_level, "Relative residual of the solver per level, from level 1");
+    return t;
+  }();
+  return table;
 }
 
 // The Poisson figures beyond the common ones: the depth used, the octree per level, the solver.
 void record_poisson(const PoissonResult& r, StageRecord& rec) {
   rec.set_used("depth", std::int64_t{r.depth});
-  std::vector<double> nodes, residuals;
+  PoissonLevels levels;
   for (std::size_t l = 1; l < r.nodes_per_level.size(); ++l) {
-    nodes.push_back(double(r.nodes_per_level[l]));
-    residuals.push_back(r.residual_per_level[l]);
+    levels.nodes_per_level.push_back(double(r.nodes_per_level[l]));
+    levels.relative_residual_per_level.push_back(r.residual_per_level[l]);
   }
-  rec.metric("nodes_per_level", nodes);
-  rec.metric("relative_residual_per_level", residuals);
+  rec.add(poisson_metrics(), levels);
+}
+
+const ResultTable<SmallComponentsResult>& removed_counts() {
+  static const ResultTable<SmallComponentsResult> table = [] {
+    ResultTable<SmallComponentsResult> t;
+    t.count("components_removed", &SmallComponentsResult::components_removed, "Small components removed (min_component_share)");
+    t.count("faces_removed", &SmallComponentsResult::faces_removed, "Faces they had");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<FlatRegionResult>& region_counts() {
+  static const ResultTable<FlatRegionResult> table = [] {
+    ResultTable<FlatRegionResult> t;
+    t.count("regions", &FlatRegionResult::regions, "Flat regions labelled (face field region)");
+    t.count("largest_region_faces", &FlatRegionResult::largest_region, "Faces of the largest region");
+    return t;
+  }();
+  return table;
+}
+
+// The mesh as built: its counts and metrics.
+struct MeshSummary {
+  std::size_t points = 0, triangles = 0, unused_points = 0, boundary_edges = 0, holes = 0, border_loops = 0;
+  std::size_t non_manifold_edges = 0, non_manifold_vertices = 0, inconsistent_edges = 0, components = 0;
+  double holes_total_perimeter = 0.0, largest_hole_perimeter = 0.0, border_perimeter = 0.0;
+  std::int64_t euler_characteristic = 0;
+  long genus = -1;
+  bool watertight = false;
+  double noise_in_spacings = 0.0, mean_spacing = 0.0;
+  bool normals_estimated = false;
+  std::string built_from;
+};
+const ResultTable<MeshSummary>& mesh_counts() {
+  static const ResultTable<MeshSummary> table = [] {
+    using M = MeshSummary;
+    ResultTable<M> t;
+    t.count("points", &M::points, "Points of the input");
+    t.count("triangles", &M::triangles, "Triangles of the mesh");
+    t.count("unused_points", &M::unused_points, "Points no triangle uses (0 for poisson)").lower_is_better();
+    t.count("boundary_edges", &M::boundary_edges, "Edges with one triangle").lower_is_better();
+    t.count("holes", &M::holes, "Boundary loops that are holes the reconstruction left").lower_is_better();
+    t.count("border_loops", &M::border_loops, "Boundary loops along the border of the scan");
+    t.count("non_manifold_edges", &M::non_manifold_edges, "Edges with more than two triangles").lower_is_better();
+    t.count("non_manifold_vertices", &M::non_manifold_vertices, "Vertices whose triangles do not form one fan").lower_is_better();
+    t.count("inconsistent_edges", &M::inconsistent_edges, "Edges whose two triangles disagree on orientation").lower_is_better();
+    t.count("components", &M::components, "Connected components");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<MeshSummary>& noise_metrics() {
+  static const ResultTable<MeshSummary> table = [] {
+    ResultTable<MeshSummary> t;
+    t.number("noise_in_spacings", &MeshSummary::noise_in_spacings, "Median RMS distance to the local plane, in local spacings")
+        .with_unit("spacings");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<MeshSummary>& mesh_metrics() {
+  static const ResultTable<MeshSummary> table = [] {
+    using M = MeshSummary;
+    ResultTable<M> t;
+    t.number("holes_total_perimeter", &M::holes_total_perimeter, "Total perimeter of the holes").with_unit("cloud units").lower_is_better();
+    t.number("largest_hole_perimeter", &M::largest_hole_perimeter, "Perimeter of the largest hole").with_unit("cloud units").lower_is_better();
+    t.number("border_perimeter", &M::border_perimeter, "Total perimeter of the border loops").with_unit("cloud units");
+    t.count("euler_characteristic", &M::euler_characteristic, "V - E + F");
+    // MeshTopology::genus() is -1 where no genus is defined (several components, non-manifold):
+    // the report says null rather than a number that reads like a value.
+    t.computed("genus", ResultType::Integer,
+               [](const M& m) { return m.genus >= 0 ? ResultValue(std::int64_t{m.genus}) : ResultValue(std::numeric_limits<double>::quiet_NaN()); },
+               "Genus of a closed manifold mesh (null where undefined)");
+    t.flag("watertight", &M::watertight, "Closed, manifold and consistently oriented");
+    t.number("mean_spacing", &M::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
+    t.flag("normals_estimated", &M::normals_estimated, "The input had no normals: they were estimated");
+    t.text("built_from", &M::built_from, "Tag of the cloud the mesh comes from");
+    return t;
+  }();
+  return table;
+}
+
+std::vector<ResultSpec> reconstruct_specs() {
+  std::vector<ResultSpec> out = noise_metrics().specs();
+  append(out, poisson_metrics().specs());
+  append(out, counted(stats_counts().specs()));
+  std::set<std::string> seen;
+  for (const MethodValues& m : method_values())
+    for (const bool counts : {true, false})
+      for (const ResultSpec& spec : method_table(m.method, counts).specs()) {
+        if (!seen.insert(spec.key).second) continue;
+        ResultSpec copy = spec;
+        if (counts) copy.block = ResultBlock::Counts;
+        copy.doc = counts ? "A count of the method" : copy.key == "method_seconds" ? copy.doc : "A figure of the method";
+        out.push_back(copy);
+      }
+  append(out, counted(removed_counts().specs()));
+  append(out, counted(region_counts().specs()));
+  append(out, counted(mesh_counts().specs()));
+  append(out, mesh_metrics().specs());
+  return out;
 }
 
 // After any method: specks removed (min_component_share), then the flat regions labelled as
 // the face field "region" (issue 12). The topology is analysed again when faces went.
 void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
   const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
-  rec.count("components_removed", as_count(removed.components_removed));
-  rec.count("faces_removed", as_count(removed.faces_removed));
+  rec.add_counts(removed_counts(), removed);
   if (removed.faces_removed > 0) {
     const std::size_t used_before = result.topology.vertices;
     result.topology = analyze_topology(result.mesh);
@@ -89,8 +268,7 @@ void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, Sta
   const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a));
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
-  rec.count("regions", as_count(regions.regions));
-  rec.count("largest_region_faces", as_count(regions.largest_region));
+  rec.add_counts(region_counts(), regions);
 }
 
 void run_reconstruct(StageRun& run) {
@@ -108,7 +286,9 @@ void run_reconstruct(StageRun& run) {
   const KdTree& tree = run.context.tree(run.output);
   const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
   const NoiseEstimate noise = estimate_noise(cloud, tree);
-  rec.metric("noise_in_spacings", noise.median_in_spacings);
+  MeshSummary m;
+  m.noise_in_spacings = noise.median_in_spacings;
+  rec.add(noise_metrics(), m);
   if (noise.median_in_spacings > kNoisyInSpacings && method != "poisson")
     rec.warnings.push_back(fmt::format(
         "the points are noisy: their neighbourhoods are {:.2f} local spacings thick (median RMS distance to the local plane; "
@@ -138,7 +318,7 @@ void run_reconstruct(StageRun& run) {
     radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
     rec.set_used("radii", radii);
   }
-  record_stats(result.stats, rec);
+  record_stats(method, result.stats, rec);
   clean_and_label_faces(result, a, rec);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
@@ -149,28 +329,27 @@ void run_reconstruct(StageRun& run) {
     for (const BoundaryLoop& loop : t.boundary_loops) loops.borders.push_back(&loop);
   else loops = classify_loops(t, cloud, tree);
   const double hole_perimeter = LoopKinds::perimeter(loops.holes);
-  rec.count("points", as_count(cloud.size()));
-  rec.count("triangles", as_count(t.triangles));
-  rec.count("unused_points", as_count(result.unused_points));
-  rec.count("boundary_edges", as_count(t.boundary_edges));
-  rec.count("holes", as_count(loops.holes.size()));
-  rec.count("border_loops", as_count(loops.borders.size()));
-  rec.count("non_manifold_edges", as_count(t.non_manifold_edges));
-  rec.count("non_manifold_vertices", as_count(t.non_manifold_vertices));
-  rec.count("inconsistent_edges", as_count(t.inconsistent_edges));
-  rec.count("components", as_count(t.components));
-  rec.metric("holes_total_perimeter", hole_perimeter);
-  rec.metric("largest_hole_perimeter", loops.holes.empty() ? 0.0 : loops.holes.front()->length);
-  rec.metric("border_perimeter", LoopKinds::perimeter(loops.borders));
-  rec.metric("euler_characteristic", static_cast<std::int64_t>(t.euler_characteristic));
-  // MeshTopology::genus() is -1 where no genus is defined (several components, non-manifold):
-  // the report says null rather than a number that reads like a value.
-  if (t.genus() >= 0) rec.metric("genus", static_cast<std::int64_t>(t.genus()));
-  else rec.metric("genus", std::numeric_limits<double>::quiet_NaN());
-  rec.metric("watertight", t.watertight());
-  rec.metric("mean_spacing", spacing);
-  rec.metric("normals_estimated", estimated);
-  rec.metric("built_from", run.record.inputs.front());  // the tag of the cloud the mesh comes from
+  m.points = cloud.size();
+  m.triangles = t.triangles;
+  m.unused_points = result.unused_points;
+  m.boundary_edges = t.boundary_edges;
+  m.holes = loops.holes.size();
+  m.border_loops = loops.borders.size();
+  m.non_manifold_edges = t.non_manifold_edges;
+  m.non_manifold_vertices = t.non_manifold_vertices;
+  m.inconsistent_edges = t.inconsistent_edges;
+  m.components = t.components;
+  m.holes_total_perimeter = hole_perimeter;
+  m.largest_hole_perimeter = loops.holes.empty() ? 0.0 : loops.holes.front()->length;
+  m.border_perimeter = LoopKinds::perimeter(loops.borders);
+  m.euler_characteristic = static_cast<std::int64_t>(t.euler_characteristic);
+  m.genus = t.genus();
+  m.watertight = t.watertight();
+  m.mean_spacing = spacing;
+  m.normals_estimated = estimated;
+  m.built_from = run.record.inputs.front();
+  rec.add_counts(mesh_counts(), m);
+  rec.add(mesh_metrics(), m);
   if (t.triangles == 0)
     throw ComputeError(fmt::format("no triangle could be formed from {} (collinear, too sparse, or no usable normals?)",
                                    plural(cloud.size(), "point")));
@@ -217,6 +396,7 @@ StageSpec reconstruct_stage() {
   append(s.params, params_of(FlatRegionParams::fields()));
   s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf reconstruct data/kitten.xyz mesh_bp.ply --method ball-pivot --radii-in-spacings 2,4",
                 "pointsurf reconstruct data/kitten.xyz mesh_poisson.ply --method poisson --trim-depth 5"};
+  s.results = reconstruct_specs();
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw key_error("radii", " and radii_in_spacings: give only one");

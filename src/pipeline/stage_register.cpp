@@ -24,11 +24,75 @@ std::vector<double> matrix_list(const RigidTransform& t) {
 
 RegisterPairParams pair_params(const StageArgs& a) { return read_params<RegisterPairParams>(a); }
 
-void record_result(StageRecord& rec, const RegistrationResult& r, const std::string& prefix) {
-  rec.metric(prefix + "fitness", r.fitness);
-  rec.metric(prefix + "inlier_rmse", r.inlier_rmse);
-  rec.metric(prefix + "iterations", std::int64_t(r.iterations));
-  rec.metric(prefix + "converged", r.converged);
+// What register reports.
+const ResultTable<RegistrationResult>& fit_metrics() {  // the fit, and with global the RANSAC's under "global_"
+  static const ResultTable<RegistrationResult> table = [] {
+    using R = RegistrationResult;
+    ResultTable<R> t;
+    t.number("fitness", &R::fitness, "Share of source points within the fit's distance of the target").higher_is_better();
+    t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
+    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(as_count(r.iterations)); }, "ICP iterations");
+    t.flag("converged", &R::converged, "The fit converged").higher_is_better();
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RegisterPairResult>& pair_counts() {
+  static const ResultTable<RegisterPairResult> table = [] {
+    ResultTable<RegisterPairResult> t;
+    t.count("source_samples", &RegisterPairResult::source_samples, "Points of the source's downsample");
+    t.count("target_samples", &RegisterPairResult::target_samples, "Points of the target's downsample");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RegisterPairResult>& transform_metrics() {
+  static const ResultTable<RegisterPairResult> table = [] {
+    using R = RegisterPairResult;
+    ResultTable<R> t;
+    t.computed("transform", ResultType::Numbers, [](const R& r) { return ResultValue(matrix_list(r.result.transform)); },
+               "4x4 row by row: maps the source onto the target");
+    t.computed("rotation_angle_deg", ResultType::Number, [](const R& r) { return ResultValue(r.result.transform.angle_degrees()); },
+               "Rotation angle of the transform")
+        .with_unit("degrees");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RegisterPairResult>& pair_metrics() {
+  static const ResultTable<RegisterPairResult> table = [] {
+    using R = RegisterPairResult;
+    ResultTable<R> t;
+    t.number("spacing", &R::spacing, "The larger mean spacing of the two clouds").with_unit("cloud units");
+    t.number("voxel", &R::voxel, "Cell of the downsample (0: none)").with_unit("cloud units");
+    t.number("seconds_prepare", &R::seconds_prepare, "Normals, spacing, downsample, kd-trees").with_unit("seconds");
+    t.number("seconds_descriptors", &R::seconds_descriptors, "Descriptors").with_unit("seconds");
+    t.number("seconds_align", &R::seconds_align, "Matching and RANSAC").with_unit("seconds");
+    t.number("seconds_icp", &R::seconds_icp, "Coarse and fine ICP").with_unit("seconds");
+    return t;
+  }();
+  return table;
+}
+struct PairInputs {
+  std::size_t source_points = 0, target_points = 0;
+};
+const ResultTable<PairInputs>& input_counts() {
+  static const ResultTable<PairInputs> table = [] {
+    ResultTable<PairInputs> t;
+    t.count("source_points", &PairInputs::source_points, "Points of the source");
+    t.count("target_points", &PairInputs::target_points, "Points of the target");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> register_specs() {
+  std::vector<ResultSpec> out = counted(input_counts().specs());
+  append(out, counted(pair_counts().specs()));
+  append(out, transform_metrics().specs());
+  append(out, fit_metrics().specs());
+  append(out, prefixed(fit_metrics().specs(), "global_"));
+  append(out, pair_metrics().specs());
+  return out;
 }
 
 void run_register(StageRun& run) {
@@ -37,20 +101,12 @@ void run_register(StageRun& run) {
   const PointCloud& target = run.context.item(run.inputs[1]).cloud();
   const RegisterPairResult r = register_pair(source.cloud(), target, params, run.progress);
   StageRecord& rec = run.record;
-  rec.count("source_points", as_count(source.cloud().size()));
-  rec.count("target_points", as_count(target.size()));
-  rec.count("source_samples", as_count(r.source_samples));
-  rec.count("target_samples", as_count(r.target_samples));
-  rec.metric("transform", matrix_list(r.result.transform));
-  rec.metric("rotation_angle_deg", r.result.transform.angle_degrees());
-  record_result(rec, r.result, "");
-  if (params.global) record_result(rec, r.global, "global_");
-  rec.metric("spacing", r.spacing);
-  rec.metric("voxel", r.voxel);
-  rec.metric("seconds_prepare", r.seconds_prepare);
-  rec.metric("seconds_descriptors", r.seconds_descriptors);
-  rec.metric("seconds_align", r.seconds_align);
-  rec.metric("seconds_icp", r.seconds_icp);
+  rec.add_counts(input_counts(), PairInputs{source.cloud().size(), target.size()});
+  rec.add_counts(pair_counts(), r);
+  rec.add(transform_metrics(), r);
+  rec.add(fit_metrics(), r.result);
+  if (params.global) rec.add(fit_metrics(), r.global, "global_");
+  rec.add(pair_metrics(), r);
   for (const auto& [estimated, name] : {std::pair{r.source_normals_estimated, "source"}, std::pair{r.target_normals_estimated, "target"}})
     if (estimated)
       rec.warnings.push_back(fmt::format("the {} has no normals; estimated (PCA, k = {}) and MST-oriented", name, params.normal_neighbors));
@@ -86,6 +142,93 @@ void run_register(StageRun& run) {
 
 RegisterScansParams multi_params(const StageArgs& a) { return read_params<RegisterScansParams>(a); }
 
+// What register-many reports: per scan (under "points_<tag>" and "pose_<i>") and per link
+// ("link_<source>_<target>_fitness"), then the whole.
+struct ScanPoints {
+  std::size_t points = 0;
+};
+const ResultTable<ScanPoints>& scan_points_counts() {
+  static const ResultTable<ScanPoints> table = [] {
+    ResultTable<ScanPoints> t;
+    t.count("", &ScanPoints::points, "Points of the scan whose tag is *");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RigidTransform>& pose_metrics() {
+  static const ResultTable<RigidTransform> table = [] {
+    ResultTable<RigidTransform> t;
+    t.computed("", ResultType::Numbers, [](const RigidTransform& p) { return ResultValue(matrix_list(p)); },
+               "Pose of scan * (4x4 row by row): maps it into scan 0's frame");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RegistrationResult>& link_metrics() {
+  static const ResultTable<RegistrationResult> table = [] {
+    ResultTable<RegistrationResult> t;
+    t.number("_fitness", &RegistrationResult::fitness, "Fitness of the link from scan * onto scan *").higher_is_better();
+    return t;
+  }();
+  return table;
+}
+struct Links {
+  std::size_t links = 0, overlap_links = 0, pruned_links = 0, points = 0;
+};
+const ResultTable<Links>& link_counts() {
+  static const ResultTable<Links> table = [] {
+    ResultTable<Links> t;
+    t.count("links", &Links::links, "Pairwise registrations");
+    t.count("overlap_links", &Links::overlap_links, "Of those, the ones found by overlap (after the first pass)");
+    t.count("pruned_links", &Links::pruned_links, "Links the pose graph dropped");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Links>& merged_counts() {
+  static const ResultTable<Links> table = [] {
+    ResultTable<Links> t;
+    t.count("points", &Links::points, "Points of the merged cloud");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<PoseGraphResult>& graph_metrics() {  // refine
+  static const ResultTable<PoseGraphResult> table = [] {
+    using G = PoseGraphResult;
+    ResultTable<G> t;
+    t.number("graph_cost_before", &G::initial_cost, "Cost of the pose graph before the refinement").with_unit("squared cloud units");
+    t.number("graph_cost", &G::cost, "Cost after it").with_unit("squared cloud units").lower_is_better();
+    t.computed("graph_iterations", ResultType::Integer, [](const G& g) { return ResultValue(as_count(g.iterations)); }, "Gauss-Newton iterations");
+    t.flag("graph_converged", &G::converged, "The refinement converged").higher_is_better();
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RegisterScansResult>& scans_metrics() {
+  static const ResultTable<RegisterScansResult> table = [] {
+    using R = RegisterScansResult;
+    ResultTable<R> t;
+    t.number("spacing", &R::spacing, "The largest mean spacing of the scans").with_unit("cloud units");
+    t.number("seconds_prepare", &R::seconds_prepare, "Normals, downsamples, descriptors").with_unit("seconds");
+    t.number("seconds_initial", &R::seconds_initial, "The first pass").with_unit("seconds");
+    t.number("seconds_overlaps", &R::seconds_overlaps, "Finding and registering the other overlapping pairs").with_unit("seconds");
+    t.number("seconds_graph", &R::seconds_graph, "The pose graph").with_unit("seconds");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> register_many_specs() {
+  std::vector<ResultSpec> out = counted(scan_points_counts().specs(), "points_*");
+  append(out, prefixed(pose_metrics().specs(), "pose_*"));
+  append(out, prefixed(link_metrics().specs(), "link_*_*"));
+  append(out, counted(link_counts().specs()));
+  append(out, graph_metrics().specs());
+  append(out, scans_metrics().specs());
+  append(out, counted(merged_counts().specs()));
+  return out;
+}
+
 void run_register_many(StageRun& run) {
   const RegisterScansParams params = multi_params(run.args);
   std::vector<PointCloud> scans;
@@ -102,32 +245,23 @@ void run_register_many(StageRun& run) {
     if (r.normals_estimated[i])
       rec.warnings.push_back(fmt::format("scan {} ({}) has no normals; estimated (PCA, k = {}) and MST-oriented", i, run.inputs[i],
                                          params.pair.normal_neighbors));
-    rec.count("points_" + run.inputs[i], as_count(scans[i].size()));
-    rec.metric(fmt::format("pose_{}", i), matrix_list(r.poses[i]));
+    rec.add_counts(scan_points_counts(), ScanPoints{scans[i].size()}, "points_" + run.inputs[i]);
+    rec.add(pose_metrics(), r.poses[i], fmt::format("pose_{}", i));
   }
   std::size_t initial = 0, pruned = 0;
   for (const ScanLink& l : r.links) {
     initial += l.initial;
     pruned += l.pruned;
-    rec.metric(fmt::format("link_{}_{}_fitness", l.source, l.target), l.result.fitness);
+    rec.add(link_metrics(), l.result, fmt::format("link_{}_{}", l.source, l.target));
     if (!l.result.converged) rec.warnings.push_back(fmt::format("ICP of scan {} onto scan {} did not converge: {}", l.source, l.target, l.result.message));
   }
-  rec.count("links", as_count(r.links.size()));
-  rec.count("overlap_links", as_count(r.links.size() - initial));
-  rec.count("pruned_links", as_count(pruned));
-  if (params.refine) {
-    rec.metric("graph_cost_before", r.graph.initial_cost);
-    rec.metric("graph_cost", r.graph.cost);
-    rec.metric("graph_iterations", std::int64_t(r.graph.iterations));
-    rec.metric("graph_converged", r.graph.converged);
-  }
-  rec.metric("spacing", r.spacing);
-  rec.metric("seconds_prepare", r.seconds_prepare);
-  rec.metric("seconds_initial", r.seconds_initial);
-  rec.metric("seconds_overlaps", r.seconds_overlaps);
-  rec.metric("seconds_graph", r.seconds_graph);
+  Links links{r.links.size(), r.links.size() - initial, pruned, 0};
+  rec.add_counts(link_counts(), links);
+  if (params.refine) rec.add(graph_metrics(), r.graph);
+  rec.add(scans_metrics(), r);
   PointCloud merged = merge_scans(scans, r.poses);
-  rec.count("points", as_count(merged.size()));
+  links.points = merged.size();
+  rec.add_counts(merged_counts(), links);
   rec.summary = fmt::format("register-many: {} in one frame ({} of them, {} links, {} pruned), {}", plural(scans.size(), "scan"),
                             multi_mode_name(params.mode), r.links.size(), pruned, plural(merged.size(), "point"));
   run.context.set_cloud(run.output, std::move(merged), run.inputs.front());
@@ -156,6 +290,7 @@ StageSpec register_stage() {
                 "pointsurf register moved.ply data/kitten.xyz --out T.json",
                 "pointsurf register moved.ply data/kitten.xyz --out T.json --apply back.ply --descriptor pfh --icp point",
                 "pointsurf transform moved.ply back2.ply --file T.json"};
+  s.results = register_specs();
   s.run = run_register;
   s.check = [](const StageArgs& a) { pair_params(a).validate(); };
   return s;
@@ -178,6 +313,7 @@ StageSpec register_many_stage() {
   s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 0.8660254037844387,-0.5,0,0.05,0.5,0.8660254037844387,0,0.02,0,0,1,-0.03,0,0,0,1",
                 "pointsurf register-many data/kitten.xyz moved.ply --out merged.ply",
                 "pointsurf register-many data/kitten.xyz moved.ply merged_first.ply --mode first --icp point"};
+  s.results = register_many_specs();
   s.run = run_register_many;
   s.check = [](const StageArgs& a) { multi_params(a).validate(); };
   return s;

@@ -15,6 +15,56 @@
 namespace pointsurf::detail {
 namespace {
 
+// What render reports.
+const ResultTable<RenderResult>& drawn_counts() {
+  static const ResultTable<RenderResult> table = [] {
+    ResultTable<RenderResult> t;
+    t.count("points_drawn", &RenderResult::points_drawn, "Points drawn");
+    t.count("triangles_drawn", &RenderResult::triangles_drawn, "Triangles drawn");
+    return t;
+  }();
+  return table;
+}
+struct Picture {
+  std::size_t png_bytes = 0;
+  std::string image;
+};
+const ResultTable<Picture>& picture_counts() {
+  static const ResultTable<Picture> table = [] {
+    ResultTable<Picture> t;
+    t.count("png_bytes", &Picture::png_bytes, "Size of the PNG file").with_unit("bytes");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<RenderResult>& scale_metrics() {  // coloured by a field
+  static const ResultTable<RenderResult> table = [] {
+    ResultTable<RenderResult> t;
+    t.computed("scale_min", ResultType::Number, [](const RenderResult& r) { return ResultValue(r.scale.min); }, "Value of the colour scale's low end");
+    t.computed("scale_max", ResultType::Number, [](const RenderResult& r) { return ResultValue(r.scale.max); }, "Value of the colour scale's high end");
+    t.computed("colormap", ResultType::Text,
+               [](const RenderResult& r) { return ResultValue(std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential")); },
+               "Colour map: sequential or diverging");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Picture>& picture_metrics() {
+  static const ResultTable<Picture> table = [] {
+    ResultTable<Picture> t;
+    t.text("image", &Picture::image, "The PNG file written");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> render_specs() {
+  std::vector<ResultSpec> out = counted(drawn_counts().specs());
+  append(out, counted(picture_counts().specs()));
+  append(out, scale_metrics().specs());
+  append(out, picture_metrics().specs());
+  return out;
+}
+
 void run_render(StageRun& run) {
   const StageArgs& a = run.args;
   const DataItem& item = run.context.item(run.inputs.front());
@@ -54,15 +104,11 @@ void run_render(StageRun& run) {
   const std::vector<std::uint8_t> png = encode_png(r.image);
   write_file_atomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   for (const std::string& w : r.warnings) run.record.warnings.push_back(w);
-  run.record.count("points_drawn", as_count(r.points_drawn));
-  run.record.count("triangles_drawn", as_count(r.triangles_drawn));
-  run.record.count("png_bytes", as_count(png.size()));
-  if (!p.field.empty()) {
-    run.record.metric("scale_min", r.scale.min);
-    run.record.metric("scale_max", r.scale.max);
-    run.record.metric("colormap", std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential"));
-  }
-  run.record.metric("image", file);
+  const Picture picture{png.size(), file};
+  run.record.add_counts(drawn_counts(), r);
+  run.record.add_counts(picture_counts(), picture);
+  if (!p.field.empty()) run.record.add(scale_metrics(), r);
+  run.record.add(picture_metrics(), picture);
   run.record.summary = fmt::format("render: {} view of {} to {} ({}x{})", p.camera ? "camera" : a.text("view"),
                                    item.mesh.triangles.empty() ? plural(item.cloud().size(), "point") : plural(item.mesh.triangles.size(), "triangle"),
                                    file, p.size.width, p.size.height);
@@ -98,6 +144,7 @@ StageSpec render_stage() {
   s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf render mesh.ply mesh.png --view front --size 1600x1200",
                 "pointsurf evaluate mesh.ply --reference data/kitten.xyz --out deviation.ply",
                 "pointsurf render deviation.ply dev.png --field deviation --tolerance 0.001 --unit m"};
+  s.results = render_specs();
   s.run = run_render;
   s.check = [](const StageArgs& a) {
     const std::string& file = a.text("filename");

@@ -15,19 +15,144 @@
 namespace pointsurf::detail {
 namespace {
 
+// What segment reports: ransac's candidates and primitives, then the labels of any method.
+const ResultTable<PrimitiveResult>& candidate_counts() {
+  static const ResultTable<PrimitiveResult> table = [] {
+    ResultTable<PrimitiveResult> t;
+    t.count("candidates", &PrimitiveResult::candidates, "Candidate primitives drawn (ransac)");
+    return t;
+  }();
+  return table;
+}
+// One primitive, a block under "primitive_<i>/".
+const ResultTable<Primitive>& primitive_metrics() {
+  static const ResultTable<Primitive> table = [] {
+    using S = Primitive;
+    const std::string u = "cloud units";
+    ResultTable<S> t;
+    t.computed("type", ResultType::Text, [](const S& s) { return ResultValue(std::string(primitive_type_name(s.type))); },
+               "Type of the primitive: plane, sphere, cylinder, cone or torus");
+    t.computed("point", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.point)); },
+               "Plane: the inliers' centroid; sphere, torus: centre; cylinder: axis point; cone: apex")
+        .with_unit(u);
+    t.computed("axis", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.axis)); },
+               "Plane: unit normal; cylinder, cone, torus: unit axis (cone: from the apex into the cone)");
+    t.number("radius", &S::radius, "Sphere, cylinder: radius; torus: major radius").with_unit(u);
+    t.number("angle_deg", &S::angle_deg, "Cone: half opening angle").with_unit("degrees");
+    t.count("inliers", &S::inliers, "Points assigned to it");
+    t.number("rms", &S::rms, "RMS distance of those points to it").with_unit(u).lower_is_better();
+    t.number("minor_radius", &S::minor_radius, "Torus: tube radius").with_unit(u);
+    return t;
+  }();
+  return table;
+}
+struct Labels {
+  std::size_t points = 0, segments = 0, unassigned = 0;
+  bool normals_estimated = false;
+};
+const ResultTable<Labels>& label_counts() {
+  static const ResultTable<Labels> table = [] {
+    ResultTable<Labels> t;
+    t.count("points", &Labels::points, "Points");
+    t.count("segments", &Labels::segments, "Segments (ransac: primitives) found");
+    t.count("unassigned", &Labels::unassigned, "Points in no segment (label -1)");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Labels>& label_metrics() {
+  static const ResultTable<Labels> table = [] {
+    ResultTable<Labels> t;
+    t.flag("normals_estimated", &Labels::normals_estimated, "The input had no normals: they were estimated");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> segment_specs() {
+  std::vector<ResultSpec> out = zero_normals_specs();
+  append(out, counted(candidate_counts().specs()));
+  append(out, prefixed(primitive_metrics().specs(), "primitive_*/"));
+  append(out, counted(label_counts().specs()));
+  append(out, label_metrics().specs());
+  return out;
+}
+
+// What boundary reports.
+const ResultTable<BoundaryResult>& boundary_counts() {
+  static const ResultTable<BoundaryResult> table = [] {
+    ResultTable<BoundaryResult> t;
+    t.count("boundary", &BoundaryResult::count, "Boundary points (field boundary)");
+    return t;
+  }();
+  return table;
+}
+// One outline, under "outline_<i>".
+struct OutlineRow {
+  const SegmentOutline* outline = nullptr;
+  std::size_t holes = 0;
+};
+const ResultTable<OutlineRow>& outline_metrics() {
+  static const ResultTable<OutlineRow> table = [] {
+    ResultTable<OutlineRow> t;
+    t.computed("", ResultType::Numbers,
+               [](const OutlineRow& r) {
+                 const SegmentOutline& s = *r.outline;
+                 return ResultValue(std::vector<double>{double(s.segment), s.area, s.perimeter, double(s.loops.size()), double(r.holes)});
+               },
+               "Outline i: segment, area, perimeter, loops, holes");
+    return t;
+  }();
+  return table;
+}
+struct Outlines {
+  std::size_t points = 0, outlines = 0, loops = 0, holes = 0, nonplanar_segments = 0;
+  double outline_area = 0.0, outline_length = 0.0;
+  std::string outline_source;
+};
+const ResultTable<Outlines>& boundary_points_counts() {
+  static const ResultTable<Outlines> table = [] {
+    ResultTable<Outlines> t;
+    t.count("points", &Outlines::points, "Points");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Outlines>& outline_counts() {
+  static const ResultTable<Outlines> table = [] {
+    ResultTable<Outlines> t;
+    t.count("outlines", &Outlines::outlines, "Outlines of planar segments");
+    t.count("loops", &Outlines::loops, "Their loops");
+    t.count("holes", &Outlines::holes, "Loops that are holes");
+    t.count("nonplanar_segments", &Outlines::nonplanar_segments, "Segments skipped as not planar");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Outlines>& outline_totals() {
+  static const ResultTable<Outlines> table = [] {
+    ResultTable<Outlines> t;
+    t.number("outline_area", &Outlines::outline_area, "Total area of the outlines").with_unit("square cloud units");
+    t.number("outline_length", &Outlines::outline_length, "Total perimeter of the outlines").with_unit("cloud units");
+    t.text("outline_source", &Outlines::outline_source, "Where the segments came from (segment field, region growing)");
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> boundary_specs() {
+  std::vector<ResultSpec> out = counted(boundary_points_counts().specs());
+  append(out, counted(boundary_counts().specs()));
+  append(out, prefixed(outline_metrics().specs(), "outline_*"));
+  append(out, counted(outline_counts().specs()));
+  append(out, outline_totals().specs());
+  return out;
+}
+
 void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
   rec.set_used("epsilon_used", r.epsilon_used);
   rec.set_used("cluster_epsilon_used", r.cluster_epsilon_used);
   rec.set_used("min_points", static_cast<std::int64_t>(r.min_points_used));
-  rec.count("candidates", as_count(r.candidates));
-  for (std::size_t i = 0; i < r.primitives.size(); ++i) {
-    const Primitive& s = r.primitives[i];
-    // Per primitive: its type, then point (3), axis (3), radius, half angle (degrees), inliers, RMS,
-    // minor radius (torus).
-    rec.metric(fmt::format("primitive_{}_type", i), std::string(primitive_type_name(s.type)));
-    rec.metric(fmt::format("primitive_{}", i), std::vector<double>{s.point.x(), s.point.y(), s.point.z(), s.axis.x(), s.axis.y(), s.axis.z(),
-                                                                   s.radius, s.angle_deg, double(s.inliers), s.rms, s.minor_radius});
-  }
+  rec.add_counts(candidate_counts(), r);
+  for (std::size_t i = 0; i < r.primitives.size(); ++i) rec.add(primitive_metrics(), r.primitives[i], fmt::format("primitive_{}/", i));
 }
 
 void run_segment(StageRun& run) {
@@ -65,10 +190,9 @@ void run_segment(StageRun& run) {
   }
   std::vector<double>& field = cloud.fields.add("segment", cloud.size(), ScalarType::Int32).values;
   for (std::size_t i = 0; i < labels.size(); ++i) field[i] = labels[i];
-  rec.count("points", as_count(cloud.size()));
-  rec.count("segments", as_count(segments));
-  rec.count("unassigned", as_count(unassigned));
-  rec.metric("normals_estimated", estimated);
+  const Labels counts{cloud.size(), segments, unassigned, estimated};
+  rec.add_counts(label_counts(), counts);
+  rec.add(label_metrics(), counts);
   if (segments == 0) rec.warnings.push_back("no segment was found: every point is unassigned (-1)");
   rec.summary = fmt::format("segment ({}): {} {}, {} of {} unassigned{}", method, segments, method == "ransac" ? "primitives" : "segments",
                             unassigned, plural(cloud.size(), "point"), estimated ? ", normals estimated" : "");
@@ -83,8 +207,10 @@ void run_boundary(StageRun& run) {
   const BoundaryResult b = detect_boundary_points(cloud, read_params<BoundaryParams>(a), &tree);
   std::vector<double>& field = cloud.fields.add("boundary", cloud.size(), ScalarType::UInt8).values;
   for (std::size_t i = 0; i < field.size(); ++i) field[i] = b.boundary[i];
-  rec.count("points", as_count(cloud.size()));
-  rec.count("boundary", as_count(b.count));
+  Outlines points;
+  points.points = cloud.size();
+  rec.add_counts(boundary_points_counts(), points);
+  rec.add_counts(boundary_counts(), b);
   // Outlines of the planar segments: the input's "segment" field, else region growing.
   std::vector<std::int32_t> labels(cloud.size(), -1);
   const ScalarField* segments = cloud.fields.find("segment");
@@ -116,16 +242,11 @@ void run_boundary(StageRun& run) {
     holes += h;
     area += s.area;
     length += s.perimeter;
-    // Per outline: segment, area, perimeter, loops, holes.
-    rec.metric(fmt::format("outline_{}", i), std::vector<double>{double(s.segment), s.area, s.perimeter, double(s.loops.size()), double(h)});
+    rec.add(outline_metrics(), OutlineRow{&s, h}, fmt::format("outline_{}", i));
   }
-  rec.count("outlines", as_count(o.outlines.size()));
-  rec.count("loops", as_count(lines.size()));
-  rec.count("holes", as_count(holes));
-  rec.count("nonplanar_segments", as_count(o.nonplanar));
-  rec.metric("outline_area", area);
-  rec.metric("outline_length", length);
-  rec.metric("outline_source", source);
+  const Outlines totals{cloud.size(), o.outlines.size(), lines.size(), holes, o.nonplanar, area, length, source};
+  rec.add_counts(outline_counts(), totals);
+  rec.add(outline_totals(), totals);
   const std::string& path = a.text("outlines");
   if (!path.empty()) write_polylines(path, lines, write);
   rec.summary = fmt::format("boundary: {} of {} on the boundary; {} outlines ({} loops, {} holes) of planar segments from the {}, area {:.4g}, length {:.4g}{}",
@@ -150,6 +271,7 @@ StageSpec boundary_stage() {
   s.params.push_back(P::text("crs", "", "GeoJSON: name of the coordinates' CRS (e.g. EPSG:25832)").meta("CRS"));
   s.examples = {"pointsurf segment data/b9_training.ply roofs.ply --method ransac --types plane",
                 "pointsurf boundary roofs.ply roofs_boundary.ply --outlines roofs.geojson --crs EPSG:25832"};
+  s.results = boundary_specs();
   s.run = run_boundary;
   s.check = [](const StageArgs& a) {
     read_params<BoundaryParams>(a).validate();
@@ -178,6 +300,7 @@ StageSpec segment_stage() {
   s.params.push_back(P::integer("normals_k", NormalParams{}.k, "Neighbours for normals when the input has none").at_least(3).only({"region", "ransac"}));
   s.examples = {"pointsurf segment data/kitten.xyz kitten_segments.ply --method region --max-angle-deg 5",
                 "pointsurf segment data/b9_training.ply primitives.ply --method ransac --report primitives.json"};
+  s.results = segment_specs();
   s.run = run_segment;
   s.check = [](const StageArgs& a) {
     if (a.method() == "region") read_params<RegionGrowingParams>(a).validate();

@@ -34,6 +34,76 @@ std::vector<ParamSpec> method_params(const std::string& method) {
   return out;
 }
 
+// What simplify reports.
+struct Simplified {
+  std::size_t input = 0, output = 0, removed = 0, feature_points = 0, boundary_points = 0, added = 0;
+  double reduction = 0.0, length_used = 0.0;
+  // How far the simplified cloud is from the full one, both ways (nearest neighbours).
+  double input_to_output_mean = 0.0, input_to_output_max = 0.0, output_to_input_mean = 0.0, output_to_input_max = 0.0;
+  double chamfer = 0.0, hausdorff = 0.0, chamfer_in_spacings = 0.0;
+};
+using SimplifiedTable = ResultTable<Simplified>;
+const SimplifiedTable& simplified_counts() {
+  static const SimplifiedTable table = [] {
+    using S = Simplified;
+    SimplifiedTable t;
+    t.count("input", &S::input, "Points read");
+    t.count("output", &S::output, "Points left");
+    t.count("removed", &S::removed, "Input points removed");
+    t.count("feature_points", &S::feature_points, "Feature points kept");
+    t.count("boundary_points", &S::boundary_points, "Boundary points kept");
+    t.count("added", &S::added, "Points added (lfs)");
+    return t;
+  }();
+  return table;
+}
+const SimplifiedTable& reduction_metrics() {
+  static const SimplifiedTable table = [] {
+    SimplifiedTable t;
+    t.number("reduction", &Simplified::reduction, "Input points per output point");
+    return t;
+  }();
+  return table;
+}
+const SimplifiedTable& length_metrics() {  // methods that derive a length
+  static const SimplifiedTable table = [] {
+    SimplifiedTable t;
+    t.number("length_used", &Simplified::length_used, "Length the method used (cell, distance)").with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+const SimplifiedTable& distance_metrics() {
+  static const SimplifiedTable table = [] {
+    using S = Simplified;
+    const std::string u = "cloud units";
+    SimplifiedTable t;
+    t.number("input_to_output_mean", &S::input_to_output_mean, "Mean distance, input to output").with_unit(u).lower_is_better();
+    t.number("input_to_output_max", &S::input_to_output_max, "Largest distance, input to output").with_unit(u).lower_is_better();
+    t.number("output_to_input_mean", &S::output_to_input_mean, "Mean distance, output to input").with_unit(u).lower_is_better();
+    t.number("output_to_input_max", &S::output_to_input_max, "Largest distance, output to input").with_unit(u).lower_is_better();
+    t.number("chamfer", &S::chamfer, "Chamfer distance: the mean of both means").with_unit(u).lower_is_better();
+    t.number("hausdorff", &S::hausdorff, "Hausdorff distance: the larger of both maxima").with_unit(u).lower_is_better();
+    return t;
+  }();
+  return table;
+}
+const SimplifiedTable& spacing_metrics() {
+  static const SimplifiedTable table = [] {
+    SimplifiedTable t;
+    t.number("chamfer_in_spacings", &Simplified::chamfer_in_spacings, "Chamfer distance in mean spacings of the input")
+        .with_unit("spacings")
+        .lower_is_better();
+    return t;
+  }();
+  return table;
+}
+std::vector<ResultSpec> simplify_specs() {
+  std::vector<ResultSpec> out = counted(simplified_counts().specs());
+  for (const SimplifiedTable* t : {&reduction_metrics(), &length_metrics(), &distance_metrics(), &spacing_metrics()}) append(out, t->specs());
+  return out;
+}
+
 void run_simplify(StageRun& run) {
   const StageArgs& a = run.args;
   const std::string& method = a.method();
@@ -67,14 +137,18 @@ void run_simplify(StageRun& run) {
   const std::size_t input = cloud.size();
   const double reduction = r.reduction();
   const std::size_t kept_inputs = r.cloud.size() - r.added_points;
-  rec.count("input", as_count(input));
-  rec.count("output", as_count(r.cloud.size()));
-  rec.count("removed", as_count(input - kept_inputs));
-  rec.count("feature_points", as_count(r.feature_points));
-  rec.count("boundary_points", as_count(r.boundary_points));
-  rec.count("added", as_count(r.added_points));
-  rec.metric("reduction", reduction);
-  if (r.length_used > 0.0) rec.metric("length_used", r.length_used);
+  Simplified report;
+  report.input = input;
+  report.output = r.cloud.size();
+  report.removed = input - kept_inputs;
+  report.feature_points = r.feature_points;
+  report.boundary_points = r.boundary_points;
+  report.added = r.added_points;
+  report.reduction = reduction;
+  report.length_used = r.length_used;
+  rec.add_counts(simplified_counts(), report);
+  rec.add(reduction_metrics(), report);
+  if (r.length_used > 0.0) rec.add(length_metrics(), report);
   // How far the simplified cloud is from the full one, both ways.
   auto summarise = [](const NeighborLists& lists) {
     double sum = 0.0, worst = 0.0;
@@ -92,13 +166,15 @@ void run_simplify(StageRun& run) {
   item.cloud() = std::move(r.cloud);
   if (tree != nullptr && !item.cloud().empty()) {
     const auto in_to_out = summarise(run.context.tree(run.output).knn_all(input_positions, 1));
-    rec.metric("input_to_output_mean", in_to_out.first);
-    rec.metric("input_to_output_max", in_to_out.second);
-    rec.metric("output_to_input_mean", out_to_in.first);
-    rec.metric("output_to_input_max", out_to_in.second);
-    rec.metric("chamfer", 0.5 * (in_to_out.first + out_to_in.first));
-    rec.metric("hausdorff", std::max(in_to_out.second, out_to_in.second));
-    if (spacing > 0.0) rec.metric("chamfer_in_spacings", 0.5 * (in_to_out.first + out_to_in.first) / spacing);
+    report.input_to_output_mean = in_to_out.first;
+    report.input_to_output_max = in_to_out.second;
+    report.output_to_input_mean = out_to_in.first;
+    report.output_to_input_max = out_to_in.second;
+    report.chamfer = 0.5 * (in_to_out.first + out_to_in.first);
+    report.hausdorff = std::max(in_to_out.second, out_to_in.second);
+    report.chamfer_in_spacings = spacing > 0.0 ? 0.5 * (in_to_out.first + out_to_in.first) / spacing : 0.0;
+    rec.add(distance_metrics(), report);
+    if (spacing > 0.0) rec.add(spacing_metrics(), report);
   }
   run.progress ? (void)run.progress(1.0) : (void)0;
   std::string extra;
@@ -132,6 +208,7 @@ StageSpec simplify_stage() {
   append(s.params, method_params<LfsParams>("lfs"));
   s.examples = {"pointsurf simplify data/b9_training.ply small.ply --method grid --cell 2",
                 "pointsurf simplify data/kitten.xyz kitten_small.ply --method regional --ratio 0.25"};
+  s.results = simplify_specs();
   s.run = run_simplify;
   s.check = [](const StageArgs& a) {
     const int given = int(a.given("ratio")) + int(a.given("count")) + int(a.has("cell") && a.given("cell"));

@@ -18,6 +18,66 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// What crop and range report (counts).
+struct Selection {
+  std::size_t input = 0, kept = 0, removed = 0;
+};
+const ResultTable<Selection>& selection_results() {
+  static const ResultTable<Selection> table = [] {
+    ResultTable<Selection> t;
+    t.count("input", &Selection::input, "Points read");
+    t.count("kept", &Selection::kept, "Points kept");
+    t.count("removed", &Selection::removed, "Points removed");
+    return t;
+  }();
+  return table;
+}
+
+// What transform reports.
+struct Moved {
+  std::size_t points = 0;
+  std::vector<double> translation;
+  double rotation_angle_deg = 0.0;
+};
+const ResultTable<Moved>& moved_counts() {
+  static const ResultTable<Moved> table = [] {
+    ResultTable<Moved> t;
+    t.count("points", &Moved::points, "Points moved");
+    return t;
+  }();
+  return table;
+}
+const ResultTable<Moved>& moved_metrics() {
+  static const ResultTable<Moved> table = [] {
+    ResultTable<Moved> t;
+    t.numbers("translation", &Moved::translation, "Translation applied (x, y, z)").with_unit("cloud units");
+    t.number("rotation_angle_deg", &Moved::rotation_angle_deg, "Rotation angle applied").with_unit("degrees");
+    return t;
+  }();
+  return table;
+}
+
+// What merge reports (counts): the points of each input, by tag, then of the result.
+struct Merged {
+  std::vector<std::pair<std::string, std::size_t>> inputs;
+  std::size_t points = 0;
+};
+const ResultTable<Merged>& merged_results() {
+  static const ResultTable<Merged> table = [] {
+    ResultTable<Merged> t;
+    t.family("points_*", ResultType::Integer,
+             [](const Merged& m) {
+               std::vector<std::pair<std::string, ResultValue>> out;
+               for (const auto& [tag, n] : m.inputs) out.emplace_back(tag, as_count(n));
+               return out;
+             },
+             "Points of each input (`*`: its tag)");
+    t.count("points", &Merged::points, "Points of the merged cloud");
+    return t;
+  }();
+  return table;
+}
+
 void keep_selected(StageRun& run, const std::vector<std::size_t>& kept, const std::string& what) {
   DataItem& item = run.context.item(run.output);
   const std::size_t before = item.cloud().size();
@@ -25,9 +85,7 @@ void keep_selected(StageRun& run, const std::vector<std::size_t>& kept, const st
     drop_faces(item, run.record);
     item.cloud() = item.cloud().select(kept);
   }
-  run.record.count("input", as_count(before));
-  run.record.count("kept", as_count(kept.size()));
-  run.record.count("removed", as_count(before - kept.size()));
+  run.record.add_counts(selection_results(), Selection{before, kept.size(), before - kept.size()});
   run.record.summary = fmt::format("{}: kept {} of {} {}", run.record.type, plural(kept.size(), "point"), before, what);
   if (kept.empty()) throw InputError(fmt::format("no point is left ({} of {})", what, plural(before, "point")));
 }
@@ -83,9 +141,9 @@ void run_transform(StageRun& run) {
   DataItem& item = run.context.item(run.output);
   t.apply(item.cloud());
   const Vector3d shift = t.translation();
-  run.record.count("points", as_count(item.cloud().size()));
-  run.record.metric("translation", std::vector<double>{shift.x(), shift.y(), shift.z()});
-  run.record.metric("rotation_angle_deg", t.angle_degrees());
+  const Moved moved{item.cloud().size(), {shift.x(), shift.y(), shift.z()}, t.angle_degrees()};
+  run.record.add_counts(moved_counts(), moved);
+  run.record.add(moved_metrics(), moved);
   run.record.summary = fmt::format("transform: moved {} (rotation {:.3g} degrees, translation {:.4g})", plural(item.cloud().size(), "point"),
                                    t.angle_degrees(), shift.norm());
 }
@@ -93,14 +151,16 @@ void run_transform(StageRun& run) {
 void run_merge(StageRun& run) {
   PointCloud merged;
   std::size_t faces = 0;
+  Merged counts;
   for (const std::string& tag : run.inputs) {
     const DataItem& item = run.context.item(tag);
     faces += item.mesh.triangles.size();
     merged.append(item.cloud());
-    run.record.count("points_" + tag, as_count(item.cloud().size()));
+    counts.inputs.emplace_back(tag, item.cloud().size());
   }
   if (faces > 0) run.record.warnings.push_back(fmt::format("merge works on points: {} dropped", plural(faces, "face")));
-  run.record.count("points", as_count(merged.size()));
+  counts.points = merged.size();
+  run.record.add_counts(merged_results(), counts);
   run.record.summary = fmt::format("merge: {} from {} inputs", plural(merged.size(), "point"), run.inputs.size());
   run.context.set_cloud(run.output, std::move(merged), run.inputs.front());
 }
@@ -118,6 +178,7 @@ StageSpec crop_stage() {
               P::vector3("max", {kInf, kInf, kInf}, "Box corner with the largest coordinates (bounds included)").unit("cloud units"),
               P::boolean("outside", false, "Keep the points outside the box instead")};
   s.examples = {"pointsurf crop data/b9_training.ply part.ply --min 596680,243650,0 --max 596710,243700,100"};
+  s.results = counted(selection_results().specs());
   s.run = run_crop;
   s.check = [](const StageArgs& a) {
     const auto& lo = a.numbers("min");
@@ -141,6 +202,7 @@ StageSpec range_stage() {
               P::number("min", -kInf, "Smallest value kept (included)"),
               P::number("max", kInf, "Largest value kept (included)")};
   s.examples = {"pointsurf range data/b9_training.ply label2.ply --field label --min 2 --max 2"};
+  s.results = counted(selection_results().specs());
   s.run = run_range;
   s.check = [](const StageArgs& a) {
     if (a.number("min") > a.number("max"))
@@ -164,6 +226,8 @@ StageSpec transform_stage() {
               P::boolean("invert", false, "Apply the inverse transform (a T.json maps the source onto the target: this maps back)")};
   s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1",
                 "pointsurf transform moved.ply back.ply --matrix 1,0,0,10,0,1,0,0,0,0,1,0,0,0,0,1 --invert"};
+  s.results = counted(moved_counts().specs());
+  append(s.results, moved_metrics().specs());
   s.run = run_transform;
   s.check = [](const StageArgs& a) {
     if (a.given("matrix") && !a.text("file").empty()) throw key_error("matrix", ", file: give one of them, not both");
@@ -189,6 +253,7 @@ StageSpec merge_stage() {
   s.consumes = {Slot{"clouds", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
   s.examples = {"pointsurf merge data/kitten.xyz data/b9_training.ply both.ply"};
+  s.results = counted(merged_results().specs());
   s.run = run_merge;
   return s;
 }

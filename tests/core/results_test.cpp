@@ -98,6 +98,21 @@ TEST(ResultTable, SpecsNameEveryKeyWithItsTypeUnitAndDirection) {
   EXPECT_EQ(p[6].key, "fit/range/lo");
 }
 
+TEST(ResultTable, CountedSpecsAreCountsAndTheRestMetrics) {
+  const std::vector<ResultSpec>& s = Fit::results().specs();
+  std::vector<ResultSpec> declared = counted(s, "fit.");
+  ASSERT_EQ(declared.size(), s.size());
+  EXPECT_EQ(declared[0].key, "fit.inliers");
+  EXPECT_STREQ(result_block_name(declared[0].block), "counts");
+  append(declared, s);  // as metrics: the default block
+  ASSERT_EQ(declared.size(), 2 * s.size());
+  EXPECT_EQ(declared[s.size()].key, "inliers");
+  EXPECT_STREQ(result_block_name(declared[s.size()].block), "metrics");
+  EXPECT_FALSE(s[0].headline);
+  ResultSpec h;
+  EXPECT_TRUE(h.in_headline().headline);
+}
+
 TEST(ResultTable, AnEmptyFamilyEmitsNothing) {
   const Fit f;
   std::vector<std::string> keys;

@@ -142,39 +142,109 @@ bool type_matches(ResultType declared, const ResultValue& v) {
   return false;
 }
 
-// A stage that declares its report metrics records no other, each of its declared type, and
-// every block it declares shows up when the run has what the block needs (a fit, labels).
-TEST(Registry, DeclaredMetricsAreExactlyWhatTheStagesReport) {
-  const std::filesystem::path dir = test::temp_dir("registry_results");
-  PointCloud sphere = test::sample_sphere(3000, 1.0, Vector3d(0.5, -0.2, 0.1), 3);
-  ScalarField& segment = sphere.fields.add("segment", sphere.size());
-  for (std::size_t i = 0; i < sphere.size(); ++i) segment.values[i] = sphere.positions[i].z() > 0.1 ? 1.0 : 2.0;
-  write_point_cloud(dir / "sphere.ply", sphere);
-  const std::string json = "[\"" + (dir / "sphere.ply").string() +
-                           "\", {\"type\": \"normals\"}, {\"type\": \"reconstruct\", \"tag\": \"mesh\"},"
-                           " {\"type\": \"evaluate\", \"align\": true, \"percentiles\": [50, 99.9]}, {\"type\": \"quality\", \"inputs\": \"mesh\"}]";
+// The declaration of `key` in `block` of the stage: the key itself, else the first pattern
+// that matches ("outline_area" is not one of the "outline_*").
+const ResultSpec* declared(const StageSpec& s, ResultBlock block, const std::string& key) {
+  for (const ResultSpec& d : s.results)
+    if (d.block == block && d.key == key) return &d;
+  for (const ResultSpec& d : s.results)
+    if (d.block == block && key_matches(d.key, key)) return &d;
+  return nullptr;
+}
+
+// Runs `json` and checks that each stage records only keys it declares, in their block and of
+// their type; `seen` gathers the declarations each stage's records matched ("counts:points").
+void run_and_check(const std::string& json, std::map<std::string, std::set<std::string>>& seen) {
   Context ctx;
   RunReport report;
-  run_pipeline(parse_pipeline(json, "results.json"), ctx, report);
-  ASSERT_TRUE(report.ok) << report.error;
-  std::set<std::string> checked;
+  ASSERT_NO_THROW(run_pipeline(parse_pipeline(json, "results.json"), ctx, report)) << json;
+  ASSERT_TRUE(report.ok) << report.error << "\n" << json;
   for (const StageRecord& r : report.stages) {
     const StageSpec* spec = find_stage(r.type);
-    ASSERT_NE(spec, nullptr);
-    if (spec->results.empty()) continue;
-    std::set<std::string> seen_specs;
-    for (const auto& [key, value] : r.metrics) {
-      const auto it = std::find_if(spec->results.begin(), spec->results.end(), [&](const ResultSpec& d) { return key_matches(d.key, key); });
-      ASSERT_NE(it, spec->results.end()) << r.type << ": metric " << key << " is recorded but not declared";
-      EXPECT_TRUE(type_matches(it->type, value)) << r.type << ": " << key << " is not of its declared type " << result_type_name(it->type);
-      seen_specs.insert(it->key);
-    }
-    for (const ResultSpec& d : spec->results) EXPECT_TRUE(seen_specs.count(d.key)) << r.type << ": declared " << d.key << " was not recorded";
-    checked.insert(r.type);
+    ASSERT_NE(spec, nullptr) << r.type;
+    EXPECT_FALSE(spec->results.empty()) << r.type << " declares nothing it reports";
+    for (const auto& [block, list] : {std::pair{ResultBlock::Counts, &r.counts}, std::pair{ResultBlock::Metrics, &r.metrics}})
+      for (const auto& [key, value] : *list) {
+        const ResultSpec* d = declared(*spec, block, key);
+        EXPECT_NE(d, nullptr) << r.type << ": " << result_block_name(block) << " \"" << key << "\" is recorded but not declared";
+        if (d == nullptr) continue;
+        EXPECT_TRUE(type_matches(d->type, value)) << r.type << ": " << key << " is not of its declared type " << result_type_name(d->type);
+        seen[r.type].insert(std::string(result_block_name(block)) + ":" + d->key);
+      }
   }
-  EXPECT_EQ(checked, (std::set<std::string>{"evaluate", "quality"}));
+}
+
+// Every stage of the registry, each method whose record differs, on small seeded data: a run
+// records exactly what its stage declares (counts and metrics, with their types), and each
+// declared key shows up in some run (the conditional ones with the option that makes them).
+TEST(Registry, EveryStageRecordsExactlyItsDeclaredResults) {
+  const std::filesystem::path dir = test::temp_dir("registry_results");
+  auto path = [&](const std::string& name) { return (dir / name).string(); };
+  PointCloud sphere = test::sample_sphere(1200, 1.0, Vector3d(0.5, -0.2, 0.1), 3);
+  ScalarField& segment = sphere.fields.add("segment", sphere.size());
+  for (std::size_t i = 0; i < sphere.size(); ++i) segment.values[i] = sphere.positions[i].z() > 0.1 ? 1.0 : 2.0;
+  write_point_cloud(path("sphere.ply"), sphere);
+  PointCloud zero = sphere;  // one normal without a direction: the stages that use the input's say so
+  zero.normals[0] = Vector3d::Zero();
+  write_point_cloud(path("zero.ply"), zero);
+  PointCloud moved = sphere;
+  for (Vector3d& p : moved.positions) p += Vector3d(0.02, -0.01, 0.015);
+  write_point_cloud(path("moved.ply"), moved);
+  write_point_cloud(path("moved2.ply"), sphere);
+  PointCloud cube = test::sample_cube(1500, 1.0, 5);  // planes, edges and corners
+  ScalarField& truth = cube.fields.add("truth", cube.size());
+  for (std::size_t i = 0; i < cube.size(); ++i) {
+    const Vector3d a = cube.positions[i].cwiseAbs();
+    truth.values[i] = (a.array() > 0.9).count() >= 2 ? 1.0 : 0.0;  // near an edge
+  }
+  write_point_cloud(path("cube.ply"), cube);
+
+  std::map<std::string, std::set<std::string>> seen;
+  const std::string sphere_ply = "{\"type\": \"read\", \"tag\": \"in\", \"filename\": \"" + path("sphere.ply") + "\"}";
+  const std::string cube_ply = "\"" + path("cube.ply") + "\"";
+  const std::vector<std::string> runs = {
+      // Points: selections, normals of each orientation, curvature with the chosen scale, features
+      // scored, segments and outlines, the simplifications, each reconstruction and the measures.
+      "[" + cube_ply + ", {\"type\": \"crop\", \"min\": [-5, -5, -5], \"max\": [5, 5, 5]}, {\"type\": \"range\", \"field\": \"z\"},"
+      " {\"type\": \"transform\", \"matrix\": [1,0,0,0.1, 0,1,0,0, 0,0,1,0, 0,0,0,1]}, {\"type\": \"normals\"},"
+      " {\"type\": \"normals\", \"orient\": \"mst\"}, {\"type\": \"normals\", \"orient\": \"keep\"}, {\"type\": \"curvature\"},"
+      " {\"type\": \"features\", \"truth_field\": \"truth\"}, {\"type\": \"boundary\"}, {\"type\": \"segment\"},"
+      " {\"type\": \"segment\", \"method\": \"euclidean\"}, {\"type\": \"segment\", \"method\": \"hk\"},"
+      " {\"type\": \"segment\", \"method\": \"ransac\"}, {\"type\": \"boundary\"}, \"" + path("points.e57") + "\"]",
+      "[\"" + path("zero.ply") + "\", {\"type\": \"curvature\", \"k\": 24}, {\"type\": \"features\", \"normals\": \"input\"},"
+      " {\"type\": \"segment\"}, {\"type\": \"clean\", \"method\": \"local,sor,radius,ransac,duplicates,bilateral,trilateral\"}, \"" + path("out.ply") + "\"]",
+      "[{\"type\": \"read\", \"filename\": \"" + path("points.e57") + "\", \"keep_poses\": true}, {\"type\": \"range\"}, \"" + path("out.ply") + "\"]",
+      "[" + sphere_ply + ", {\"type\": \"simplify\", \"tag\": \"grid\", \"inputs\": \"in\"},"
+      " {\"type\": \"simplify\", \"method\": \"random\", \"inputs\": \"in\"},"
+      " {\"type\": \"simplify\", \"method\": \"curvature\", \"inputs\": \"in\"},"
+      " {\"type\": \"simplify\", \"method\": \"regional\", \"inputs\": \"in\"},"
+      " {\"type\": \"simplify\", \"method\": \"curvature-distance\", \"inputs\": \"in\"},"
+      " {\"type\": \"simplify\", \"method\": \"lfs\", \"inputs\": \"in\"}, \"" + path("out.ply") + "\"]",
+      "[" + sphere_ply + ", {\"type\": \"reconstruct\", \"tag\": \"mesh\"}, \"" + path("mesh.ply") + "\", {\"type\": \"quality\"},"
+      " {\"type\": \"evaluate\", \"inputs\": \"mesh\", \"align\": true, \"percentiles\": [50, 99.9]},"
+      " {\"type\": \"render\", \"field\": \"deviation\", \"filename\": \"" + path("deviation.png") + "\"}]",
+      "[" + sphere_ply + ", {\"type\": \"reconstruct\", \"method\": \"cocone\", \"inputs\": \"in\"},"
+      " {\"type\": \"reconstruct\", \"method\": \"crust\", \"inputs\": \"in\"},"
+      " {\"type\": \"reconstruct\", \"method\": \"ball-pivot\", \"inputs\": \"in\"},"
+      " {\"type\": \"reconstruct\", \"method\": \"poisson\", \"inputs\": \"in\", \"depth\": 5}, \"" + path("out.ply") + "\"]",
+      // Two and three clouds.
+      "[{\"type\": \"read\", \"filename\": \"" + path("sphere.ply") + "\", \"tag\": \"a\"},"
+      " {\"type\": \"read\", \"filename\": \"" + path("moved.ply") + "\", \"tag\": \"b\"},"
+      " {\"type\": \"read\", \"filename\": \"" + path("moved2.ply") + "\", \"tag\": \"c\"},"
+      " {\"type\": \"merge\", \"inputs\": [\"a\", \"b\"]},"
+      " {\"type\": \"register\", \"inputs\": [\"b\", \"a\"], \"ransac_iterations\": 2000},"
+      " {\"type\": \"register-many\", \"inputs\": [\"a\", \"b\", \"c\"]}, \"" + path("out.ply") + "\"]",
+  };
+  for (const std::string& json : runs) run_and_check(json, seen);
+  for (const StageSpec& s : registered_stages()) {
+    EXPECT_FALSE(s.results.empty()) << s.name << " declares nothing it reports";
+    for (const ResultSpec& d : s.results)
+      EXPECT_TRUE(seen[s.name].count(std::string(result_block_name(d.block)) + ":" + d.key))
+          << s.name << ": declared " << result_block_name(d.block) << " " << d.key << " was not recorded by any run";
+  }
   EXPECT_TRUE(key_matches("deviation_by_region/*/rms", "deviation_by_region/segment_1/rms"));
   EXPECT_FALSE(key_matches("deviation_by_region/*/rms", "deviation_by_region/a/b/rms"));
+  std::filesystem::remove_all(dir);
 }
 
 // The library's defaults, read from default-constructed Params structs: the registry must

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/deviation_stats.h"
 #include "support/files.h"
 #include "support/mesh_shapes.h"
 #include "support/shapes.h"
@@ -80,6 +81,32 @@ TEST(HtmlReportView, SummaryAndStagesAreTheRunReportsValues) {
   EXPECT_EQ(v.warnings, std::vector<std::string>{"stage 2 (reconstruct): 3 holes left <script>x</script>"});
   EXPECT_EQ(v.run_report, run_report());
   EXPECT_EQ(v.three_js, "/* three */");
+}
+
+// The table's rows are the headline members of the deviation's declaration, in its order: a
+// block holding every member of DeviationStats shows the eleven summary values, not the counts
+// of each side nor the percentiles and histogram.
+TEST(HtmlReportView, DeviationRowsAreTheDeclaredHeadlineMembers) {
+  DeviationStats d;
+  d.count = 10;
+  d.positive = 6;
+  d.rms = 0.25;
+  d.percentile_ranks = {50.0};
+  d.percentile_values = {0.1};
+  json block = json::object();
+  DeviationStats::results().record(d, [&](std::string key, ResultValue v) {
+    json value = std::visit([](const auto& x) { return json(x); }, v);
+    block[json::json_pointer("/" + key)] = value;
+  });
+  json r = run_report();
+  r["stages"][2]["metrics"]["deviation"] = block;
+  const HtmlReportView v = html_report_view(inputs(r));
+  std::vector<std::string> keys;
+  for (const auto& [key, text] : v.deviation.statistics) keys.push_back(key);
+  EXPECT_EQ(keys, (std::vector<std::string>{"count", "max_positive", "max_negative", "mean_positive", "mean_negative", "mean",
+                                            "mean_absolute", "rms", "std", "tolerance", "within_tolerance"}));
+  EXPECT_EQ(v.deviation.statistics[0].second, "10");
+  EXPECT_EQ(v.deviation.statistics[7].second, "0.25");
 }
 
 TEST(HtmlReportView, DeviationIsTheEvaluateStagesBlock) {

@@ -21,6 +21,14 @@
 //     return t;
 //   }
 //   // In a stage: run.record.add(FitResult::results(), fit, "fit/");
+//
+// A stage's report has two blocks, "counts" (how many points, faces, segments it read and made)
+// and "metrics" (everything else). A table says nothing of blocks: the stage chooses, recording
+// with StageRecord::add (metrics) or StageRecord::add_counts (counts), and declares the same in
+// StageSpec::results, one list whose specs carry their block (`counted(...)` marks counts):
+//
+//   s.results = counted(FitCounts::results().specs());                // counts: "points", ...
+//   append(s.results, prefixed(FitResult::results().specs(), "fit/"));  // metrics: "fit/rms"
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -46,6 +54,10 @@ const char* better_name(Better b) noexcept;  // "", "higher", "lower"
 enum class ResultType { Integer, Number, Text, Flag, Numbers };
 const char* result_type_name(ResultType t) noexcept;  // "integer", "number", "text", "flag", "numbers"
 
+/// The block of a stage's report a value is recorded in.
+enum class ResultBlock { Metrics, Counts };
+const char* result_block_name(ResultBlock b) noexcept;  // "metrics", "counts"
+
 /// What a reported value is, without the struct it comes from.
 struct ResultSpec {
   std::string key;                   // "rms"; with its block's prefix in a stage ("deviation/rms").
@@ -55,14 +67,22 @@ struct ResultSpec {
   std::string unit;                  // "cloud units", "degrees", "" (none)
   Better better = Better::Neither;
   std::string doc;                   // one line
+  ResultBlock block = ResultBlock::Metrics;  // set by the stage's declaration (counted())
+  bool headline = false;             // one of the few values a summary shows (the HTML report's
+                                     // deviation table)
 
   ResultSpec& with_unit(std::string u) { unit = std::move(u); return *this; }
   ResultSpec& higher_is_better() { better = Better::Higher; return *this; }
   ResultSpec& lower_is_better() { better = Better::Lower; return *this; }
+  ResultSpec& in_headline() { headline = true; return *this; }
 };
 
 /// The specs of `specs` with `prefix` in front of each key (a block of a stage's report).
 std::vector<ResultSpec> prefixed(std::vector<ResultSpec> specs, const std::string& prefix);
+/// The specs of `specs` as counts of a stage's report, `prefix` in front of each key.
+std::vector<ResultSpec> counted(std::vector<ResultSpec> specs, const std::string& prefix = "");
+/// Appends `more` to `specs` (a stage's declaration built from several tables).
+void append(std::vector<ResultSpec>& specs, const std::vector<ResultSpec>& more);
 
 /// The reported members of a Result struct R, in report order.
 template <class R>

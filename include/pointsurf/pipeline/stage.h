@@ -53,6 +53,11 @@ struct StageRecord {
   void add(const ResultTable<R>& table, const R& r, const std::string& prefix = "") {
     table.record(r, [this](std::string key, ResultValue value) { metrics.emplace_back(std::move(key), std::move(value)); }, prefix);
   }
+  /// The same, as counts (a stage declares them with counted()).
+  template <class R>
+  void add_counts(const ResultTable<R>& table, const R& r, const std::string& prefix = "") {
+    table.record(r, [this](std::string key, ResultValue value) { counts.emplace_back(std::move(key), std::move(value)); }, prefix);
+  }
 };
 
 /// The parameters of one stage run, resolved: every parameter of the chosen method, given or
@@ -133,9 +138,11 @@ struct StageSpec {
   /// naming it. The file is checked and cleaned up like a writer's and a pipeline may end with
   /// the stage.
   std::string writes_param;
-  /// The metrics its report holds, declared by the library's Result tables (core/results.h),
-  /// with their blocks' prefixes ("deviation/rms"): docs/stages.md and Python show them, and a
-  /// test checks that a run records no other metric. Empty: not declared yet.
+  /// The counts and metrics its report holds (ResultSpec::block tells them apart), declared by
+  /// the library's Result tables or small tables of the stage's own (core/results.h), with
+  /// their prefixes ("deviation/rms"): docs/stages.md and Python show them, and a test runs
+  /// every stage and checks that it records exactly these, with these types. Keys recorded
+  /// only by some methods or options are declared too (the test checks them over its runs).
   std::vector<ResultSpec> results;
   std::function<void(StageRun&)> run;
   /// Checks across parameters made before any work (e.g. a viewpoint given without

@@ -122,4 +122,7 @@ void estimate_missing_normals(StageRun& run, int k, const ProgressCallback& prog
 /// with the count and share of such points otherwise, saying what the stage does with them
 /// (`skipped`, e.g. "not moved"). Returns that count.
 std::size_t check_input_normals(StageRun& run, const std::string& skipped);
+/// The count check_input_normals records ("zero_normals"), for the declarations of the stages
+/// that call it.
+std::vector<ResultSpec> zero_normals_specs();
 }  // namespace pointsurf::detail

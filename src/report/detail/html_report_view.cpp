@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/evaluate/deviation_stats.h"
 #include "pointsurf/render/render_scene.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -113,9 +114,9 @@ DeviationView deviation_view(const json& stages, const ColorScale& scale) {
     }
   if (block) {
     d.evaluated = true;
-    for (const char* k : {"count", "max_positive", "max_negative", "mean_positive", "mean_negative", "mean", "mean_absolute", "rms", "std",
-                          "tolerance", "within_tolerance"})
-      if (block->contains(k)) d.statistics.emplace_back(k, value_text((*block)[k]));
+    // The headline statistics of the deviation's declaration (DeviationStats::results()).
+    for (const ResultSpec& spec : DeviationStats::results().specs())
+      if (spec.headline && block->contains(spec.key)) d.statistics.emplace_back(spec.key, value_text((*block)[spec.key]));
   }
   if (hist && hist->contains("edges") && hist->contains("counts")) {
     const json& edges = (*hist)["edges"];

@@ -48,7 +48,7 @@ struct StageView {
 /// Evaluate's deviation: the last evaluate stage's "metrics/deviation" block.
 struct DeviationView {
   bool evaluated = false;                   // there is such a block (its table is shown, maybe empty)
-  TextRows statistics;                      // count, max_positive, ..., tolerance, within_tolerance: those present
+  TextRows statistics;                      // the headline values of DeviationStats::results(): those present
   double tolerance = 0.0;                   // field units; 0 when no evaluate stage gives one
   struct Histogram {
     std::vector<double> centres;            // of the bins, field units
