@@ -16,7 +16,6 @@ namespace {
 
 // The library's Params of each method from its arguments: the run and the check before any
 // work build them the same way, and the check calls their validate().
-SimplifyTarget target_of(const StageArgs& a) { return read_params<SimplifyTarget>(a); }
 GridParams grid_params(const StageArgs& a) { return read_params<GridParams>(a); }
 RandomParams random_params(const StageArgs& a) { return read_params<RandomParams>(a); }
 CurvatureSimplifyParams curvature_simplify_params(const StageArgs& a) { return read_params<CurvatureSimplifyParams>(a); }

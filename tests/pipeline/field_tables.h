@@ -17,7 +17,9 @@ void expect_complete(const char* name) {
     EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
     EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
     // The struct's default passes the field's own range where the field applies.
-    if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
+    if (!f.applies || f.applies(P{})) {
+      EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
+    }
     P round_trip;  // set(get(default)) keeps the value
     f.set(round_trip, f.get(P{}));
     EXPECT_EQ(format_value(f.get(round_trip)), format_value(f.get(P{}))) << name << "." << f.spec.name;
