@@ -32,7 +32,9 @@ void expect_table(const char* name, std::size_t members) {
   for (const Field<P>& f : table) {
     EXPECT_FALSE(f.spec.doc.empty()) << name << "." << f.spec.name;
     EXPECT_TRUE(f.get && f.set) << name << "." << f.spec.name;
-    if (!f.applies || f.applies(P{})) EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
+    if (!f.applies || f.applies(P{})) {
+      EXPECT_EQ(range_failure(f.spec, f.get(P{})), "") << name << "." << f.spec.name;
+    }
     P q;  // set(get(default)) keeps the value
     f.set(q, f.get(P{}));
     EXPECT_EQ(format_value(f.get(q)), format_value(f.get(P{}))) << name << "." << f.spec.name;
