@@ -112,7 +112,7 @@ const ResultTable<RegistrationResult>& mesh_alignment_results() {
         .with_unit("cloud units");
     t.number("fitness", &R::fitness, "Share of reference points within the fit's distance").higher_is_better();
     t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
-    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(static_cast<std::int64_t>(r.iterations)); }, "ICP iterations");
+    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(std::int64_t(r.iterations)); }, "ICP iterations");
     t.flag("converged", &R::converged, "The fit converged").higher_is_better();
     t.text("message", &R::message, "How the fit ended");
     return t;

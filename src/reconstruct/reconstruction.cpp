@@ -53,7 +53,7 @@ const ResultTable<ReconstructionStats>& ReconstructionStats::results(const std::
       t.count("holes_filled", &S::holes_filled, "Holes the hole filler closed").as_count();
       t.count("fill_triangles", &S::fill_triangles, "Triangles the hole filler added").as_count();
       for (const std::string& name : m.counts)
-        t.computed(name, ResultType::Integer, [name](const S& s) { return ResultValue(static_cast<std::int64_t>(named_value(s.counts, name))); },
+        t.computed(name, ResultType::Integer, [name](const S& s) { return ResultValue(std::int64_t(named_value(s.counts, name))); },
                    "A count of the method")
             .as_count();
       for (const std::string& name : m.figures)

@@ -306,7 +306,7 @@ const ResultTable<PoseGraphResult>& PoseGraphResult::results() {
     ResultTable<G> t;
     t.number("cost_before", &G::initial_cost, "Cost of the pose graph before the refinement").with_unit("squared cloud units");
     t.number("cost", &G::cost, "Cost after it").with_unit("squared cloud units").lower_is_better();
-    t.computed("iterations", ResultType::Integer, [](const G& g) { return ResultValue(static_cast<std::int64_t>(g.iterations)); }, "Gauss-Newton iterations");
+    t.computed("iterations", ResultType::Integer, [](const G& g) { return ResultValue(std::int64_t(g.iterations)); }, "Gauss-Newton iterations");
     t.flag("converged", &G::converged, "The refinement converged").higher_is_better();
     return t;
   }();

@@ -9,7 +9,7 @@ const ResultTable<RegistrationResult>& RegistrationResult::results() {
     ResultTable<R> t;
     t.number("fitness", &R::fitness, "Share of source points within the fit's distance of the target").higher_is_better();
     t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
-    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(static_cast<std::int64_t>(r.iterations)); }, "ICP iterations");
+    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(std::int64_t(r.iterations)); }, "ICP iterations");
     t.flag("converged", &R::converged, "The fit converged").higher_is_better();
     return t;
   }();

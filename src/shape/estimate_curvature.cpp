@@ -491,7 +491,7 @@ const ResultTable<CurvatureResult>& CurvatureResult::results() {
     t.count("degenerate", &R::degenerate, "Points with no curvature (zero normal, too few neighbours, singular fit)").lower_is_better().as_count();
     for (int type = 0; type < kSurfaceTypeCount; ++type)
       t.computed(surface_type_name(static_cast<SurfaceType>(type)), ResultType::Integer,
-                 [type](const R& r) { return ResultValue(static_cast<std::int64_t>(r.type_counts[std::size_t(type)])); }, "Points of this HK surface type")
+                 [type](const R& r) { return ResultValue(std::int64_t(r.type_counts[std::size_t(type)])); }, "Points of this HK surface type")
           .as_count();
     return t;
   }();

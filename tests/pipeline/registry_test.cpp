@@ -271,7 +271,8 @@ TEST(Registry, AddRecordsEachValueInItsSpecsBlock) {
                                                                           {"trilateral.mean_normal_change_deg", ResultBlock::Metrics}}));
   StageRecord all;
   all.add_counts(SmoothResult::results(), r, "bilateral.");
-  EXPECT_EQ(all.counts, (ResultList{{"bilateral.moved", std::int64_t{12}}, {"bilateral.rms_displacement", 0.25}, {"bilateral.max_displacement", 0.5}}));
+  EXPECT_EQ(all.counts,
+            (ResultList{{"bilateral.moved", std::int64_t{12}}, {"bilateral.rms_displacement", 0.25}, {"bilateral.max_displacement", 0.5}}));
   EXPECT_TRUE(all.metrics.empty());
 }
 
