@@ -112,4 +112,15 @@ DuplicateResult remove_duplicates(PointCloud& cloud, const DuplicateParams& para
   return found;
 }
 
+const ResultTable<DuplicateResult>& DuplicateResult::results() {
+  static const ResultTable<DuplicateResult> table = [] {
+    ResultTable<DuplicateResult> t;
+    t.count("removed", &DuplicateResult::removed, "Duplicates merged away").as_count();
+    t.number("max_merge_distance", &DuplicateResult::max_distance, "Largest distance from a removed point to the one it merged into")
+        .with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -6,6 +6,8 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -331,6 +333,35 @@ OutlierResult remove_ransac_outliers(const PointCloud& cloud, const RansacOutlie
   reporter.report(1.0);
   reporter.throw_if_cancelled();
   return collect(keep, distance);
+}
+
+const ResultTable<OutlierResult>& OutlierResult::results(const std::string& method) {
+  // The threshold of each removal method: its key and doc (local's is a ratio, the others lengths).
+  struct ThresholdName {
+    const char* method;
+    const char* key;
+    const char* doc;
+  };
+  static constexpr ThresholdName kThresholds[] = {
+      {"local", "ratio_threshold", "Ratio to the neighbourhood's mean distance above which a point was dropped"},
+      {"sor", "mean_distance_threshold", "Mean neighbour distance above which a point was dropped"},
+      {"radius", "radius_used", "Search radius used"},
+      {"ransac", "distance_used", "Plane distance used"},
+  };
+  static const std::vector<ResultTable<OutlierResult>> tables = [] {
+    std::vector<ResultTable<OutlierResult>> out;
+    for (const ThresholdName& n : kThresholds) {
+      ResultTable<OutlierResult> t;
+      t.count("removed", &OutlierResult::removed, "Points removed as outliers").as_count();
+      ResultSpec& spec = t.number(n.key, &OutlierResult::threshold, n.doc);
+      if (std::string(n.method) != "local") spec.with_unit("cloud units");
+      out.push_back(std::move(t));
+    }
+    return out;
+  }();
+  for (std::size_t i = 0; i < std::size(kThresholds); ++i)
+    if (method == kThresholds[i].method) return tables[i];
+  throw std::logic_error("OutlierResult: no removal method " + method);
 }
 
 PointCloud keep_points(const PointCloud& cloud, std::span<const std::uint32_t> kept) {

@@ -263,4 +263,20 @@ SmoothResult smooth_trilateral(PointCloud& cloud, const TrilateralParams& params
   return result;
 }
 
+const ResultTable<SmoothResult>& SmoothResult::results(bool normals) {
+  static const std::vector<ResultTable<SmoothResult>> tables = [] {
+    std::vector<ResultTable<SmoothResult>> out(2);
+    for (ResultTable<SmoothResult>& t : out) {
+      t.count("moved", &SmoothResult::moved, "Points moved").as_count();
+      t.number("rms_displacement", &SmoothResult::rms_displacement, "RMS distance the points moved").with_unit("cloud units");
+      t.number("max_displacement", &SmoothResult::max_displacement, "Largest distance a point moved").with_unit("cloud units");
+    }
+    ResultTable<SmoothResult>& t = out[1];  // trilateral
+    t.count("normals_changed", &SmoothResult::normals_changed, "Normals the trilateral pass changed").as_count();
+    t.number("mean_normal_change_deg", &SmoothResult::mean_normal_change_deg, "Mean angle the changed normals turned").with_unit("degrees");
+    return out;
+  }();
+  return tables[normals ? 1 : 0];
+}
+
 }  // namespace pointsurf

@@ -88,4 +88,36 @@ RegistrationResult align_to_mesh(std::span<const Vector3d> points, const Triangl
   return icp(scan, target, tree, RigidTransform(), icp_params, progress);
 }
 
+const ResultTable<RegistrationResult>& mesh_alignment_results() {
+  static const ResultTable<RegistrationResult> table = [] {
+    using R = RegistrationResult;
+    ResultTable<R> t;
+    t.computed("matrix", ResultType::Numbers,
+               [](const R& r) {
+                 const Eigen::Matrix4d m = r.transform.matrix();
+                 std::vector<double> matrix;
+                 for (int i = 0; i < 4; ++i)
+                   for (int j = 0; j < 4; ++j) matrix.push_back(m(i, j));
+                 return ResultValue(std::move(matrix));
+               },
+               "4x4 row by row: maps the reference as read onto the mesh");
+    t.computed("rotation_deg", ResultType::Number, [](const R& r) { return ResultValue(r.transform.angle_degrees()); }, "Rotation angle of the fit")
+        .with_unit("degrees");
+    t.computed("translation", ResultType::Numbers,
+               [](const R& r) {
+                 const Eigen::Matrix4d m = r.transform.matrix();
+                 return ResultValue(std::vector<double>{m(0, 3), m(1, 3), m(2, 3)});
+               },
+               "Translation of the fit")
+        .with_unit("cloud units");
+    t.number("fitness", &R::fitness, "Share of reference points within the fit's distance").higher_is_better();
+    t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
+    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(std::int64_t(r.iterations)); }, "ICP iterations");
+    t.flag("converged", &R::converged, "The fit converged").higher_is_better();
+    t.text("message", &R::message, "How the fit ended");
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -86,4 +86,13 @@ BoundaryResult detect_boundary_points(const PointCloud& cloud, const BoundaryPar
   return out;
 }
 
+const ResultTable<BoundaryResult>& BoundaryResult::results() {
+  static const ResultTable<BoundaryResult> table = [] {
+    ResultTable<BoundaryResult> t;
+    t.count("boundary", &BoundaryResult::count, "Boundary points (field boundary)").as_count();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

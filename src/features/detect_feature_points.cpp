@@ -411,4 +411,16 @@ FeatureResult detect_feature_points(PointCloud& cloud, const FeatureParams& para
   return result;
 }
 
+const ResultTable<FeatureResult>& FeatureResult::results() {
+  static const ResultTable<FeatureResult> table = [] {
+    ResultTable<FeatureResult> t;
+    t.count("candidates", &FeatureResult::candidates, "Points whose variation exceeded the threshold").as_count();
+    t.count("edges", &FeatureResult::edges, "Points labelled edge").as_count();
+    t.count("corners", &FeatureResult::corners, "Points labelled corner").as_count();
+    t.number("mean_spacing", &FeatureResult::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -46,4 +46,18 @@ OrientResult orient_to_reference(PointCloud& cloud, std::span<const Eigen::Vecto
   return result;
 }
 
+const ResultTable<NormalAgreement>& NormalAgreement::results() {
+  static const ResultTable<NormalAgreement> table = [] {
+    ResultTable<NormalAgreement> t;
+    t.count("input_normals_compared", &NormalAgreement::compared, "Points where the input's and the new normal both have a direction").as_count();
+    t.number("mean_angle_to_input_deg", &NormalAgreement::mean_angle_deg, "Mean angle between the new and the input's normal lines")
+        .with_unit("degrees")
+        .lower_is_better();
+    t.number("orientation_agreement_with_input", &NormalAgreement::share, "Share of compared points whose new normal is on the input's side")
+        .higher_is_better();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -165,4 +165,15 @@ NormalResult estimate_normals(PointCloud& cloud, const NormalParams& params, con
   return result;
 }
 
+const ResultTable<NormalResult>& NormalResult::results() {
+  static const ResultTable<NormalResult> table = [] {
+    ResultTable<NormalResult> t;
+    t.count("degenerate", &NormalResult::degenerate, "Points with too few neighbours or a degenerate neighbourhood: normal (0,0,0)")
+        .lower_is_better()
+        .as_count();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

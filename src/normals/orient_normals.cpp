@@ -561,4 +561,14 @@ OrientResult orient_normals(PointCloud& cloud, const OrientParams& params, const
   return result;
 }
 
+const ResultTable<OrientResult>& OrientResult::results(Orientation method) {
+  static const std::vector<ResultTable<OrientResult>> tables = [] {  // any method, then Mst
+    std::vector<ResultTable<OrientResult>> out(2);
+    for (ResultTable<OrientResult>& t : out) t.count("flipped", &OrientResult::flipped, "Normals whose sign the orientation changed").as_count();
+    out[1].count("components", &OrientResult::components, "Connected components of the orientation graph (orient mst)").as_count();
+    return out;
+  }();
+  return tables[method == Orientation::Mst ? 1 : 0];
+}
+
 }  // namespace pointsurf

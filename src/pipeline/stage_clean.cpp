@@ -2,7 +2,6 @@
 // The clean stage: outlier removal, duplicates and feature-aware denoising, applied in the
 // order of its method list.
 #include <cmath>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -38,95 +37,8 @@ std::vector<ParamSpec> trilateral_only_params() {
 }
 
 // What clean reports, each method's values under "<method>.": an outlier removal's count and
-// threshold (its name says what the threshold is), a smoothing's moves.
-const ResultTable<OutlierResult>& removed_counts() {
-  static const ResultTable<OutlierResult> table = [] {
-    ResultTable<OutlierResult> t;
-    t.count("removed", &OutlierResult::removed, "Points removed as outliers");
-    return t;
-  }();
-  return table;
-}
-// The threshold of each removal method: its key and doc.
-struct ThresholdName {
-  const char* method;
-  const char* key;
-  const char* doc;
-};
-constexpr ThresholdName kThresholds[] = {
-    {"local", "ratio_threshold", "Ratio to the neighbourhood's mean distance above which a point was dropped"},
-    {"sor", "mean_distance_threshold", "Mean neighbour distance above which a point was dropped"},
-    {"radius", "radius_used", "Search radius used"},
-    {"ransac", "distance_used", "Plane distance used"},
-};
-const ThresholdName& threshold_of(const std::string& method) {
-  for (const ThresholdName& t : kThresholds)
-    if (method == t.method) return t;
-  throw std::logic_error("clean: no threshold for " + method);
-}
-const ResultTable<OutlierResult>& threshold_metrics(const std::string& method) {
-  static const std::vector<ResultTable<OutlierResult>> tables = [] {
-    std::vector<ResultTable<OutlierResult>> out;
-    for (const ThresholdName& n : kThresholds) {
-      ResultTable<OutlierResult> t;
-      ResultSpec& spec = t.number(n.key, &OutlierResult::threshold, n.doc);
-      if (std::string(n.method) != "local") spec.with_unit("cloud units");
-      out.push_back(std::move(t));
-    }
-    return out;
-  }();
-  return tables[std::size_t(&threshold_of(method) - kThresholds)];
-}
-const ResultTable<DuplicateResult>& duplicate_counts() {
-  static const ResultTable<DuplicateResult> table = [] {
-    ResultTable<DuplicateResult> t;
-    t.count("removed", &DuplicateResult::removed, "Duplicates merged away");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<DuplicateResult>& duplicate_metrics() {
-  static const ResultTable<DuplicateResult> table = [] {
-    ResultTable<DuplicateResult> t;
-    t.number("max_merge_distance", &DuplicateResult::max_distance, "Largest distance from a removed point to the one it merged into")
-        .with_unit("cloud units");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<SmoothResult>& moved_counts() {
-  static const ResultTable<SmoothResult> table = [] {
-    ResultTable<SmoothResult> t;
-    t.count("moved", &SmoothResult::moved, "Points moved");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<SmoothResult>& moved_metrics() {
-  static const ResultTable<SmoothResult> table = [] {
-    ResultTable<SmoothResult> t;
-    t.number("rms_displacement", &SmoothResult::rms_displacement, "RMS distance the points moved").with_unit("cloud units");
-    t.number("max_displacement", &SmoothResult::max_displacement, "Largest distance a point moved").with_unit("cloud units");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<SmoothResult>& normal_change_counts() {  // trilateral
-  static const ResultTable<SmoothResult> table = [] {
-    ResultTable<SmoothResult> t;
-    t.count("normals_changed", &SmoothResult::normals_changed, "Normals the trilateral pass changed");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<SmoothResult>& normal_change_metrics() {  // trilateral
-  static const ResultTable<SmoothResult> table = [] {
-    ResultTable<SmoothResult> t;
-    t.number("mean_normal_change_deg", &SmoothResult::mean_normal_change_deg, "Mean angle the changed normals turned").with_unit("degrees");
-    return t;
-  }();
-  return table;
-}
+// threshold (its key says what the threshold is), a duplicate merge's, a smoothing's moves; then
+// the points read and left.
 struct CleanCounts {
   std::size_t input = 0, output = 0;
 };
@@ -142,19 +54,10 @@ const ResultTable<CleanCounts>& clean_counts() {
 
 std::vector<ResultSpec> clean_specs() {
   std::vector<ResultSpec> out;
-  for (const ThresholdName& n : kThresholds) {
-    const std::string prefix = std::string(n.method) + ".";
-    append(out, counted(removed_counts().specs(), prefix));
-    append(out, prefixed(threshold_metrics(n.method).specs(), prefix));
-  }
-  append(out, counted(duplicate_counts().specs(), "duplicates."));
-  append(out, prefixed(duplicate_metrics().specs(), "duplicates."));
-  for (const std::string prefix : {"bilateral.", "trilateral."}) {
-    append(out, counted(moved_counts().specs(), prefix));
-    append(out, prefixed(moved_metrics().specs(), prefix));
-  }
-  append(out, counted(normal_change_counts().specs(), "trilateral."));
-  append(out, prefixed(normal_change_metrics().specs(), "trilateral."));
+  for (const std::string method : {"local", "sor", "radius", "ransac"}) append(out, prefixed(OutlierResult::results(method).specs(), method + "."));
+  append(out, prefixed(DuplicateResult::results().specs(), "duplicates."));
+  append(out, prefixed(SmoothResult::results().specs(), "bilateral."));
+  append(out, prefixed(SmoothResult::results(true).specs(), "trilateral."));
   append(out, zero_normals_specs());
   append(out, counted(clean_counts().specs()));
   return out;
@@ -182,13 +85,11 @@ void run_clean(StageRun& run) {
         drop_faces(item, rec);
         cloud = keep_points(cloud, r.kept);
       }
-      rec.add_counts(removed_counts(), r, name + ".");
-      rec.add(threshold_metrics(name), r, name + ".");
+      rec.add(OutlierResult::results(name), r, name + ".");
       steps += fmt::format("{}{} removed {} ({:.2f} %)", steps.empty() ? "" : ", ", name, r.removed, 100.0 * double(r.removed) / double(before));
     };
     auto smoothed = [&](const SmoothResult& r) {
-      rec.add_counts(moved_counts(), r, name + ".");
-      rec.add(moved_metrics(), r, name + ".");
+      rec.add(SmoothResult::results(name == "trilateral"), r, name + ".");
       rec.set_used(name + ".radius_used", r.radius_used);
       rec.set_used(name + ".height_sigma_used", r.height_sigma_used);
       steps += fmt::format("{}{} moved {} (rms {:.4g}, max {:.4g})", steps.empty() ? "" : ", ", name, r.moved, r.rms_displacement, r.max_displacement);
@@ -213,19 +114,14 @@ void run_clean(StageRun& run) {
         if (faces > 0) drop_faces(item, rec);
         cloud = merge_duplicates(cloud, r);
       }
-      rec.add_counts(duplicate_counts(), r, "duplicates.");
-      rec.add(duplicate_metrics(), r, "duplicates.");
+      rec.add(DuplicateResult::results(), r, "duplicates.");
       if (!p.exact) rec.set_used("duplicates.distance_used", r.distance_used);
       steps += fmt::format("{}duplicates merged {} ({})", steps.empty() ? "" : ", ", r.removed,
                            p.exact ? "exact" : fmt::format("within {:.4g}", r.distance_used));
     } else if (name == "bilateral") {
       smoothed(smooth_bilateral(cloud, bilateral_params(a), &tree, progress));
     } else {
-      const TrilateralParams p = trilateral_params(a);
-      const SmoothResult r = smooth_trilateral(cloud, p, &tree, progress);
-      smoothed(r);
-      rec.add_counts(normal_change_counts(), r, "trilateral.");
-      rec.add(normal_change_metrics(), r, "trilateral.");
+      smoothed(smooth_trilateral(cloud, trilateral_params(a), &tree, progress));
     }
   }
   rec.add_counts(clean_counts(), CleanCounts{input_points, item.cloud().size()});

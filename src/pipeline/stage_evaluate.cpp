@@ -28,39 +28,6 @@ void record_deviation(StageRecord& rec, const std::string& prefix, const Deviati
 // The quality block: the same keys from the quality and the evaluate stage.
 void record_quality(StageRecord& rec, const MeshQuality& q) { rec.add(MeshQuality::results(), q, "quality/"); }
 
-// The best fit of the reference (evaluate --align), reported under align/.
-const ResultTable<RegistrationResult>& align_results() {
-  static const ResultTable<RegistrationResult> table = [] {
-    using R = RegistrationResult;
-    ResultTable<R> t;
-    t.computed("matrix", ResultType::Numbers,
-               [](const R& r) {
-                 const Eigen::Matrix4d m = r.transform.matrix();
-                 std::vector<double> matrix;
-                 for (int i = 0; i < 4; ++i)
-                   for (int j = 0; j < 4; ++j) matrix.push_back(m(i, j));
-                 return ResultValue(std::move(matrix));
-               },
-               "4x4 row by row: maps the reference as read onto the mesh");
-    t.computed("rotation_deg", ResultType::Number, [](const R& r) { return ResultValue(r.transform.angle_degrees()); }, "Rotation angle of the fit")
-        .with_unit("degrees");
-    t.computed("translation", ResultType::Numbers,
-               [](const R& r) {
-                 const Eigen::Matrix4d m = r.transform.matrix();
-                 return ResultValue(std::vector<double>{m(0, 3), m(1, 3), m(2, 3)});
-               },
-               "Translation of the fit")
-        .with_unit("cloud units");
-    t.number("fitness", &R::fitness, "Share of reference points within the fit's distance").higher_is_better();
-    t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
-    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(as_count(r.iterations)); }, "ICP iterations");
-    t.flag("converged", &R::converged, "The fit converged").higher_is_better();
-    t.text("message", &R::message, "How the fit ended");
-    return t;
-  }();
-  return table;
-}
-
 // Chamfer and Hausdorff between the reference and the mesh, reported under distance/.
 struct TwoWayDistance {
   double reference_to_mesh_mean = 0.0, reference_to_mesh_max = 0.0;
@@ -152,7 +119,7 @@ const CountTable& sample_counts() {
 // Every metric evaluate and quality report, for their declarations.
 std::vector<ResultSpec> quality_specs() { return prefixed(MeshQuality::results().specs(), "quality/"); }
 std::vector<ResultSpec> evaluate_specs() {
-  std::vector<ResultSpec> out = prefixed(align_results().specs(), "align/");
+  std::vector<ResultSpec> out = prefixed(mesh_alignment_results().specs(), "align/");
   for (const ResultSpec& s : evaluate_text_results().specs()) out.push_back(s);
   append(out, region_text_results().specs());
   for (const char* block : {"deviation/", "deviation_not_vertices/", "deviation_by_region/*/"})
@@ -215,7 +182,7 @@ RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const st
   p.max_distance = Length::cloud(p.max_distance.resolve(p.max_distance.in_spacings() ? run.context.mean_spacing(ref_tag) : 0.0));
   rec.set_used("align_max_distance_used", p.max_distance.value);
   const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud().positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
-  rec.add(align_results(), r, "align/");
+  rec.add(mesh_alignment_results(), r, "align/");
   if (!r.converged) rec.warnings.push_back("align: " + r.message + "; measured as aligned so far");
   return r.transform;
 }

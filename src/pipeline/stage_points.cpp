@@ -66,15 +66,6 @@ const ResultTable<NormalCounts>& zero_normal_counts() {
   }();
   return table;
 }
-const ResultTable<NormalResult>& normal_counts() {
-  static const ResultTable<NormalResult> table = [] {
-    ResultTable<NormalResult> t;
-    t.count("degenerate", &NormalResult::degenerate, "Points with too few neighbours or a degenerate neighbourhood: normal (0,0,0)")
-        .lower_is_better();
-    return t;
-  }();
-  return table;
-}
 struct SpacingValue {
   double mean_spacing = 0.0;
 };
@@ -86,52 +77,13 @@ const ResultTable<SpacingValue>& spacing_metrics() {
   }();
   return table;
 }
-const ResultTable<OrientResult>& flipped_counts() {
-  static const ResultTable<OrientResult> table = [] {
-    ResultTable<OrientResult> t;
-    t.count("flipped", &OrientResult::flipped, "Normals whose sign the orientation changed");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<OrientResult>& component_counts() {  // mst only
-  static const ResultTable<OrientResult> table = [] {
-    ResultTable<OrientResult> t;
-    t.count("components", &OrientResult::components, "Connected components of the orientation graph (orient mst)");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<NormalAgreement>& agreement_counts() {
-  static const ResultTable<NormalAgreement> table = [] {
-    ResultTable<NormalAgreement> t;
-    t.count("input_normals_compared", &NormalAgreement::compared, "Points where the input's and the new normal both have a direction");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<NormalAgreement>& agreement_metrics() {
-  static const ResultTable<NormalAgreement> table = [] {
-    ResultTable<NormalAgreement> t;
-    t.number("mean_angle_to_input_deg", &NormalAgreement::mean_angle_deg, "Mean angle between the new and the input's normal lines")
-        .with_unit("degrees")
-        .lower_is_better();
-    t.number("orientation_agreement_with_input", &NormalAgreement::share, "Share of compared points whose new normal is on the input's side")
-        .higher_is_better();
-    return t;
-  }();
-  return table;
-}
-
 std::vector<ResultSpec> normals_specs() {
   std::vector<ResultSpec> out = counted(point_counts().specs());
   append(out, counted(zero_normal_counts().specs()));
-  append(out, counted(normal_counts().specs()));
-  append(out, counted(flipped_counts().specs()));
-  append(out, counted(component_counts().specs()));
-  append(out, counted(agreement_counts().specs()));
+  append(out, NormalResult::results().specs());
   append(out, spacing_metrics().specs());
-  append(out, agreement_metrics().specs());
+  append(out, OrientResult::results(Orientation::Mst).specs());
+  append(out, NormalAgreement::results().specs());
   return out;
 }
 
@@ -139,8 +91,7 @@ std::vector<ResultSpec> normals_specs() {
 NormalAgreement record_agreement(const std::vector<Vector3d>& reference, const std::vector<Vector3d>& estimated, StageRecord& rec) {
   const NormalAgreement agreement = compare_normals(reference, estimated);
   if (agreement.compared == 0) return agreement;
-  rec.add_counts(agreement_counts(), agreement);
-  rec.add(agreement_metrics(), agreement);
+  rec.add(NormalAgreement::results(), agreement);
   return agreement;
 }
 
@@ -208,7 +159,7 @@ void run_normals(StageRun& run) {
   rec.set_used("neighborhood", neighborhood_name(static_cast<int>(params.neighborhood)));
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", estimated.radius_used);
   rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
-  rec.add_counts(normal_counts(), estimated);
+  rec.add(NormalResult::results(), estimated);
   rec.add(spacing_metrics(), SpacingValue{spacing});
   const bool by_radius = params.neighborhood != NeighborhoodKind::Knn;
   if (estimated.degenerate == cloud.size()) {
@@ -229,12 +180,11 @@ void run_normals(StageRun& run) {
   std::string oriented_text = "not oriented";
   if (orientation == "input") {
     const OrientResult r = orient_to_reference(cloud, input_normals);
-    rec.add_counts(flipped_counts(), r);
+    rec.add(OrientResult::results(Orientation::None), r);
     oriented_text = fmt::format("oriented to the input's normals ({} flipped)", r.flipped);
   } else if (orient.method != Orientation::None) {
     const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
-    rec.add_counts(flipped_counts(), r);
-    if (orient.method == Orientation::Mst) rec.add_counts(component_counts(), r);
+    rec.add(OrientResult::results(orient.method), r);
     oriented_text = orient.method == Orientation::Mst ? fmt::format("oriented mst ({}, {} flipped)", plural(r.components, "component"), r.flipped)
                                                       : fmt::format("oriented by {} ({} flipped)", orientation_name(orient.method), r.flipped);
   }
@@ -264,31 +214,7 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
   run.record.warnings.push_back(fmt::format("no normals in the input; estimated (PCA, k = {}) and MST-oriented", k));
 }
 
-// What curvature reports.
-const ResultTable<CurvatureScale>& scale_metrics() {  // k = 0 (the scale chosen from the noise)
-  static const ResultTable<CurvatureScale> table = [] {
-    using S = CurvatureScale;
-    ResultTable<S> t;
-    t.number("noise", &S::noise, "Noise: median RMS residual of the jet fits at the chosen k").with_unit("cloud units");
-    t.computed("radius_in_noise", ResultType::Number, [](const S& s) { return ResultValue(s.noise > 0.0 ? s.radius / s.noise : 0.0); },
-               "Median neighbourhood radius in noise units");
-    t.flag("scale_capped", &S::capped, "k stopped at max_k before the radius reached scale_in_noise times the noise").lower_is_better();
-    return t;
-  }();
-  return table;
-}
-const ResultTable<CurvatureResult>& curvature_counts() {
-  static const ResultTable<CurvatureResult> table = [] {
-    using R = CurvatureResult;
-    ResultTable<R> t;
-    t.count("degenerate", &R::degenerate, "Points with no curvature (zero normal, too few neighbours, singular fit)").lower_is_better();
-    for (int type = 0; type < kSurfaceTypeCount; ++type)
-      t.computed(surface_type_name(static_cast<SurfaceType>(type)), ResultType::Integer,
-                 [type](const R& r) { return ResultValue(as_count(r.type_counts[std::size_t(type)])); }, "Points of this HK surface type");
-    return t;
-  }();
-  return table;
-}
+// What curvature reports besides CurvatureScale and CurvatureResult.
 struct CurvatureValues {
   double median_residual = 0.0;
   bool normals_estimated = false;
@@ -303,10 +229,10 @@ const ResultTable<CurvatureValues>& curvature_metrics() {
   return table;
 }
 std::vector<ResultSpec> curvature_specs() {
-  std::vector<ResultSpec> out = scale_metrics().specs();
+  std::vector<ResultSpec> out = CurvatureScale::results().specs();
   append(out, counted(zero_normal_counts().specs()));
   append(out, counted(point_counts().specs()));
-  append(out, counted(curvature_counts().specs()));
+  append(out, CurvatureResult::results().specs());
   append(out, curvature_metrics().specs());
   return out;
 }
@@ -332,7 +258,7 @@ void run_curvature(StageRun& run) {
   const CurvatureResult r = estimate_curvature(cloud, params, &tree, sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0));
   StageRecord& rec = run.record;
   if (scale) {
-    rec.add(scale_metrics(), *scale);
+    rec.add(CurvatureScale::results(), *scale);
     if (scale->capped)
       rec.warnings.push_back(fmt::format("the noise ({:.3g}) needs a neighbourhood radius of {:.3g} ({} times it), but k stopped at {} "
                                          "(radius {:.3g}; max_k {}, {}): the curvature may be noise-dominated (check the share "
@@ -345,7 +271,7 @@ void run_curvature(StageRun& run) {
   if (params.neighborhood != NeighborhoodKind::Knn) rec.set_used("radius_used", r.radius_used);
   rec.set_used("zero_curvature", r.zero_curvature);
   rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
-  rec.add_counts(curvature_counts(), r);
+  rec.add(CurvatureResult::results(), r);
   rec.add(curvature_metrics(), CurvatureValues{r.median_residual, estimated});
   if (r.degenerate > 0)
     rec.warnings.push_back(fmt::format("{} a zero normal, too few neighbours or a singular jet fit: curvature 0, surface_type 0 (undefined)",
@@ -360,26 +286,7 @@ void run_curvature(StageRun& run) {
                             100.0 * double(r.type_counts[best]) / double(std::max<std::size_t>(cloud.size(), 1)), r.degenerate);
 }
 
-// What features reports.
-const ResultTable<FeatureResult>& feature_counts() {
-  static const ResultTable<FeatureResult> table = [] {
-    ResultTable<FeatureResult> t;
-    t.count("candidates", &FeatureResult::candidates, "Points whose variation exceeded the threshold");
-    t.count("edges", &FeatureResult::edges, "Points labelled edge");
-    t.count("corners", &FeatureResult::corners, "Points labelled corner");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<FeatureResult>& feature_metrics() {
-  static const ResultTable<FeatureResult> table = [] {
-    ResultTable<FeatureResult> t;
-    t.number("mean_spacing", &FeatureResult::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
-    return t;
-  }();
-  return table;
-}
-// Against truth_field, when given.
+// What features reports besides FeatureResult: the score against truth_field, when given.
 struct FeatureScore {
   std::size_t truth_points = 0;
   double precision = 0.0, recall = 0.0;
@@ -404,8 +311,7 @@ const ResultTable<FeatureScore>& score_metrics() {
 std::vector<ResultSpec> features_specs() {
   std::vector<ResultSpec> out = counted(zero_normal_counts().specs());
   append(out, counted(point_counts().specs()));
-  append(out, counted(feature_counts().specs()));
-  append(out, feature_metrics().specs());
+  append(out, FeatureResult::results().specs());
   append(out, counted(score_counts().specs()));
   append(out, score_metrics().specs());
   return out;
@@ -433,8 +339,7 @@ void run_features(StageRun& run) {
   rec.set_used("variation_threshold", r.variation_threshold_used);
   rec.set_used("plane_distance_used", r.dd_used);
   rec.add_counts(point_counts(), NormalCounts{cloud.size(), 0});
-  rec.add_counts(feature_counts(), r);
-  rec.add(feature_metrics(), r);
+  rec.add(FeatureResult::results(), r);
   std::string scored;
   if (!truth_name.empty()) {
     const std::vector<double>& truth = cloud.fields.find(truth_name)->values;

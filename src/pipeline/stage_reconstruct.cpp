@@ -3,9 +3,7 @@
 // cocone, Crust, ball pivoting or screened Poisson), with its topology reported.
 #include <algorithm>
 #include <limits>
-#include <map>
 #include <set>
-#include <stdexcept>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -55,80 +53,6 @@ LoopKinds classify_loops(const MeshTopology& t, const PointCloud& cloud, const K
   return kinds;
 }
 
-// The counts every method reports (ReconstructionStats), then its own.
-const ResultTable<ReconstructionStats>& stats_counts() {
-  static const ResultTable<ReconstructionStats> table = [] {
-    using S = ReconstructionStats;
-    ResultTable<S> t;
-    t.count("duplicate_points", &S::duplicate_points, "Exact duplicates of earlier points, left unused");
-    t.count("candidate_triangles", &S::candidate_triangles, "Triangles the method proposed before choosing");
-    t.count("holes_filled", &S::holes_filled, "Holes the hole filler closed");
-    t.count("fill_triangles", &S::fill_triangles, "Triangles the hole filler added");
-    return t;
-  }();
-  return table;
-}
-
-// Each method's own counts and figures (ReconstructionStats::counts and figures), in the order
-// the library lists them: the test of the declarations checks that each run reports these.
-struct MethodValues {
-  std::string method;
-  std::vector<std::string> counts, figures;
-};
-const std::vector<MethodValues>& method_values() {
-  static const std::vector<MethodValues> values = [] {
-    const std::vector<std::string> delaunay = {"delaunay_cells", "hull_points", "normal_filtered", "pruned", "open_pieces",
-                                               "closed_pieces", "walk_dropped", "rim_peeled", "flipped_pieces", "fill_triangles_removed"};
-    std::vector<std::string> crust = delaunay;
-    crust.insert(crust.end(), {"poles", "second_delaunay_vertices", "second_delaunay_cells"});
-    return std::vector<MethodValues>{
-        {"triangulate", {"selected_triangles", "front_triangles", "pinch_triangles_removed", "inserted_points"}, {"local_spacing_mean"}},
-        {"cocone", delaunay, {"seconds_delaunay"}},
-        {"crust", crust, {"seconds_delaunay"}},
-        {"ball-pivot", {"fill_triangles_removed"}, {}},
-        {"poisson",
-         {"skipped_normals", "depth", "finest_level", "finest_nodes", "trimmed_triangles", "trim_cut_triangles", "trim_removed_islands",
-          "unsupported_pieces", "unsupported_triangles"},
-         {"iso_value", "peak_megabytes"}},
-    };
-  }();
-  return values;
-}
-
-template <class V>
-V named_value(const std::vector<std::pair<std::string, V>>& list, const std::string& name) {
-  for (const auto& [key, value] : list)
-    if (key == name) return value;
-  throw std::logic_error("reconstruct: the method reported no \"" + name + "\"");
-}
-
-// The method's own counts (`counts`) or figures and method_seconds, from method_values().
-const ResultTable<ReconstructionStats>& method_table(const std::string& method, bool counts) {
-  static const std::map<std::pair<std::string, bool>, ResultTable<ReconstructionStats>> tables = [] {
-    using S = ReconstructionStats;
-    std::map<std::pair<std::string, bool>, ResultTable<S>> out;
-    for (const MethodValues& m : method_values()) {
-      ResultTable<S>& c = out[{m.method, true}];
-      for (const std::string& name : m.counts)
-        c.computed(name, ResultType::Integer, [name](const S& s) { return ResultValue(as_count(named_value(s.counts, name))); },
-                   "Count of the " + m.method + " method");
-      ResultTable<S>& f = out[{m.method, false}];
-      for (const std::string& name : m.figures)
-        f.computed(name, ResultType::Number, [name](const S& s) { return ResultValue(named_value(s.figures, name)); },
-                   "Figure of the " + m.method + " method");
-      f.number("method_seconds", &S::seconds, "Wall time of the method").with_unit("seconds");
-    }
-    return out;
-  }();
-  return tables.at({method, counts});
-}
-
-void record_stats(const std::string& method, const ReconstructionStats& stats, StageRecord& rec) {
-  rec.add_counts(stats_counts(), stats);
-  rec.add_counts(method_table(method, true), stats);
-  rec.add(method_table(method, false), stats);
-}
-
 // The Poisson figures beyond the common ones: the octree per level, the solver.
 struct PoissonLevels {
   std::vector<double> nodes_per_level, relative_residual_per_level;
@@ -152,25 +76,6 @@ void record_poisson(const PoissonResult& r, StageRecord& rec) {
     levels.relative_residual_per_level.push_back(r.residual_per_level[l]);
   }
   rec.add(poisson_metrics(), levels);
-}
-
-const ResultTable<SmallComponentsResult>& removed_counts() {
-  static const ResultTable<SmallComponentsResult> table = [] {
-    ResultTable<SmallComponentsResult> t;
-    t.count("components_removed", &SmallComponentsResult::components_removed, "Small components removed (min_component_share)");
-    t.count("faces_removed", &SmallComponentsResult::faces_removed, "Faces they had");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<FlatRegionResult>& region_counts() {
-  static const ResultTable<FlatRegionResult> table = [] {
-    ResultTable<FlatRegionResult> t;
-    t.count("regions", &FlatRegionResult::regions, "Flat regions labelled (face field region)");
-    t.count("largest_region_faces", &FlatRegionResult::largest_region, "Faces of the largest region");
-    return t;
-  }();
-  return table;
 }
 
 // The mesh as built: its counts and metrics.
@@ -234,22 +139,16 @@ const ResultTable<MeshSummary>& mesh_metrics() {
   return table;
 }
 
-std::vector<ResultSpec> reconstruct_specs() {
+// Every method's ReconstructionStats, each key once (the first method's doc).
+std::vector<ResultSpec> reconstruct_specs(const std::vector<std::string>& methods) {
   std::vector<ResultSpec> out = noise_metrics().specs();
   append(out, poisson_metrics().specs());
-  append(out, counted(stats_counts().specs()));
   std::set<std::string> seen;
-  for (const MethodValues& m : method_values())
-    for (const bool counts : {true, false})
-      for (const ResultSpec& spec : method_table(m.method, counts).specs()) {
-        if (!seen.insert(spec.key).second) continue;
-        ResultSpec copy = spec;
-        if (counts) copy.block = ResultBlock::Counts;
-        copy.doc = counts ? "A count of the method" : copy.key == "method_seconds" ? copy.doc : "A figure of the method";
-        out.push_back(copy);
-      }
-  append(out, counted(removed_counts().specs()));
-  append(out, counted(region_counts().specs()));
+  for (const std::string& method : methods)
+    for (const ResultSpec& spec : ReconstructionStats::results(method).specs())
+      if (seen.insert(spec.key).second) out.push_back(spec);
+  append(out, SmallComponentsResult::results().specs());
+  append(out, FlatRegionResult::results().specs());
   append(out, counted(mesh_counts().specs()));
   append(out, mesh_metrics().specs());
   return out;
@@ -259,7 +158,7 @@ std::vector<ResultSpec> reconstruct_specs() {
 // the face field "region" (issue 12). The topology is analysed again when faces went.
 void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
   const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
-  rec.add_counts(removed_counts(), removed);
+  rec.add(SmallComponentsResult::results(), removed);
   if (removed.faces_removed > 0) {
     const std::size_t used_before = result.topology.vertices;
     result.topology = analyze_topology(result.mesh);
@@ -268,7 +167,7 @@ void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, Sta
   const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a));
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
-  rec.add_counts(region_counts(), regions);
+  rec.add(FlatRegionResult::results(), regions);
 }
 
 void run_reconstruct(StageRun& run) {
@@ -318,7 +217,7 @@ void run_reconstruct(StageRun& run) {
     radii.erase(std::unique(radii.begin(), radii.end()), radii.end());
     rec.set_used("radii", radii);
   }
-  record_stats(method, result.stats, rec);
+  rec.add(ReconstructionStats::results(method), result.stats);
   clean_and_label_faces(result, a, rec);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
@@ -396,7 +295,7 @@ StageSpec reconstruct_stage() {
   append(s.params, params_of(FlatRegionParams::fields()));
   s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf reconstruct data/kitten.xyz mesh_bp.ply --method ball-pivot --radii-in-spacings 2,4",
                 "pointsurf reconstruct data/kitten.xyz mesh_poisson.ply --method poisson --trim-depth 5"};
-  s.results = reconstruct_specs();
+  s.results = reconstruct_specs(s.methods);
   s.run = run_reconstruct;
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw key_error("radii", " and radii_in_spacings: give only one");

@@ -24,55 +24,7 @@ std::vector<double> matrix_list(const RigidTransform& t) {
 
 RegisterPairParams pair_params(const StageArgs& a) { return read_params<RegisterPairParams>(a); }
 
-// What register reports.
-const ResultTable<RegistrationResult>& fit_metrics() {  // the fit, and with global the RANSAC's under "global_"
-  static const ResultTable<RegistrationResult> table = [] {
-    using R = RegistrationResult;
-    ResultTable<R> t;
-    t.number("fitness", &R::fitness, "Share of source points within the fit's distance of the target").higher_is_better();
-    t.number("inlier_rmse", &R::inlier_rmse, "RMS distance of those points").with_unit("cloud units").lower_is_better();
-    t.computed("iterations", ResultType::Integer, [](const R& r) { return ResultValue(as_count(r.iterations)); }, "ICP iterations");
-    t.flag("converged", &R::converged, "The fit converged").higher_is_better();
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RegisterPairResult>& pair_counts() {
-  static const ResultTable<RegisterPairResult> table = [] {
-    ResultTable<RegisterPairResult> t;
-    t.count("source_samples", &RegisterPairResult::source_samples, "Points of the source's downsample");
-    t.count("target_samples", &RegisterPairResult::target_samples, "Points of the target's downsample");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RegisterPairResult>& transform_metrics() {
-  static const ResultTable<RegisterPairResult> table = [] {
-    using R = RegisterPairResult;
-    ResultTable<R> t;
-    t.computed("transform", ResultType::Numbers, [](const R& r) { return ResultValue(matrix_list(r.result.transform)); },
-               "4x4 row by row: maps the source onto the target");
-    t.computed("rotation_angle_deg", ResultType::Number, [](const R& r) { return ResultValue(r.result.transform.angle_degrees()); },
-               "Rotation angle of the transform")
-        .with_unit("degrees");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RegisterPairResult>& pair_metrics() {
-  static const ResultTable<RegisterPairResult> table = [] {
-    using R = RegisterPairResult;
-    ResultTable<R> t;
-    t.number("spacing", &R::spacing, "The larger mean spacing of the two clouds").with_unit("cloud units");
-    t.number("voxel", &R::voxel, "Cell of the downsample (0: none)").with_unit("cloud units");
-    t.number("seconds_prepare", &R::seconds_prepare, "Normals, spacing, downsample, kd-trees").with_unit("seconds");
-    t.number("seconds_descriptors", &R::seconds_descriptors, "Descriptors").with_unit("seconds");
-    t.number("seconds_align", &R::seconds_align, "Matching and RANSAC").with_unit("seconds");
-    t.number("seconds_icp", &R::seconds_icp, "Coarse and fine ICP").with_unit("seconds");
-    return t;
-  }();
-  return table;
-}
+// What register reports besides RegisterPairResult: the sizes of the two clouds.
 struct PairInputs {
   std::size_t source_points = 0, target_points = 0;
 };
@@ -87,11 +39,7 @@ const ResultTable<PairInputs>& input_counts() {
 }
 std::vector<ResultSpec> register_specs() {
   std::vector<ResultSpec> out = counted(input_counts().specs());
-  append(out, counted(pair_counts().specs()));
-  append(out, transform_metrics().specs());
-  append(out, fit_metrics().specs());
-  append(out, prefixed(fit_metrics().specs(), "global_"));
-  append(out, pair_metrics().specs());
+  append(out, RegisterPairResult::results(true).specs());
   return out;
 }
 
@@ -102,11 +50,7 @@ void run_register(StageRun& run) {
   const RegisterPairResult r = register_pair(source.cloud(), target, params, run.progress);
   StageRecord& rec = run.record;
   rec.add_counts(input_counts(), PairInputs{source.cloud().size(), target.size()});
-  rec.add_counts(pair_counts(), r);
-  rec.add(transform_metrics(), r);
-  rec.add(fit_metrics(), r.result);
-  if (params.global) rec.add(fit_metrics(), r.global, "global_");
-  rec.add(pair_metrics(), r);
+  rec.add(RegisterPairResult::results(params.global), r);
   for (const auto& [estimated, name] : {std::pair{r.source_normals_estimated, "source"}, std::pair{r.target_normals_estimated, "target"}})
     if (estimated)
       rec.warnings.push_back(fmt::format("the {} has no normals; estimated (PCA, k = {}) and MST-oriented", name, params.normal_neighbors));
@@ -142,8 +86,9 @@ void run_register(StageRun& run) {
 
 RegisterScansParams multi_params(const StageArgs& a) { return read_params<RegisterScansParams>(a); }
 
-// What register-many reports: per scan (under "points_<tag>" and "pose_<i>") and per link
-// ("link_<source>_<target>_fitness"), then the whole.
+// What register-many reports: per scan (under "points_<tag>" and "pose_<i>"), each ScanLink
+// (under "link_<source>_<target>_"), then the links counted, PoseGraphResult (under "graph_")
+// and RegisterScansResult.
 struct ScanPoints {
   std::size_t points = 0;
 };
@@ -160,14 +105,6 @@ const ResultTable<RigidTransform>& pose_metrics() {
     ResultTable<RigidTransform> t;
     t.computed("", ResultType::Numbers, [](const RigidTransform& p) { return ResultValue(matrix_list(p)); },
                "Pose of scan * (4x4 row by row): maps it into scan 0's frame");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RegistrationResult>& link_metrics() {
-  static const ResultTable<RegistrationResult> table = [] {
-    ResultTable<RegistrationResult> t;
-    t.number("_fitness", &RegistrationResult::fitness, "Fitness of the link from scan * onto scan *").higher_is_better();
     return t;
   }();
   return table;
@@ -193,38 +130,13 @@ const ResultTable<Links>& merged_counts() {
   }();
   return table;
 }
-const ResultTable<PoseGraphResult>& graph_metrics() {  // refine
-  static const ResultTable<PoseGraphResult> table = [] {
-    using G = PoseGraphResult;
-    ResultTable<G> t;
-    t.number("graph_cost_before", &G::initial_cost, "Cost of the pose graph before the refinement").with_unit("squared cloud units");
-    t.number("graph_cost", &G::cost, "Cost after it").with_unit("squared cloud units").lower_is_better();
-    t.computed("graph_iterations", ResultType::Integer, [](const G& g) { return ResultValue(as_count(g.iterations)); }, "Gauss-Newton iterations");
-    t.flag("graph_converged", &G::converged, "The refinement converged").higher_is_better();
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RegisterScansResult>& scans_metrics() {
-  static const ResultTable<RegisterScansResult> table = [] {
-    using R = RegisterScansResult;
-    ResultTable<R> t;
-    t.number("spacing", &R::spacing, "The largest mean spacing of the scans").with_unit("cloud units");
-    t.number("seconds_prepare", &R::seconds_prepare, "Normals, downsamples, descriptors").with_unit("seconds");
-    t.number("seconds_initial", &R::seconds_initial, "The first pass").with_unit("seconds");
-    t.number("seconds_overlaps", &R::seconds_overlaps, "Finding and registering the other overlapping pairs").with_unit("seconds");
-    t.number("seconds_graph", &R::seconds_graph, "The pose graph").with_unit("seconds");
-    return t;
-  }();
-  return table;
-}
 std::vector<ResultSpec> register_many_specs() {
   std::vector<ResultSpec> out = counted(scan_points_counts().specs(), "points_*");
   append(out, prefixed(pose_metrics().specs(), "pose_*"));
-  append(out, prefixed(link_metrics().specs(), "link_*_*"));
+  append(out, prefixed(ScanLink::results().specs(), "link_*_*_"));
   append(out, counted(link_counts().specs()));
-  append(out, graph_metrics().specs());
-  append(out, scans_metrics().specs());
+  append(out, prefixed(PoseGraphResult::results().specs(), "graph_"));
+  append(out, RegisterScansResult::results().specs());
   append(out, counted(merged_counts().specs()));
   return out;
 }
@@ -252,13 +164,13 @@ void run_register_many(StageRun& run) {
   for (const ScanLink& l : r.links) {
     initial += l.initial;
     pruned += l.pruned;
-    rec.add(link_metrics(), l.result, fmt::format("link_{}_{}", l.source, l.target));
+    rec.add(ScanLink::results(), l, fmt::format("link_{}_{}_", l.source, l.target));
     if (!l.result.converged) rec.warnings.push_back(fmt::format("ICP of scan {} onto scan {} did not converge: {}", l.source, l.target, l.result.message));
   }
   Links links{r.links.size(), r.links.size() - initial, pruned, 0};
   rec.add_counts(link_counts(), links);
-  if (params.refine) rec.add(graph_metrics(), r.graph);
-  rec.add(scans_metrics(), r);
+  if (params.refine) rec.add(PoseGraphResult::results(), r.graph, "graph_");
+  rec.add(RegisterScansResult::results(), r);
   PointCloud merged = merge_scans(scans, r.poses);
   links.points = merged.size();
   rec.add_counts(merged_counts(), links);

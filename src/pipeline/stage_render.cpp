@@ -15,16 +15,7 @@
 namespace pointsurf::detail {
 namespace {
 
-// What render reports.
-const ResultTable<RenderResult>& drawn_counts() {
-  static const ResultTable<RenderResult> table = [] {
-    ResultTable<RenderResult> t;
-    t.count("points_drawn", &RenderResult::points_drawn, "Points drawn");
-    t.count("triangles_drawn", &RenderResult::triangles_drawn, "Triangles drawn");
-    return t;
-  }();
-  return table;
-}
+// What render reports besides RenderResult: the file written.
 struct Picture {
   std::size_t png_bytes = 0;
   std::string image;
@@ -33,18 +24,6 @@ const ResultTable<Picture>& picture_counts() {
   static const ResultTable<Picture> table = [] {
     ResultTable<Picture> t;
     t.count("png_bytes", &Picture::png_bytes, "Size of the PNG file").with_unit("bytes");
-    return t;
-  }();
-  return table;
-}
-const ResultTable<RenderResult>& scale_metrics() {  // coloured by a field
-  static const ResultTable<RenderResult> table = [] {
-    ResultTable<RenderResult> t;
-    t.computed("scale_min", ResultType::Number, [](const RenderResult& r) { return ResultValue(r.scale.min); }, "Value of the colour scale's low end");
-    t.computed("scale_max", ResultType::Number, [](const RenderResult& r) { return ResultValue(r.scale.max); }, "Value of the colour scale's high end");
-    t.computed("colormap", ResultType::Text,
-               [](const RenderResult& r) { return ResultValue(std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential")); },
-               "Colour map: sequential or diverging");
     return t;
   }();
   return table;
@@ -58,9 +37,8 @@ const ResultTable<Picture>& picture_metrics() {
   return table;
 }
 std::vector<ResultSpec> render_specs() {
-  std::vector<ResultSpec> out = counted(drawn_counts().specs());
+  std::vector<ResultSpec> out = RenderResult::results(true).specs();
   append(out, counted(picture_counts().specs()));
-  append(out, scale_metrics().specs());
   append(out, picture_metrics().specs());
   return out;
 }
@@ -105,9 +83,8 @@ void run_render(StageRun& run) {
   write_file_atomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   for (const std::string& w : r.warnings) run.record.warnings.push_back(w);
   const Picture picture{png.size(), file};
-  run.record.add_counts(drawn_counts(), r);
+  run.record.add(RenderResult::results(!p.field.empty()), r);
   run.record.add_counts(picture_counts(), picture);
-  if (!p.field.empty()) run.record.add(scale_metrics(), r);
   run.record.add(picture_metrics(), picture);
   run.record.summary = fmt::format("render: {} view of {} to {} ({}x{})", p.camera ? "camera" : a.text("view"),
                                    item.mesh.triangles.empty() ? plural(item.cloud().size(), "point") : plural(item.mesh.triangles.size(), "triangle"),

@@ -15,37 +15,8 @@
 namespace pointsurf::detail {
 namespace {
 
-// What segment reports: ransac's candidates and primitives, then the labels of any method.
-const ResultTable<PrimitiveResult>& candidate_counts() {
-  static const ResultTable<PrimitiveResult> table = [] {
-    ResultTable<PrimitiveResult> t;
-    t.count("candidates", &PrimitiveResult::candidates, "Candidate primitives drawn (ransac)");
-    return t;
-  }();
-  return table;
-}
-// One primitive, a block under "primitive_<i>/".
-const ResultTable<Primitive>& primitive_metrics() {
-  static const ResultTable<Primitive> table = [] {
-    using S = Primitive;
-    const std::string u = "cloud units";
-    ResultTable<S> t;
-    t.computed("type", ResultType::Text, [](const S& s) { return ResultValue(std::string(primitive_type_name(s.type))); },
-               "Type of the primitive: plane, sphere, cylinder, cone or torus");
-    t.computed("point", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.point)); },
-               "Plane: the inliers' centroid; sphere, torus: centre; cylinder: axis point; cone: apex")
-        .with_unit(u);
-    t.computed("axis", ResultType::Numbers, [](const S& s) { return ResultValue(as_list(s.axis)); },
-               "Plane: unit normal; cylinder, cone, torus: unit axis (cone: from the apex into the cone)");
-    t.number("radius", &S::radius, "Sphere, cylinder: radius; torus: major radius").with_unit(u);
-    t.number("angle_deg", &S::angle_deg, "Cone: half opening angle").with_unit("degrees");
-    t.count("inliers", &S::inliers, "Points assigned to it");
-    t.number("rms", &S::rms, "RMS distance of those points to it").with_unit(u).lower_is_better();
-    t.number("minor_radius", &S::minor_radius, "Torus: tube radius").with_unit(u);
-    return t;
-  }();
-  return table;
-}
+// What segment reports besides PrimitiveResult and each Primitive (ransac, the primitive i under
+// "primitive_<i>/"): the labels of any method.
 struct Labels {
   std::size_t points = 0, segments = 0, unassigned = 0;
   bool normals_estimated = false;
@@ -70,22 +41,14 @@ const ResultTable<Labels>& label_metrics() {
 }
 std::vector<ResultSpec> segment_specs() {
   std::vector<ResultSpec> out = zero_normals_specs();
-  append(out, counted(candidate_counts().specs()));
-  append(out, prefixed(primitive_metrics().specs(), "primitive_*/"));
+  append(out, PrimitiveResult::results().specs());
+  append(out, prefixed(Primitive::results().specs(), "primitive_*/"));
   append(out, counted(label_counts().specs()));
   append(out, label_metrics().specs());
   return out;
 }
 
-// What boundary reports.
-const ResultTable<BoundaryResult>& boundary_counts() {
-  static const ResultTable<BoundaryResult> table = [] {
-    ResultTable<BoundaryResult> t;
-    t.count("boundary", &BoundaryResult::count, "Boundary points (field boundary)");
-    return t;
-  }();
-  return table;
-}
+// What boundary reports besides BoundaryResult.
 // One outline, under "outline_<i>".
 struct OutlineRow {
   const SegmentOutline* outline = nullptr;
@@ -140,7 +103,7 @@ const ResultTable<Outlines>& outline_totals() {
 }
 std::vector<ResultSpec> boundary_specs() {
   std::vector<ResultSpec> out = counted(boundary_points_counts().specs());
-  append(out, counted(boundary_counts().specs()));
+  append(out, BoundaryResult::results().specs());
   append(out, prefixed(outline_metrics().specs(), "outline_*"));
   append(out, counted(outline_counts().specs()));
   append(out, outline_totals().specs());
@@ -151,8 +114,8 @@ void record_primitives(StageRecord& rec, const PrimitiveResult& r) {
   rec.set_used("epsilon_used", r.epsilon_used);
   rec.set_used("cluster_epsilon_used", r.cluster_epsilon_used);
   rec.set_used("min_points", static_cast<std::int64_t>(r.min_points_used));
-  rec.add_counts(candidate_counts(), r);
-  for (std::size_t i = 0; i < r.primitives.size(); ++i) rec.add(primitive_metrics(), r.primitives[i], fmt::format("primitive_{}/", i));
+  rec.add(PrimitiveResult::results(), r);
+  for (std::size_t i = 0; i < r.primitives.size(); ++i) rec.add(Primitive::results(), r.primitives[i], fmt::format("primitive_{}/", i));
 }
 
 void run_segment(StageRun& run) {
@@ -210,7 +173,7 @@ void run_boundary(StageRun& run) {
   Outlines points;
   points.points = cloud.size();
   rec.add_counts(boundary_points_counts(), points);
-  rec.add_counts(boundary_counts(), b);
+  rec.add(BoundaryResult::results(), b);
   // Outlines of the planar segments: the input's "segment" field, else region growing.
   std::vector<std::int32_t> labels(cloud.size(), -1);
   const ScalarField* segments = cloud.fields.find("segment");

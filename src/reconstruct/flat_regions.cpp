@@ -163,4 +163,14 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
   return result;
 }
 
+const ResultTable<FlatRegionResult>& FlatRegionResult::results() {
+  static const ResultTable<FlatRegionResult> table = [] {
+    ResultTable<FlatRegionResult> t;
+    t.count("regions", &FlatRegionResult::regions, "Flat regions labelled (face field region)").as_count();
+    t.count("largest_region_faces", &FlatRegionResult::largest_region, "Faces of the largest region").as_count();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -65,4 +65,14 @@ SmallComponentsResult remove_small_components(TriangleMesh& mesh, const SmallCom
   return result;
 }
 
+const ResultTable<SmallComponentsResult>& SmallComponentsResult::results() {
+  static const ResultTable<SmallComponentsResult> table = [] {
+    ResultTable<SmallComponentsResult> t;
+    t.count("components_removed", &SmallComponentsResult::components_removed, "Small components removed (min_component_share)").as_count();
+    t.count("faces_removed", &SmallComponentsResult::faces_removed, "Faces they had").as_count();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

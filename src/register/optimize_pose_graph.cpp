@@ -300,4 +300,17 @@ Matrix6d information_from_pairs(const PointCloud& source, const KdTree& target_t
       [](const Matrix6d& a, const Matrix6d& b) -> Matrix6d { return a + b; });
 }
 
+const ResultTable<PoseGraphResult>& PoseGraphResult::results() {
+  static const ResultTable<PoseGraphResult> table = [] {
+    using G = PoseGraphResult;
+    ResultTable<G> t;
+    t.number("cost_before", &G::initial_cost, "Cost of the pose graph before the refinement").with_unit("squared cloud units");
+    t.number("cost", &G::cost, "Cost after it").with_unit("squared cloud units").lower_is_better();
+    t.computed("iterations", ResultType::Integer, [](const G& g) { return ResultValue(std::int64_t(g.iterations)); }, "Gauss-Newton iterations");
+    t.flag("converged", &G::converged, "The refinement converged").higher_is_better();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -164,4 +164,38 @@ RegisterPairResult register_pair(const PointCloud& source, const PointCloud& tar
   return out;
 }
 
+const ResultTable<RegisterPairResult>& RegisterPairResult::results(bool global) {
+  static const std::vector<ResultTable<RegisterPairResult>> tables = [] {
+    using R = RegisterPairResult;
+    std::vector<ResultTable<R>> out(2);
+    for (const bool with_global : {false, true}) {
+      ResultTable<R>& t = out[with_global ? 1 : 0];
+      t.count("source_samples", &R::source_samples, "Points of the source's downsample").as_count();
+      t.count("target_samples", &R::target_samples, "Points of the target's downsample").as_count();
+      t.computed("transform", ResultType::Numbers,
+                 [](const R& r) {
+                   const Eigen::Matrix4d m = r.result.transform.matrix();
+                   std::vector<double> rows;
+                   for (int i = 0; i < 4; ++i)
+                     for (int j = 0; j < 4; ++j) rows.push_back(m(i, j));
+                   return ResultValue(std::move(rows));
+                 },
+                 "4x4 row by row: maps the source onto the target");
+      t.computed("rotation_angle_deg", ResultType::Number, [](const R& r) { return ResultValue(r.result.transform.angle_degrees()); },
+                 "Rotation angle of the transform")
+          .with_unit("degrees");
+      t.nested("", &R::result, RegistrationResult::results());
+      if (with_global) t.nested("global_", &R::global, RegistrationResult::results());
+      t.number("spacing", &R::spacing, "The larger mean spacing of the two clouds").with_unit("cloud units");
+      t.number("voxel", &R::voxel, "Cell of the downsample (0: none)").with_unit("cloud units");
+      t.number("seconds_prepare", &R::seconds_prepare, "Normals, spacing, downsample, kd-trees").with_unit("seconds");
+      t.number("seconds_descriptors", &R::seconds_descriptors, "Descriptors").with_unit("seconds");
+      t.number("seconds_align", &R::seconds_align, "Matching and RANSAC").with_unit("seconds");
+      t.number("seconds_icp", &R::seconds_icp, "Coarse and fine ICP").with_unit("seconds");
+    }
+    return out;
+  }();
+  return tables[global ? 1 : 0];
+}
+
 }  // namespace pointsurf

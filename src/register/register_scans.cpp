@@ -166,4 +166,29 @@ PointCloud merge_scans(const std::vector<PointCloud>& scans, const std::vector<R
   return merged;
 }
 
+const ResultTable<ScanLink>& ScanLink::results() {
+  static const ResultTable<ScanLink> table = [] {
+    ResultTable<ScanLink> t;
+    t.computed("fitness", ResultType::Number, [](const ScanLink& l) { return ResultValue(l.result.fitness); },
+               "Fitness of the link from scan * onto scan *")
+        .higher_is_better();
+    return t;
+  }();
+  return table;
+}
+
+const ResultTable<RegisterScansResult>& RegisterScansResult::results() {
+  static const ResultTable<RegisterScansResult> table = [] {
+    using R = RegisterScansResult;
+    ResultTable<R> t;
+    t.number("spacing", &R::spacing, "The largest mean spacing of the scans").with_unit("cloud units");
+    t.number("seconds_prepare", &R::seconds_prepare, "Normals, downsamples, descriptors").with_unit("seconds");
+    t.number("seconds_initial", &R::seconds_initial, "The first pass").with_unit("seconds");
+    t.number("seconds_overlaps", &R::seconds_overlaps, "Finding and registering the other overlapping pairs").with_unit("seconds");
+    t.number("seconds_graph", &R::seconds_graph, "The pose graph").with_unit("seconds");
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

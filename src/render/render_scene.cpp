@@ -725,4 +725,23 @@ RenderResult render_scene(const PointCloud& cloud, const std::vector<Triangle>& 
   return std::move(r).result();
 }
 
+const ResultTable<RenderResult>& RenderResult::results(bool by_field) {
+  static const std::vector<ResultTable<RenderResult>> tables = [] {
+    using R = RenderResult;
+    std::vector<ResultTable<R>> out(2);
+    for (ResultTable<R>& t : out) {
+      t.count("points_drawn", &R::points_drawn, "Points drawn").as_count();
+      t.count("triangles_drawn", &R::triangles_drawn, "Triangles drawn").as_count();
+    }
+    ResultTable<R>& t = out[1];  // coloured by a field
+    t.computed("scale_min", ResultType::Number, [](const R& r) { return ResultValue(r.scale.min); }, "Value of the colour scale's low end");
+    t.computed("scale_max", ResultType::Number, [](const R& r) { return ResultValue(r.scale.max); }, "Value of the colour scale's high end");
+    t.computed("colormap", ResultType::Text,
+               [](const R& r) { return ResultValue(std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential")); },
+               "Colour map: sequential or diverging");
+    return out;
+  }();
+  return tables[by_field ? 1 : 0];
+}
+
 }  // namespace pointsurf

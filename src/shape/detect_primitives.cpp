@@ -572,4 +572,36 @@ PrimitiveResult detect_primitives(const PointCloud& cloud, const PrimitiveParams
   return std::move(x).result();
 }
 
+const ResultTable<Primitive>& Primitive::results() {
+  static const ResultTable<Primitive> table = [] {
+    using S = Primitive;
+    const std::string u = "cloud units";
+    auto list = [](const Eigen::Vector3d& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
+    ResultTable<S> t;
+    t.computed("type", ResultType::Text, [](const S& s) { return ResultValue(std::string(primitive_type_name(s.type))); },
+               "Type of the primitive: plane, sphere, cylinder, cone or torus");
+    t.computed("point", ResultType::Numbers, [list](const S& s) { return ResultValue(list(s.point)); },
+               "Plane: the inliers' centroid; sphere, torus: centre; cylinder: axis point; cone: apex")
+        .with_unit(u);
+    t.computed("axis", ResultType::Numbers, [list](const S& s) { return ResultValue(list(s.axis)); },
+               "Plane: unit normal; cylinder, cone, torus: unit axis (cone: from the apex into the cone)");
+    t.number("radius", &S::radius, "Sphere, cylinder: radius; torus: major radius").with_unit(u);
+    t.number("angle_deg", &S::angle_deg, "Cone: half opening angle").with_unit("degrees");
+    t.count("inliers", &S::inliers, "Points assigned to it");
+    t.number("rms", &S::rms, "RMS distance of those points to it").with_unit(u).lower_is_better();
+    t.number("minor_radius", &S::minor_radius, "Torus: tube radius").with_unit(u);
+    return t;
+  }();
+  return table;
+}
+
+const ResultTable<PrimitiveResult>& PrimitiveResult::results() {
+  static const ResultTable<PrimitiveResult> table = [] {
+    ResultTable<PrimitiveResult> t;
+    t.count("candidates", &PrimitiveResult::candidates, "Candidate primitives drawn (ransac)").as_count();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

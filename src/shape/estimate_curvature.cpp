@@ -484,4 +484,31 @@ CurvatureResult estimate_curvature(PointCloud& cloud, const CurvatureParams& par
   return result;
 }
 
+const ResultTable<CurvatureResult>& CurvatureResult::results() {
+  static const ResultTable<CurvatureResult> table = [] {
+    using R = CurvatureResult;
+    ResultTable<R> t;
+    t.count("degenerate", &R::degenerate, "Points with no curvature (zero normal, too few neighbours, singular fit)").lower_is_better().as_count();
+    for (int type = 0; type < kSurfaceTypeCount; ++type)
+      t.computed(surface_type_name(static_cast<SurfaceType>(type)), ResultType::Integer,
+                 [type](const R& r) { return ResultValue(std::int64_t(r.type_counts[std::size_t(type)])); }, "Points of this HK surface type")
+          .as_count();
+    return t;
+  }();
+  return table;
+}
+
+const ResultTable<CurvatureScale>& CurvatureScale::results() {
+  static const ResultTable<CurvatureScale> table = [] {
+    using S = CurvatureScale;
+    ResultTable<S> t;
+    t.number("noise", &S::noise, "Noise: median RMS residual of the jet fits at the chosen k").with_unit("cloud units");
+    t.computed("radius_in_noise", ResultType::Number, [](const S& s) { return ResultValue(s.noise > 0.0 ? s.radius / s.noise : 0.0); },
+               "Median neighbourhood radius in noise units");
+    t.flag("scale_capped", &S::capped, "k stopped at max_k before the radius reached scale_in_noise times the noise").lower_is_better();
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace pointsurf

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -511,6 +512,29 @@ TEST(Outliers, ReuseATreeAndCancel) {
   EXPECT_EQ(last, 1.0);
 }
 
+
+// Each removal method's table: the count, then the threshold under the key that says what it
+// is, each in its block.
+TEST(OutlierResult, EachMethodReportsItsThresholdUnderItsOwnKey) {
+  OutlierResult r;
+  r.removed = 5;
+  r.threshold = 0.125;
+  const std::vector<std::pair<std::string, std::string>> keys = {
+      {"local", "ratio_threshold"}, {"sor", "mean_distance_threshold"}, {"radius", "radius_used"}, {"ransac", "distance_used"}};
+  for (const auto& [method, key] : keys) {
+    std::vector<std::pair<ResultBlock, std::string>> blocks;
+    ResultList values;
+    OutlierResult::results(method).record_blocks(r, [&](ResultBlock b, std::string k, ResultValue v) {
+      blocks.emplace_back(b, k);
+      values.emplace_back(std::move(k), std::move(v));
+    }, method + ".");
+    EXPECT_EQ(blocks, (std::vector<std::pair<ResultBlock, std::string>>{{ResultBlock::Counts, method + ".removed"},
+                                                                         {ResultBlock::Metrics, method + "." + key}}));
+    EXPECT_EQ(values, (ResultList{{method + ".removed", std::int64_t{5}}, {method + "." + key, 0.125}}));
+    EXPECT_EQ(OutlierResult::results(method).specs()[1].unit, method == "local" ? "" : "cloud units");
+  }
+  EXPECT_THROW(OutlierResult::results("duplicates"), std::logic_error);
+}
 
 }  // namespace
 }  // namespace pointsurf

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Result tables: members are emitted once each, in declaration order, under the caller's
-// prefix, with nested blocks and families expanded, and the specs say what each key is.
+// prefix, with nested blocks and families expanded, each in the report's block its spec says,
+// and the specs say what each key is.
 #include "pointsurf/core/results.h"
 
 #include <gtest/gtest.h>
@@ -119,6 +120,81 @@ TEST(ResultTable, AnEmptyFamilyEmitsNothing) {
   Fit::results().record(f, [&](std::string key, ResultValue) { keys.push_back(std::move(key)); });
   EXPECT_EQ(std::count_if(keys.begin(), keys.end(), [](const std::string& k) { return k[0] == 'p'; }), 0);
   EXPECT_EQ(keys.size(), 8u);
+}
+
+
+// A table marking its counts: the spec says the block, and a nested table's values keep theirs.
+struct Sizes {
+  std::size_t points = 0;
+  double spacing = 0.0;
+  static const ResultTable<Sizes>& results() {
+    static const ResultTable<Sizes> t = [] {
+      ResultTable<Sizes> t;
+      t.count("points", &Sizes::points, "Points").as_count();
+      t.number("spacing", &Sizes::spacing, "Spacing");
+      return t;
+    }();
+    return t;
+  }
+};
+struct Solve {
+  std::size_t faces = 0, iterations = 0;
+  Sizes input;
+  static const ResultTable<Solve>& results() {
+    static const ResultTable<Solve> t = [] {
+      ResultTable<Solve> t;
+      t.count("faces", &Solve::faces, "Faces").as_count();
+      t.nested("input/", &Solve::input, Sizes::results());
+      t.count("iterations", &Solve::iterations, "Iterations");  // an integer, but a metric
+      return t;
+    }();
+    return t;
+  }
+};
+
+TEST(ResultTable, EachValueGoesToTheBlockItsSpecSays) {
+  Solve run;
+  run.faces = 7;
+  run.iterations = 3;
+  run.input = {100, 0.5};
+  std::vector<std::pair<ResultBlock, std::string>> got;
+  ResultList values;
+  Solve::results().record_blocks(run, [&](ResultBlock b, std::string key, ResultValue v) {
+    got.emplace_back(b, key);
+    values.emplace_back(std::move(key), std::move(v));
+  }, "run/");
+  const std::vector<std::pair<ResultBlock, std::string>> expected = {{ResultBlock::Counts, "run/faces"},
+                                                                     {ResultBlock::Counts, "run/input/points"},
+                                                                     {ResultBlock::Metrics, "run/input/spacing"},
+                                                                     {ResultBlock::Metrics, "run/iterations"}};
+  EXPECT_EQ(got, expected);
+  ASSERT_EQ(values.size(), 4u);
+  EXPECT_EQ(std::get<std::int64_t>(values[0].second), 7);
+  EXPECT_EQ(std::get<std::int64_t>(values[1].second), 100);
+  EXPECT_EQ(std::get<double>(values[2].second), 0.5);
+  EXPECT_EQ(std::get<std::int64_t>(values[3].second), 3);
+  // The plain record emits the same values in the same order.
+  ResultList plain;
+  Solve::results().record(run, [&](std::string key, ResultValue v) { plain.emplace_back(std::move(key), std::move(v)); }, "run/");
+  EXPECT_EQ(plain, values);
+}
+
+TEST(ResultTable, SpecsCarryTheBlocksTheTableMarks) {
+  const std::vector<ResultSpec>& s = Solve::results().specs();
+  std::vector<std::pair<std::string, ResultBlock>> got;
+  for (const ResultSpec& r : s) got.emplace_back(r.key, r.block);
+  const std::vector<std::pair<std::string, ResultBlock>> expected = {{"faces", ResultBlock::Counts},
+                                                                     {"input/points", ResultBlock::Counts},
+                                                                     {"input/spacing", ResultBlock::Metrics},
+                                                                     {"iterations", ResultBlock::Metrics}};
+  EXPECT_EQ(got, expected);
+  // prefixed() keeps each block; counted() makes every one a count.
+  const std::vector<ResultSpec> p = prefixed(s, "run/");
+  EXPECT_EQ(p[1].key, "run/input/points");
+  EXPECT_EQ(p[1].block, ResultBlock::Counts);
+  EXPECT_EQ(p[2].block, ResultBlock::Metrics);
+  for (const ResultSpec& r : counted(s)) EXPECT_EQ(r.block, ResultBlock::Counts) << r.key;
+  EXPECT_EQ(Fit::results().specs()[0].block, ResultBlock::Metrics);  // count() alone says nothing of the block
 }
 
 }  // namespace

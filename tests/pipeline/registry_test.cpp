@@ -247,6 +247,35 @@ TEST(Registry, EveryStageRecordsExactlyItsDeclaredResults) {
   std::filesystem::remove_all(dir);
 }
 
+// StageRecord::add puts each value of a library table in the block its spec says (a nested
+// table's values in theirs); add_counts makes every value of a stage's own table a count.
+TEST(Registry, AddRecordsEachValueInItsSpecsBlock) {
+  SmoothResult r;
+  r.moved = 12;
+  r.rms_displacement = 0.25;
+  r.max_displacement = 0.5;
+  r.normals_changed = 3;
+  r.mean_normal_change_deg = 4.5;
+  StageRecord rec;
+  rec.add(SmoothResult::results(true), r, "trilateral.");
+  EXPECT_EQ(rec.counts, (ResultList{{"trilateral.moved", std::int64_t{12}}, {"trilateral.normals_changed", std::int64_t{3}}}));
+  EXPECT_EQ(rec.metrics, (ResultList{{"trilateral.rms_displacement", 0.25}, {"trilateral.max_displacement", 0.5},
+                                     {"trilateral.mean_normal_change_deg", 4.5}}));
+  // The declaration says the same blocks.
+  std::vector<std::pair<std::string, ResultBlock>> declared;
+  for (const ResultSpec& s : prefixed(SmoothResult::results(true).specs(), "trilateral.")) declared.emplace_back(s.key, s.block);
+  EXPECT_EQ(declared, (std::vector<std::pair<std::string, ResultBlock>>{{"trilateral.moved", ResultBlock::Counts},
+                                                                          {"trilateral.rms_displacement", ResultBlock::Metrics},
+                                                                          {"trilateral.max_displacement", ResultBlock::Metrics},
+                                                                          {"trilateral.normals_changed", ResultBlock::Counts},
+                                                                          {"trilateral.mean_normal_change_deg", ResultBlock::Metrics}}));
+  StageRecord all;
+  all.add_counts(SmoothResult::results(), r, "bilateral.");
+  EXPECT_EQ(all.counts,
+            (ResultList{{"bilateral.moved", std::int64_t{12}}, {"bilateral.rms_displacement", 0.25}, {"bilateral.max_displacement", 0.5}}));
+  EXPECT_TRUE(all.metrics.empty());
+}
+
 // The library's defaults, read from default-constructed Params structs: the registry must
 // show exactly these in --help (a default typed a second time would drift).
 struct Expected {

@@ -8,6 +8,7 @@
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -31,6 +32,9 @@ struct DuplicateResult {
   double distance_used = 0.0;                 // cloud units (0 for exact)
   double max_distance = 0.0;                  // largest distance from a removed point to its
                                               // representative, cloud units (<= distance_used)
+
+  /// The reported members (core/results.h).
+  static const ResultTable<DuplicateResult>& results();
 };
 
 /// Finds duplicates: scanning points by index, a point within `distance` (inclusive) of an

@@ -6,11 +6,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -22,6 +24,11 @@ struct OutlierResult {
   double threshold = 0.0;           // the cut actually used, cloud units: statistical: mean kNN
                                     // distance above which a point is dropped; radius: the
                                     // search radius; RANSAC: the plane distance
+
+  /// The reported members (core/results.h) for the removal `method`: local, sor, radius or
+  /// ransac (the clean stage's names); the threshold's key says what it is (ratio_threshold,
+  /// mean_distance_threshold, radius_used, distance_used). std::logic_error for another name.
+  static const ResultTable<OutlierResult>& results(const std::string& method);
 };
 
 struct StatisticalOutlierParams {

@@ -7,6 +7,7 @@
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -54,6 +55,10 @@ struct SmoothResult {
   double height_sigma_used = 0.0;   // cloud units
   std::size_t normals_changed = 0;  // trilateral: normals turned by more than 1 degree
   double mean_normal_change_deg = 0.0;  // trilateral: mean angle between input and corrected normals
+
+  /// The reported members (core/results.h): the moves; with `normals`, the trilateral pass's
+  /// normal changes after them.
+  static const ResultTable<SmoothResult>& results(bool normals = false);
 };
 
 /// Bilateral point filtering (Fleishman et al. 2003, "Bilateral mesh denoising", applied to

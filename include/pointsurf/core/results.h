@@ -2,9 +2,9 @@
 #pragma once
 // Result tables: a Result struct of the library declares its reported members once, next to the
 // struct (key, member or accessor, unit, which way is better, one-line doc), as Params structs
-// declare their fields (core/fields.h). The pipeline's records (the report's metrics), the
-// report schema in docs/stages.md and the registry that Python reads come from the table, so a
-// key is typed once.
+// declare their fields (core/fields.h). The pipeline's records (the report's counts and
+// metrics), the report schema in docs/stages.md and the registry that Python reads come from the
+// table, so a key is typed once.
 //
 //   struct FitResult {
 //     std::size_t inliers = 0;
@@ -14,21 +14,25 @@
 //   const ResultTable<FitResult>& FitResult::results() {
 //     static const ResultTable<FitResult> t = [] {
 //       ResultTable<FitResult> t;
-//       t.count("inliers", &FitResult::inliers, "Points within the band").higher_is_better();
-//       t.number("rms", &FitResult::rms, "Root mean square distance").unit("cloud units").lower_is_better();
+//       t.count("inliers", &FitResult::inliers, "Points within the band").higher_is_better().as_count();
+//       t.number("rms", &FitResult::rms, "Root mean square distance").with_unit("cloud units").lower_is_better();
 //       return t;
 //     }();
 //     return t;
 //   }
-//   // In a stage: run.record.add(FitResult::results(), fit, "fit/");
 //
 // A stage's report has two blocks, "counts" (how many points, faces, segments it read and made)
-// and "metrics" (everything else). A table says nothing of blocks: the stage chooses, recording
-// with StageRecord::add (metrics) or StageRecord::add_counts (counts), and declares the same in
-// StageSpec::results, one list whose specs carry their block (`counted(...)` marks counts):
+// and "metrics" (everything else). A table marks its counts itself (`as_count()`; every other
+// value is a metric, integers included), and a nested table's values keep their own blocks.
+// A stage records a table with StageRecord::add, which puts each value in the block its spec
+// says, and declares the same in StageSpec::results, one list whose specs carry their block:
 //
-//   s.results = counted(FitCounts::results().specs());                // counts: "points", ...
-//   append(s.results, prefixed(FitResult::results().specs(), "fit/"));  // metrics: "fit/rms"
+//   run.record.add(FitResult::results(), fit, "fit/");                    // counts "fit/inliers", metrics "fit/rms"
+//   s.results = prefixed(FitResult::results().specs(), "fit/");            // the same, declared
+//
+// A small table of the stage's own (values that belong to no library struct) may leave its
+// blocks unmarked and be recorded with StageRecord::add_counts and declared with counted(...),
+// which make every value of it a count.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -67,7 +71,8 @@ struct ResultSpec {
   std::string unit;                  // "cloud units", "degrees", "" (none)
   Better better = Better::Neither;
   std::string doc;                   // one line
-  ResultBlock block = ResultBlock::Metrics;  // set by the stage's declaration (counted())
+  ResultBlock block = ResultBlock::Metrics;  // as_count() in the table, or counted() in a
+                                             // stage's declaration, makes it a count
   bool headline = false;             // one of the few values a summary shows (the HTML report's
                                      // deviation table)
 
@@ -75,6 +80,8 @@ struct ResultSpec {
   ResultSpec& higher_is_better() { better = Better::Higher; return *this; }
   ResultSpec& lower_is_better() { better = Better::Lower; return *this; }
   ResultSpec& in_headline() { headline = true; return *this; }
+  /// Reported in the block "counts" of a stage's report (the default is "metrics").
+  ResultSpec& as_count() { block = ResultBlock::Counts; return *this; }
 };
 
 /// The specs of `specs` with `prefix` in front of each key (a block of a stage's report).
@@ -89,6 +96,8 @@ template <class R>
 class ResultTable {
 public:
   using Emit = std::function<void(std::string key, ResultValue value)>;
+  /// The same, told the block of each value (its spec's).
+  using BlockEmit = std::function<void(ResultBlock block, std::string key, ResultValue value)>;
 
   /// A count (any integer member), reported as an integer.
   template <class I>
@@ -132,8 +141,8 @@ public:
   template <class S>
   void nested(const std::string& prefix, S R::*member, const ResultTable<S>& table) {
     const ResultTable<S>* t = &table;  // tables are function-local statics
-    blocks_.push_back(Block{specs_.size(), table.specs().size(), [member, t, prefix](const R& r, const std::string& outer, const Emit& emit) {
-                              t->record(r.*member, emit, outer + prefix);
+    blocks_.push_back(Block{specs_.size(), table.specs().size(), [member, t, prefix](const R& r, const std::string& outer, const BlockEmit& emit) {
+                              t->record_blocks(r.*member, emit, outer + prefix);
                             }});
     for (const ResultSpec& s : table.specs()) {
       ResultSpec copy = s;
@@ -142,8 +151,9 @@ public:
     }
   }
 
-  /// Emits every member of `r`, keys prefixed by `prefix`, in declaration order.
-  void record(const R& r, const Emit& emit, const std::string& prefix = "") const {
+  /// Emits every member of `r`, keys prefixed by `prefix`, in declaration order, each with its
+  /// block (a nested table's values with theirs).
+  void record_blocks(const R& r, const BlockEmit& emit, const std::string& prefix = "") const {
     std::size_t block = 0;
     for (std::size_t i = 0; i < specs_.size();) {
       if (block < blocks_.size() && blocks_[block].first == i) {
@@ -152,9 +162,14 @@ public:
         ++block;
         continue;
       }
-      emitters_[index_[i]](r, prefix + specs_[i].key, emit);
+      const ResultBlock b = specs_[i].block;
+      emitters_[index_[i]](r, prefix + specs_[i].key, [&emit, b](std::string key, ResultValue value) { emit(b, std::move(key), std::move(value)); });
       ++i;
     }
+  }
+  /// The same without the blocks.
+  void record(const R& r, const Emit& emit, const std::string& prefix = "") const {
+    record_blocks(r, [&emit](ResultBlock, std::string key, ResultValue value) { emit(std::move(key), std::move(value)); }, prefix);
   }
 
   const std::vector<ResultSpec>& specs() const noexcept { return specs_; }
@@ -163,7 +178,7 @@ private:
   using Emitter = std::function<void(const R&, const std::string& key, const Emit&)>;
   struct Block {
     std::size_t first, size;
-    std::function<void(const R&, const std::string& prefix, const Emit&)> emit;
+    std::function<void(const R&, const std::string& prefix, const BlockEmit&)> emit;
   };
   ResultSpec& add(std::string key, ResultType type, std::string doc, Emitter e) {
     ResultSpec s;

@@ -42,5 +42,9 @@ struct MeshAlignParams {
 /// InputError for a mesh that cannot be measured. Parallel; thread-safe.
 RegistrationResult align_to_mesh(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshAlignParams& params = {},
                                  const ProgressCallback& progress = {});
+/// The reported members of align_to_mesh's answer (core/results.h): RegistrationResult told as
+/// a best fit of a reference onto a mesh, the transform with its rotation and translation, then
+/// how well it fits and how it ended.
+const ResultTable<RegistrationResult>& mesh_alignment_results();
 
 }  // namespace pointsurf

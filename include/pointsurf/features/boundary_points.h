@@ -10,6 +10,7 @@
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -31,6 +32,9 @@ struct BoundaryResult {
   std::vector<double> gap_deg;         // per point: the largest angular gap, degrees (360: no
                                        // usable neighbour)
   std::size_t count = 0;               // boundary points
+
+  /// The reported members (core/results.h).
+  static const ResultTable<BoundaryResult>& results();
 };
 
 /// The angular-gap test per point (in parallel, oneTBB, in the tree's spatial order): the `k`

@@ -7,6 +7,7 @@
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf {
@@ -50,6 +51,9 @@ struct FeatureResult {
   double variation_threshold_used = 0.0;  // the candidate threshold actually used
   double dd_used = 0.0;              // the plane distance actually used, cloud units
   double mean_spacing = 0.0;         // mean spacing of the cloud, cloud units
+
+  /// The reported members (core/results.h).
+  static const ResultTable<FeatureResult>& results();
 };
 
 /// Labels sharp-feature points (SPEC C7, after the seed paper's feature-point screening):

@@ -9,6 +9,7 @@
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/spatial/kd_tree.h"
 #include "pointsurf/spatial/neighborhood.h"
 
@@ -36,6 +37,9 @@ struct NormalResult {
   std::size_t degenerate = 0;   // points with fewer than 3 neighbours or a rank-deficient
                                 // neighbourhood: their normal is (0, 0, 0) (smaller is better)
   double radius_used = 0.0;     // search radius actually used (Radius, Hybrid), cloud units
+
+  /// The reported members (core/results.h).
+  static const ResultTable<NormalResult>& results();
 };
 
 /// Estimates unit normals by PCA: the eigenvector of the smallest eigenvalue of each point's
@@ -73,6 +77,10 @@ struct OrientParams {
 struct OrientResult {
   std::size_t components = 0;   // connected components of the graph, after joining (Mst)
   std::size_t flipped = 0;      // normals whose sign changed
+
+  /// The reported members (core/results.h) of an orientation by `method`: the components with
+  /// Mst only.
+  static const ResultTable<OrientResult>& results(Orientation method);
 };
 
 /// Orients `cloud.normals` (which must be present) consistently. Mst (Hoppe et al. 1992):
@@ -103,6 +111,9 @@ struct NormalAgreement {
   std::size_t agreeing = 0;     // of those, the ones with a positive dot product (larger is better)
   double share = 0.0;           // agreeing / compared, in [0, 1] (1 when compared == 0; larger is better)
   double mean_angle_deg = 0.0;  // mean angle between the two lines, sign ignored, in [0, 90] degrees (smaller is better)
+
+  /// The reported members (core/results.h), the reference being the input's normals.
+  static const ResultTable<NormalAgreement>& results();
 };
 NormalAgreement compare_normals(std::span<const Eigen::Vector3d> reference, std::span<const Eigen::Vector3d> normals);
 

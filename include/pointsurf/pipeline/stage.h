@@ -48,12 +48,15 @@ struct StageRecord {
   void set_used(const std::string& name, ParamValue value);
   void count(std::string name, std::int64_t value) { counts.emplace_back(std::move(name), value); }
   void metric(std::string name, ResultValue value) { metrics.emplace_back(std::move(name), std::move(value)); }
-  /// Records every member of `r` that its table declares, as metrics under `prefix`.
+  /// Records every member of `r` that its table declares under `prefix`, each in the block its
+  /// spec says (as_count(): counts; else metrics).
   template <class R>
   void add(const ResultTable<R>& table, const R& r, const std::string& prefix = "") {
-    table.record(r, [this](std::string key, ResultValue value) { metrics.emplace_back(std::move(key), std::move(value)); }, prefix);
+    table.record_blocks(r, [this](ResultBlock block, std::string key, ResultValue value) {
+      (block == ResultBlock::Counts ? counts : metrics).emplace_back(std::move(key), std::move(value));
+    }, prefix);
   }
-  /// The same, as counts (a stage declares them with counted()).
+  /// The same, every value as a count (a stage's own table; it declares them with counted()).
   template <class R>
   void add_counts(const ResultTable<R>& table, const R& r, const std::string& prefix = "") {
     table.record(r, [this](std::string key, ResultValue value) { counts.emplace_back(std::move(key), std::move(value)); }, prefix);

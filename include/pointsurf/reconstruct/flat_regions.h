@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pointsurf/core/fields.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -36,6 +37,9 @@ struct FlatRegionResult {
                             // each region's smallest face index
   std::size_t regions = 0;  // number of regions (fewer is flatter); small regions are kept
   std::size_t largest_region = 0;  // faces of the largest region
+
+  /// The reported members (core/results.h).
+  static const ResultTable<FlatRegionResult>& results();
 };
 
 /// Labels the flat regions of `mesh`: regions grow across edges that exactly two faces share

@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "pointsurf/core/fields.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -26,6 +27,9 @@ struct SmallComponentsResult {
   std::size_t components_removed = 0;  // of them removed
   std::size_t faces_removed = 0;       // triangles removed with them (fewer is better)
   std::size_t min_faces = 0;           // smallest component kept, faces: ceil(min_share x F)
+
+  /// The reported members (core/results.h).
+  static const ResultTable<SmallComponentsResult>& results();
 };
 
 /// Removes from `mesh` every edge-connected component (triangles sharing an edge, as in

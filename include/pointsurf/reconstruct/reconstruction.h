@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -24,6 +25,13 @@ struct ReconstructionStats {
   double seconds = 0.0;                 // wall time of the whole method
   std::vector<std::pair<std::string, std::size_t>> counts;  // the method's own counts, in report order
   std::vector<std::pair<std::string, double>> figures;      // and its own measures (seconds, lengths)
+
+  /// The reported members (core/results.h) of a run of `method` (triangulate, cocone, crust,
+  /// ball-pivot or poisson, the reconstruct stage's names): the counts every method reports,
+  /// the method's own counts and figures (`counts` and `figures`, named in the order the
+  /// method lists them), its time. std::logic_error for another name, and when recording
+  /// stats that lack one of the method's names.
+  static const ResultTable<ReconstructionStats>& results(const std::string& method);
 };
 
 struct ReconstructionResult {

@@ -52,6 +52,9 @@ struct ScanLink {
   bool initial = false;                // from the first pass (first or chain), else an overlap
                                        // found afterwards
   bool pruned = false;                 // dropped by the pose graph (its residual stayed large)
+
+  /// The reported members (core/results.h), under a prefix naming the two scans.
+  static const ResultTable<ScanLink>& results();
 };
 
 struct RegisterScansResult {
@@ -66,6 +69,10 @@ struct RegisterScansResult {
   double seconds_initial = 0.0;               // the first pass
   double seconds_overlaps = 0.0;              // finding and registering the other overlapping pairs
   double seconds_graph = 0.0;
+
+  /// The reported members (core/results.h): the spacing and the times (the poses, links and
+  /// graph are reported through their own tables).
+  static const ResultTable<RegisterScansResult>& results();
 };
 
 /// The poses of `scans` (at least 2) in the first scan's frame. Throws InputError when a scan

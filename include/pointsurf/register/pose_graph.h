@@ -17,6 +17,7 @@
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/core/rigid_transform.h"
 
 namespace pointsurf {
@@ -63,6 +64,9 @@ struct PoseGraphResult {
   std::vector<std::size_t> pruned;    // indices of the edges dropped (uncertain, residual too large)
   std::vector<double> edge_rms;       // per edge: RMS displacement of its points under the final
                                       // poses, cloud units (smaller is better)
+
+  /// The reported members (core/results.h): the cost before and after, the iterations.
+  static const ResultTable<PoseGraphResult>& results();
 };
 
 /// Optimises the poses of `initial_poses.size()` scans so that every edge's relative transform

@@ -54,6 +54,11 @@ struct RegisterPairResult {
   double seconds_descriptors = 0.0;
   double seconds_align = 0.0;         // matching and RANSAC
   double seconds_icp = 0.0;           // coarse and fine ICP
+
+  /// The reported members (core/results.h): the downsamples, the transform, the final fit
+  /// (RegistrationResult's), with `global` RANSAC's fit under "global_", then the lengths and
+  /// times.
+  static const ResultTable<RegisterPairResult>& results(bool global = false);
 };
 
 /// The rigid transform taking `source` onto `target`. Clouds without normals get PCA normals

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "pointsurf/core/rigid_transform.h"
+#include "pointsurf/core/results.h"
 
 namespace pointsurf {
 
@@ -20,6 +21,10 @@ struct RegistrationResult {
   bool converged = false;            // ICP: a stop criterion met; RANSAC: the confidence reached
                                      // or a model with enough inliers found
   std::string message;               // why it stopped (one line)
+
+  /// The reported members of a registration of a source onto a target (core/results.h): how
+  /// well it fits (the transform is its caller's to report).
+  static const ResultTable<RegistrationResult>& results();
 };
 
 }  // namespace pointsurf

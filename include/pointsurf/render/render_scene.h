@@ -12,6 +12,7 @@
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/render/colormap.h"
 #include "pointsurf/render/image.h"
@@ -72,6 +73,10 @@ struct RenderResult {
   std::size_t triangles_drawn = 0;
   double pixels_per_unit = 0.0;  // orthographic views: picture pixels per cloud unit
   std::vector<std::string> warnings;  // e.g. the font could not be loaded: no labels
+
+  /// The reported members (core/results.h): what was drawn; with `by_field` (coloured by a
+  /// field) the colour scale after it.
+  static const ResultTable<RenderResult>& results(bool by_field = false);
 };
 
 /// Renders `cloud` as points, or, when `triangles` is not empty, the mesh whose vertices (and

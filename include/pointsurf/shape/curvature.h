@@ -13,6 +13,7 @@
 
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -95,6 +96,10 @@ struct CurvatureResult {
   std::vector<Vector3d> d1, d2;        // N unit principal directions of k1 and k2 (empty unless keep_directions;
                                        // zero where degenerate)
   std::vector<Vector3d> normals;       // N unit jet normals on the side of the input normals (same condition)
+
+  /// The reported members (core/results.h): the degenerate points and the points of each
+  /// surface type, counts.
+  static const ResultTable<CurvatureResult>& results();
 };
 
 /// The neighbourhood size the default curvature (Knn, k = 0) uses.
@@ -108,6 +113,9 @@ struct CurvatureScale {
                            // 1 (the whole ball) when the start sufficed
   bool capped = false;     // the radius never reached scale_in_noise * noise: k is max_k or the largest power
                            // of two times the start that the cloud holds; the curvature may be noise-dominated
+
+  /// The reported members (core/results.h).
+  static const ResultTable<CurvatureScale>& results();
 };
 
 /// Chooses the jet neighbourhood from the noise. Fitting a jet over a neighbourhood narrower than

@@ -10,6 +10,7 @@
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/point_cloud.h"
 #include "pointsurf/core/progress.h"
+#include "pointsurf/core/results.h"
 
 namespace pointsurf {
 
@@ -75,6 +76,9 @@ struct Primitive {
   double minor_radius = 0.0;                        // torus: tube radius, cloud units
   /// Distance of `p` to the primitive's surface, cloud units.
   double distance(const Eigen::Vector3d& p) const;
+  /// The reported members (core/results.h), all of them metrics (a report lists each primitive
+  /// as a block of its own).
+  static const ResultTable<Primitive>& results();
 };
 
 struct PrimitiveResult {
@@ -85,6 +89,9 @@ struct PrimitiveResult {
   double epsilon_used = 0.0;          // cloud units
   double cluster_epsilon_used = 0.0;  // cloud units
   std::size_t min_points_used = 0;
+
+  /// The reported members (core/results.h); each primitive is reported through its own table.
+  static const ResultTable<PrimitiveResult>& results();
 };
 
 /// Efficient RANSAC (Schnabel, Wahl, Klein 2007, "Efficient RANSAC for point-cloud shape
