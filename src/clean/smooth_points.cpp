@@ -20,7 +20,7 @@
 namespace pointsurf {
 namespace {
 
-constexpr std::size_t kGrain = 128;
+constexpr std::size_t kSmoothGrain = 128;
 struct Resolved {
   double radius = 0.0;
   double height_sigma = 0.0;
@@ -56,7 +56,7 @@ void for_each_neighbourhood(const PointCloud& input, const KdTree& tree, const R
                             Visit&& visit) {
   const std::span<const std::uint32_t> order = tree.spatial_order();
   tbb::enumerable_thread_specific<std::vector<Neighbor>> buffers;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kGrain), [&](const tbb::blocked_range<std::size_t>& range) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kSmoothGrain), [&](const tbb::blocked_range<std::size_t>& range) {
     if (reporter.cancelled()) return;
     std::vector<Neighbor>& neighbors = buffers.local();
     for (std::size_t pos = range.begin(); pos != range.end(); ++pos) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 
 #include <Eigen/Geometry>
@@ -17,8 +18,6 @@
 
 namespace pointsurf {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Does segment [p, q] meet triangle (a, b, c)? Moller-Trumbore, boundaries included.
 bool segment_hits_triangle(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
@@ -118,7 +117,7 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
     const std::array<Vector3d, 3> p = {a, b, c};
     for (int i = 0; i < 3; ++i) {
       const Vector3d e1 = p[std::size_t((i + 1) % 3)] - p[std::size_t(i)], e2 = p[std::size_t((i + 2) % 3)] - p[std::size_t(i)];
-      angles.push_back(std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180.0 / kPi);
+      angles.push_back(std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180.0 / std::numbers::pi);
     }
     aspects.push_back(longest * (la + lb + lc) / (4.0 * std::sqrt(3.0) * area));
   }

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
+#include <numbers>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -15,7 +16,6 @@ namespace pointsurf {
 namespace {
 
 constexpr int kLeafSize = 4;
-constexpr double kPi = 3.14159265358979323846;
 
 // Nodes of the subtree over n triangles: the median split fixes the shape, so every subtree's
 // place in the node array is known before it is built and the halves build in parallel.
@@ -294,7 +294,7 @@ double TriangleBvh::winding_number(const Vector3d& query, double accuracy) const
     stack[top++] = node.right;
     stack[top++] = static_cast<int>(index) + 1;
   }
-  return solid_angle / (4.0 * kPi);
+  return solid_angle / (4.0 * std::numbers::pi);
 }
 
 void TriangleBvh::overlapping(const Vector3d& lo_abs, const Vector3d& hi_abs, const std::function<void(int)>& visit) const {

@@ -88,7 +88,7 @@ double load_scalar(const char* p, char type, int size) noexcept {
 }
 
 // Parses the text header up to and including the DATA line, validating every entry.
-PcdHeader parse_header(std::string_view bytes, const std::string& name) {
+PcdHeader parse_pcd_header(std::string_view bytes, const std::string& name) {
   TextCursor cursor(bytes);
   std::string_view line;
   std::vector<std::string_view> tokens;
@@ -203,7 +203,7 @@ PcdHeader parse_header(std::string_view bytes, const std::string& name) {
 enum class Role : std::uint8_t { X, Y, Z, NX, NY, NZ, Rgb, Rgba, Field };
 
 // One value of a point read from the file: which field/component, and where it goes.
-struct Slot {
+struct PcdSlot {
   Role role;
   std::size_t field;      // index into PcdHeader::fields
   std::size_t component;  // 0 .. count-1
@@ -212,7 +212,7 @@ struct Slot {
 };
 
 struct Layout {
-  std::vector<Slot> slots;
+  std::vector<PcdSlot> slots;
   std::vector<ScalarField> fields;  // output fields, values filled while reading
   bool normals = false, colours = false, alpha = false;
   std::size_t alpha_out = 0;
@@ -250,7 +250,7 @@ Layout make_layout(const PcdHeader& h, const std::string& name) {
   for (std::size_t f = 0; f < h.fields.size(); ++f) {
     const PcdField& field = h.fields[f];
     const int fi = static_cast<int>(f);
-    auto slot = [&](Role role) { layout.slots.push_back(Slot{role, f, 0, token, 0}); };
+    auto slot = [&](Role role) { layout.slots.push_back(PcdSlot{role, f, 0, token, 0}); };
     if (fi == x) slot(Role::X);
     else if (fi == y) slot(Role::Y);
     else if (fi == z) slot(Role::Z);
@@ -262,7 +262,7 @@ Layout make_layout(const PcdHeader& h, const std::string& name) {
       const ScalarType type = scalar_type_of(field.type, field.size);
       for (std::size_t c = 0; c < field.count; ++c) {
         const std::size_t out = add_field(field.count == 1 ? field.name : fmt::format("{}_{}", field.name, c), type);
-        layout.slots.push_back(Slot{Role::Field, f, c, token + c, out});
+        layout.slots.push_back(PcdSlot{Role::Field, f, c, token + c, out});
       }
     }
     token += field.count;
@@ -359,7 +359,7 @@ std::size_t read_ascii(std::string_view bytes, const PcdHeader& h, const Layout&
     if (tokens.size() != h.values_per_point)
       throw InputError(fmt::format("{}: line {}: point {}: expected {} values, got {}", name, at, read, h.values_per_point, tokens.size()));
     for (std::size_t s = 0; s < layout.slots.size(); ++s) {
-      const Slot& slot = layout.slots[s];
+      const PcdSlot& slot = layout.slots[s];
       const std::string_view token = tokens[slot.token];
       const bool ok = slot.role == Role::Rgb || slot.role == Role::Rgba ? parse_colour_token(token, sink.bits)
                                                                         : parse_number(token, sink.value(s));
@@ -383,7 +383,7 @@ std::size_t read_ascii(std::string_view bytes, const PcdHeader& h, const Layout&
 void read_binary(const char* data, const PcdHeader& h, const Layout& layout, PointSink& sink, bool column_major) {
   struct Access { std::size_t base, stride, size; char type; };
   std::vector<Access> access;
-  for (const Slot& slot : layout.slots) {
+  for (const PcdSlot& slot : layout.slots) {
     const PcdField& f = h.fields[slot.field];
     const std::size_t size = static_cast<std::size_t>(f.size);
     if (column_major) access.push_back({h.points * f.offset + slot.component * size, f.count * size, size, f.type});
@@ -406,7 +406,7 @@ RawData read_pcd(const std::filesystem::path& path, const ReadOptions&) {
   const std::string name = display_name(path);
   const FileBytes file_bytes(path);
   const std::string_view bytes = file_bytes.view();
-  const PcdHeader h = parse_header(bytes, name);
+  const PcdHeader h = parse_pcd_header(bytes, name);
   Layout layout = make_layout(h, name);
 
   RawData raw;
@@ -467,7 +467,7 @@ enum class Source : std::uint8_t { Position, Normal, Rgb, Field };
 // Default positions are float32 when no coordinate moves by more than this share of the spacing.
 constexpr double kFloatTolerance = 1e-4;
 
-struct OutColumn {
+struct PcdColumn {
   std::string name;
   char type;
   int size;
@@ -489,7 +489,7 @@ std::uint32_t packed_rgb(const Vector3f& c) {
   return (byte(c.x()) << 16) | (byte(c.y()) << 8) | byte(c.z());
 }
 
-double column_value(const OutColumn& col, const PointCloud& cloud, std::size_t i) {
+double column_value(const PcdColumn& col, const PointCloud& cloud, std::size_t i) {
   switch (col.source) {
     case Source::Position: return cloud.positions[i][col.component];
     case Source::Normal: return cloud.normals[i][col.component];
@@ -499,7 +499,7 @@ double column_value(const OutColumn& col, const PointCloud& cloud, std::size_t i
   return 0.0;
 }
 
-void store(char* dst, const OutColumn& col, const PointCloud& cloud, std::size_t i) {
+void store(char* dst, const PcdColumn& col, const PointCloud& cloud, std::size_t i) {
   if (col.source == Source::Rgb) {
     const std::uint32_t bits = packed_rgb(cloud.colors[i]);
     std::memcpy(dst, &bits, 4);  // little-endian hosts only, like PCL itself
@@ -527,7 +527,7 @@ void store(char* dst, const OutColumn& col, const PointCloud& cloud, std::size_t
   }
 }
 
-void write_text_value(FileWriter& out, const OutColumn& col, const PointCloud& cloud, std::size_t i, int precision) {
+void write_text_value(FileWriter& out, const PcdColumn& col, const PointCloud& cloud, std::size_t i, int precision) {
   char text[64];
   std::to_chars_result r{};
   if (col.source == Source::Rgb) {
@@ -578,7 +578,7 @@ void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const
                                    name, step, largest, diagonal));
   }
 
-  std::vector<OutColumn> columns;
+  std::vector<PcdColumn> columns;
   for (int k = 0; k < 3; ++k) columns.push_back({std::string(1, "xyz"[k]), 'F', single ? 4 : 8, Source::Position, k});
   if (cloud.has_normals())
     for (int k = 0; k < 3; ++k) columns.push_back({fmt::format("normal_{}", "xyz"[k]), 'F', 4, Source::Normal, k});
@@ -586,7 +586,7 @@ void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const
   // would not survive the text) and F in binary ones; its readers expect exactly that.
   if (cloud.has_colors()) columns.push_back({"rgb", options.ascii ? 'U' : 'F', 4, Source::Rgb});
   for (const ScalarField& f : cloud.fields) {
-    const bool reserved = f.name == "_" || std::any_of(columns.begin(), columns.end(), [&](const OutColumn& c) { return c.name == f.name; }) ||
+    const bool reserved = f.name == "_" || std::any_of(columns.begin(), columns.end(), [&](const PcdColumn& c) { return c.name == f.name; }) ||
                           f.name == "x" || f.name == "y" || f.name == "z" || f.name == "normal_x" || f.name == "normal_y" ||
                           f.name == "normal_z" || f.name == "nx" || f.name == "ny" || f.name == "nz" || f.name == "rgb" || f.name == "rgba";
     const bool bad_char = f.name.empty() || std::any_of(f.name.begin(), f.name.end(), [](char c) {
@@ -600,7 +600,7 @@ void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const
 
   std::string fields_line = "FIELDS", size_line = "SIZE", type_line = "TYPE", count_line = "COUNT";
   std::size_t point_size = 0;
-  for (const OutColumn& c : columns) {
+  for (const PcdColumn& c : columns) {
     fields_line += " " + c.name;
     size_line += fmt::format(" {}", c.size);
     type_line += fmt::format(" {}", c.type);
@@ -630,7 +630,7 @@ void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const
     std::vector<char> row(point_size);
     for (std::size_t i = 0; i < n; ++i) {
       char* p = row.data();
-      for (const OutColumn& c : columns) {
+      for (const PcdColumn& c : columns) {
         store(p, c, cloud, i);
         p += c.size;
       }
@@ -641,7 +641,7 @@ void write_pcd(const std::filesystem::path& path, const PointCloud& cloud, const
     // also compresses better).
     std::vector<char> plain(n * point_size);
     char* p = plain.data();
-    for (const OutColumn& c : columns)
+    for (const PcdColumn& c : columns)
       for (std::size_t i = 0; i < n; ++i, p += c.size) store(p, c, cloud, i);
     // Incompressible data grows by at most 1/32 plus a little; the margin avoids a retry.
     std::vector<char> packed(plain.size() + plain.size() / 16 + 64);

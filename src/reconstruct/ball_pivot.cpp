@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <vector>
@@ -42,7 +43,6 @@ constexpr double kInsideTolerance = 1e-9;
 // Seeds try pairs among this many nearest unused neighbours of a point (Bernardini et al.
 // consider pairs nearest first; the first pairs almost always give the seed when one exists).
 constexpr int kSeedNeighbours = 12;
-constexpr double kPi = 3.14159265358979323846;
 
 enum class EdgeState : std::uint8_t { Front, Boundary, Inner };
 
@@ -54,7 +54,7 @@ struct Edge {
   int next0, next1;  // next edge in the lists of v0 and v1 (-1 ends)
 };
 
-struct Candidate {
+struct PivotCandidate {
   double angle;
   int point;
   Eigen::Vector3d center;
@@ -252,8 +252,8 @@ private:
   // of a thin wall, stacked plates). On one smooth sheet the chord is perpendicular to the sum
   // of the two normals (exactly so on a circle), whatever the curvature.
   bool other_sheet(int p, int q) const {
-    static const double cos_parallel = std::cos(kSheetNormalDeg * kPi / 180.0);
-    static const double sin_chord = std::sin(kSheetChordDeg * kPi / 180.0);
+    static const double cos_parallel = std::cos(kSheetNormalDeg * std::numbers::pi / 180.0);
+    static const double sin_chord = std::sin(kSheetChordDeg * std::numbers::pi / 180.0);
     if (!(normals_[p].dot(normals_[q]) > cos_parallel)) return false;
     const Eigen::Vector3d d = local_[q] - local_[p];
     const Eigen::Vector3d m = (normals_[p] + normals_[q]).normalized();
@@ -418,12 +418,12 @@ private:
       Eigen::Vector3d to = *center - mid;
       to -= axis * axis.dot(to);
       double angle = std::atan2(sign * from.cross(to).dot(axis), from.dot(to));
-      if (angle < -1e-7) angle += 2.0 * kPi;  // rounding around 0 stays at 0 (co-circular points)
-      candidates_.push_back(Candidate{std::max(angle, 0.0), p, *center});
+      if (angle < -1e-7) angle += 2.0 * std::numbers::pi;  // rounding around 0 stays at 0 (co-circular points)
+      candidates_.push_back(PivotCandidate{std::max(angle, 0.0), p, *center});
     }
     std::sort(candidates_.begin(), candidates_.end(),
-              [](const Candidate& x, const Candidate& y) { return x.angle < y.angle || (x.angle == y.angle && x.point < y.point); });
-    for (const Candidate& c : candidates_) {
+              [](const PivotCandidate& x, const PivotCandidate& y) { return x.angle < y.angle || (x.angle == y.angle && x.point < y.point); });
+    for (const PivotCandidate& c : candidates_) {
       if (!ball_empty(c.center, a, b, c.point, neighbors_)) continue;
       // The first point the ball hits decides: if it cannot take a triangle the edge is a
       // boundary (trying farther points would let the ball pass through this one).
@@ -488,7 +488,7 @@ private:
   std::vector<std::size_t> ahead_offsets_;
   std::vector<std::uint32_t> ahead_index_;
   std::vector<std::vector<std::uint32_t>> ahead_chunks_;
-  std::vector<Candidate> candidates_;
+  std::vector<PivotCandidate> candidates_;
   std::vector<int> seed_candidates_;
 };
 
@@ -609,9 +609,9 @@ ReconstructionResult reconstruct_ball_pivoting(const PointCloud& cloud, const Ba
   });
 
   Rules rules;
-  rules.cos_vertex = std::cos(params.max_normal_angle_deg * kPi / 180.0);
-  rules.cos_mean = std::cos(params.max_mean_normal_angle_deg * kPi / 180.0);
-  rules.cos_opposite = std::cos(kOppositeNormalsDeg * kPi / 180.0);
+  rules.cos_vertex = std::cos(params.max_normal_angle_deg * std::numbers::pi / 180.0);
+  rules.cos_mean = std::cos(params.max_mean_normal_angle_deg * std::numbers::pi / 180.0);
+  rules.cos_opposite = std::cos(kOppositeNormalsDeg * std::numbers::pi / 180.0);
   rules.sheet_offset = kSheetOffsetInSpacings * result.mean_spacing;
   BallPivoter pivoter(*tree, std::move(local), std::move(normals), std::move(skip), origin, rules, reporter);
   // Lists of about 30 points each at the default 1.5 spacings; a first radius beyond

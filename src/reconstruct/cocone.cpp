@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -23,8 +24,6 @@
 
 namespace pointsurf {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// Where a Voronoi edge end lies relative to the double cone of half-angle 90 - theta around the
 /// pole vector at p: +1 inside the upper cone, -1 inside the lower cone, 0 in the cocone.
@@ -45,7 +44,7 @@ std::vector<std::array<int, 3>> cocone_candidates(const detail::DelaunaySetup& s
   const std::vector<Vector3d>& p = setup.p;
   const std::vector<Vector3d>& pole = setup.poles.axis;
   const std::size_t nc = cells.size();
-  const double sin_theta = std::sin(cocone_angle_deg * kPi / 180.0);
+  const double sin_theta = std::sin(cocone_angle_deg * std::numbers::pi / 180.0);
   std::vector<std::uint8_t> facet_flags(nc, 0);  // bit i: facet i passes
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nc), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t c = r.begin(); c != r.end(); ++c) {

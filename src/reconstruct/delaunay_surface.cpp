@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -29,8 +30,6 @@
 
 namespace pointsurf {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
@@ -85,7 +84,7 @@ void edge_angles(const std::vector<Vector3d>& p, int a, int b, const Vector3d& r
   for (std::size_t i = 0; i < count; ++i) {
     const Vector3d w = p[third_vertex(cx.tris[tris[i]], a, b)] - p[a];
     double ang = std::atan2(w.dot(e2), w.dot(e1));
-    if (ang < 0) ang += 2 * kPi;
+    if (ang < 0) ang += 2 * std::numbers::pi;
     out[i] = ang;
   }
 }
@@ -112,13 +111,13 @@ std::size_t prune_sharp(const Complex& cx, const std::vector<Vector3d>& p, std::
     bool sharp = false;
     if (live.size() == 1) {
       sharp = rim_is_sharp;
-    } else if (max_gap_rad < 2 * kPi) {
+    } else if (max_gap_rad < 2 * std::numbers::pi) {
       const int a = cx.edge_verts[e][0], b = cx.edge_verts[e][1];
       const Vector3d ref = p[third_vertex(cx.tris[live[0]], a, b)] - p[a];
       ang.resize(live.size());
       edge_angles(p, a, b, ref, live.data(), live.size(), cx, ang.data());
       std::sort(ang.begin(), ang.end());
-      double gap = 2 * kPi - (ang.back() - ang.front());
+      double gap = 2 * std::numbers::pi - (ang.back() - ang.front());
       for (std::size_t i = 1; i < ang.size(); ++i) gap = std::max(gap, ang[i] - ang[i - 1]);
       sharp = gap > max_gap_rad;
     }
@@ -254,14 +253,14 @@ DelaunaySetup prepare_delaunay(const PointCloud& cloud, const char* method, Dela
 DelaunayExtraction::DelaunayExtraction(const PointCloud& cloud, const DelaunaySetup& setup,
                                        std::vector<std::array<int, 3>> candidates, const DelaunaySurfaceParams& params,
                                        DelaunaySurfaceStats& stats)
-    : cloud(cloud), setup(setup), params(params), stats(stats), max_gap(params.sharp_edge_angle_deg * kPi / 180.0),
+    : cloud(cloud), setup(setup), params(params), stats(stats), max_gap(params.sharp_edge_angle_deg * std::numbers::pi / 180.0),
       candidates(std::move(candidates)) {}
 
 void DelaunayExtraction::filter_by_normals() {
   const std::vector<Vector3d>& p = setup.p;
   const std::vector<Vector3d>& pole = setup.poles.axis;
   stats.candidate_triangles = candidates.size();
-  const double cos_filter = std::cos(params.normal_filter_angle_deg * kPi / 180.0);
+  const double cos_filter = std::cos(params.normal_filter_angle_deg * std::numbers::pi / 180.0);
   std::vector<char> drop(candidates.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size()), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t t = r.begin(); t != r.end(); ++t) {
@@ -429,7 +428,7 @@ void DelaunayExtraction::join_across(int t, const std::array<int, 3>& ot, int j)
   // is taken only where nothing else can join, as at the tip of a spike: through a fold the
   // walk would orient what it reaches inside out, and where that meets the rest a seam of
   // holes opens that no filling closes (on thin parts, a few spacings across).
-  const double min_turn = 2 * kPi - max_gap;
+  const double min_turn = 2 * std::numbers::pi - max_gap;
   for (int pass = 0; pass < 2; ++pass)
     for (std::size_t i : rank_) {
       const int s = live_[i];

@@ -20,7 +20,7 @@
 namespace pointsurf {
 namespace {
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kNoDistance = std::numeric_limits<double>::infinity();
 constexpr std::int64_t kMaxCellsPerAxis = std::int64_t(1) << 20;
 // Rings of cells searched around a point before its kNN query goes to the kd-tree.
 constexpr int kMaxRing = 3;
@@ -148,7 +148,7 @@ struct VoxelGrid::Impl {
   // the block covers the whole grid.
   double margin(const std::array<std::int64_t, 3>& c, std::int64_t ring, double qx, double qy, double qz) const {
     const double q[3] = {qx, qy, qz};
-    double m = kInfinity;
+    double m = kNoDistance;
     for (int a = 0; a < 3; ++a) {
       if (c[a] - ring > 0) m = std::min(m, q[a] - (low[a] + double(c[a] - ring) * side));
       if (c[a] + ring < dims[a] - 1) m = std::min(m, (low[a] + double(c[a] + ring + 1) * side) - q[a]);
@@ -158,14 +158,14 @@ struct VoxelGrid::Impl {
 
   // The k nearest among `cand` (distances already computed) into cand.found, with entries
   // above `bound` skipped first (a bound known to hold the k nearest); returns how many.
-  static std::size_t select(Candidates& cand, std::size_t k, double bound, bool sorted = true, double guess = kInfinity) {
+  static std::size_t select(Candidates& cand, std::size_t k, double bound, bool sorted = true, double guess = kNoDistance) {
     std::vector<Neighbor>& found = cand.found;
     const std::size_t m = cand.size();
     if (found.size() < m) found.resize(m);
     // Pass 0 keeps the entries within a guess (which may hold fewer than k), pass 1 within
     // the bound (which holds k when it is right), pass 2 all: the first pass that keeps k or
     // more has the k nearest, since every entry it drops is farther than all it keeps.
-    const double limits[3] = {std::min(guess, bound), bound, kInfinity};
+    const double limits[3] = {std::min(guess, bound), bound, kNoDistance};
     for (int pass = guess < bound ? 0 : 1; pass < 3; ++pass) {
       const double limit = limits[pass];
       std::size_t kept = 0;
@@ -175,7 +175,7 @@ struct VoxelGrid::Impl {
         out[kept] = Neighbor{static_cast<std::uint32_t>(j), d[j]};  // slot for now
         kept += d[j] <= limit;  // branch-free compaction
       }
-      if (kept >= k || limit == kInfinity) {
+      if (kept >= k || limit == kNoDistance) {
         found.resize(kept);
         break;
       }
@@ -335,7 +335,7 @@ void VoxelGrid::for_each_knn(std::size_t k, const Visit& visit, bool sorted) con
   tbb::enumerable_thread_specific<std::vector<Neighbor>> from_tree;
   g.over_cells(1, [&](std::size_t cell, const std::array<std::int64_t, 3>& c, Candidates& cand) {
     bool have_previous = false;  // cand.previous holds the previous point's k nearest
-    double previous_kth = kInfinity;  // and its k-th squared distance
+    double previous_kth = kNoDistance;  // and its k-th squared distance
     for (std::size_t p = g.cell_start[cell]; p < g.cell_start[cell + 1]; ++p) {
       const double qx = g.x[p], qy = g.y[p], qz = g.z[p];
       cand.distances_to(qx, qy, qz);
@@ -343,7 +343,7 @@ void VoxelGrid::for_each_knn(std::size_t k, const Visit& visit, bool sorted) con
       // bounds its k-th distance, and entries beyond it need no ordering.
       // A guess: a little beyond the previous point's own k-th distance (neighbouring points
       // have similar ones), tried first; select() checks it.
-      double bound = kInfinity, guess = kInfinity;
+      double bound = kNoDistance, guess = kNoDistance;
       if (have_previous) {
         bound = 0.0;
         for (const std::uint32_t slot : cand.previous) bound = std::max(bound, cand.squared[slot]);
@@ -354,7 +354,7 @@ void VoxelGrid::for_each_knn(std::size_t k, const Visit& visit, bool sorted) con
       have_previous = count == k;  // k candidates: a bound for the next point either way
       const double m1 = g.margin(c, 1, qx, qy, qz);
       std::span<const Neighbor> result(cand.found.data(), count);
-      const bool sure = count == k ? (m1 == kInfinity || (m1 > 0.0 && result.back().squared_distance < m1 * m1)) : m1 == kInfinity;
+      const bool sure = count == k ? (m1 == kNoDistance || (m1 > 0.0 && result.back().squared_distance < m1 * m1)) : m1 == kNoDistance;
       if (!sure) {
         // Wider rings, then the kd-tree.
         Candidates& w = wide.local();
@@ -362,9 +362,9 @@ void VoxelGrid::for_each_knn(std::size_t k, const Visit& visit, bool sorted) con
         for (std::int64_t ring = 2; ring <= kMaxRing && !done; ++ring) {
           g.gather(c, ring, w);
           w.distances_to(qx, qy, qz);
-          count = Impl::select(w, k, kInfinity, sorted);
+          count = Impl::select(w, k, kNoDistance, sorted);
           const double mr = g.margin(c, ring, qx, qy, qz);
-          done = count == k ? (mr == kInfinity || (mr > 0.0 && w.found[count - 1].squared_distance < mr * mr)) : mr == kInfinity;
+          done = count == k ? (mr == kNoDistance || (mr > 0.0 && w.found[count - 1].squared_distance < mr * mr)) : mr == kNoDistance;
           result = std::span<const Neighbor>(w.found.data(), count);
         }
         if (!done) {

@@ -22,13 +22,13 @@ using test::expect_error;
 
 // A shape sampled, noised by `noise_in_spacings` and given PCA normals (k 30), as a scan would
 // arrive: the normals near creases are blended.
-struct Noisy {
+struct NoisyScan {
   PointCloud cloud;
   double spacing = 0.0;
 };
 
-Noisy noisy(PointCloud cloud, double noise_in_spacings, std::uint64_t seed) {
-  Noisy s;
+NoisyScan noisy(PointCloud cloud, double noise_in_spacings, std::uint64_t seed) {
+  NoisyScan s;
   s.spacing = mean_spacing(cloud.positions);
   test::add_noise(cloud, noise_in_spacings * s.spacing, seed);
   cloud.normals.clear();
@@ -41,7 +41,7 @@ auto sphere_distance = [](const Vector3d& p) { return test::distance_to_sphere(p
 auto cube_distance = [](const Vector3d& p) { return test::distance_to_cube(p); };
 
 TEST(Bilateral, ReducesNoiseOnASphere) {
-  Noisy s = noisy(test::sample_sphere(20000, 1.0, Vector3d::Zero(), 5), 0.4, 6);
+  NoisyScan s = noisy(test::sample_sphere(20000, 1.0, Vector3d::Zero(), 5), 0.4, 6);
   const double before = test::rms_distance(s.cloud.positions, sphere_distance);
   PointCloud cloud = s.cloud;
   const SmoothResult r = smooth_bilateral(cloud);
@@ -72,7 +72,7 @@ CubeFigures cube_figures(const std::vector<Vector3d>& points, const std::vector<
 }
 
 TEST(Trilateral, KeepsCubeEdgesSharperThanBilateralAtTheSameNoiseReduction) {
-  Noisy s = noisy(test::sample_cube(30000, 1.0, 7), 0.4, 8);
+  NoisyScan s = noisy(test::sample_cube(30000, 1.0, 7), 0.4, 8);
   const CubeFigures before = cube_figures(s.cloud.positions, s.cloud.positions, s.spacing);
   PointCloud bilateral = s.cloud, trilateral = s.cloud;
   smooth_bilateral(bilateral);
@@ -93,7 +93,7 @@ TEST(Trilateral, KeepsCubeEdgesSharperThanBilateralAtTheSameNoiseReduction) {
 }
 
 TEST(Trilateral, FiltersNormalsWithinFacesNotAcrossEdges) {
-  Noisy s = noisy(test::sample_cube(30000, 1.0, 9), 0.3, 10);
+  NoisyScan s = noisy(test::sample_cube(30000, 1.0, 9), 0.3, 10);
   PointCloud cloud = s.cloud;
   smooth_trilateral(cloud);
   // The true normal of a point is that of its nearest face.
@@ -127,7 +127,7 @@ TEST(Trilateral, FiltersNormalsWithinFacesNotAcrossEdges) {
 }
 
 TEST(Trilateral, UsesAFeatureFieldWhenPresent) {
-  Noisy s = noisy(test::sample_cube(20000, 1.0, 11), 0.4, 12);
+  NoisyScan s = noisy(test::sample_cube(20000, 1.0, 11), 0.4, 12);
   PointCloud flagged = s.cloud;
   ScalarField& feature = flagged.fields.add("feature", flagged.size(), ScalarType::UInt8);
   for (std::size_t i = 0; i < flagged.size(); ++i) feature.values[i] = test::distance_to_cube_edge(flagged.positions[i]) < s.spacing;
@@ -145,7 +145,7 @@ TEST(Trilateral, UsesAFeatureFieldWhenPresent) {
 }
 
 TEST(Smoothing, InvariantUnderPermutationRigidMotionAndAFarShift) {
-  Noisy s = noisy(test::sample_cube(6000, 1.0, 13), 0.4, 14);
+  NoisyScan s = noisy(test::sample_cube(6000, 1.0, 13), 0.4, 14);
   PointCloud base = s.cloud;
   smooth_trilateral(base);
   std::vector<std::size_t> perm(s.cloud.size());

@@ -26,7 +26,6 @@ namespace {
 using test::expect_error;
 using test::write_bytes;
 
-const std::filesystem::path kData = std::filesystem::path(POINTSURF_DATA_DIR).parent_path() / "tests" / "data";
 
 // CRC-32C bit by bit (the library uses a table or SSE4.2).
 std::uint32_t crc32c_bitwise(const char* p, std::size_t n) {
@@ -157,7 +156,7 @@ CloudReadResult read_bytes_as_e57(const std::filesystem::path& dir, const std::s
 }
 
 TEST(E57, ReferenceBunnyReadsToTheCoordinatesItStates) {
-  const CloudReadResult r = read_point_cloud(kData / "bunnyDouble.e57");
+  const CloudReadResult r = read_point_cloud(test::test_data_path("bunnyDouble.e57"));
   EXPECT_EQ(r.format, "e57");
   ASSERT_EQ(r.cloud.size(), 30571u);  // recordCount in its XML; no point is flagged invalid
   EXPECT_TRUE(r.cloud.fields.empty()) << "cartesianInvalidState is consumed, not kept";
@@ -176,7 +175,7 @@ TEST(E57, ReferenceBunnyReadsToTheCoordinatesItStates) {
 }
 
 TEST(E57, ReferenceColouredCubeReadsItsColours) {
-  const CloudReadResult r = read_point_cloud(kData / "ColouredCubeFloat.e57");
+  const CloudReadResult r = read_point_cloud(test::test_data_path("ColouredCubeFloat.e57"));
   ASSERT_EQ(r.cloud.size(), 7680u);
   ASSERT_TRUE(r.cloud.has_colors());
   EXPECT_EQ(r.cloud.positions[0], Vector3d(-0.5, -0.4990559220314026, 0.07136291265487671));
@@ -187,12 +186,12 @@ TEST(E57, ReferenceColouredCubeReadsItsColours) {
 }
 
 TEST(E57, BadChecksumIsRefusedNamingThePage) {
-  expect_error<InputError>([] { read_point_cloud(kData / "bad-crc.e57"); }, "bad-crc.e57: page 0 (bytes 0..1023): CRC-32C checksum mismatch");
+  expect_error<InputError>([] { read_point_cloud(test::test_data_path("bad-crc.e57")); }, "bad-crc.e57: page 0 (bytes 0..1023): CRC-32C checksum mismatch");
 }
 
 TEST(E57, CliRefusesBadChecksumWithExitCode2AndNoOutput) {
   const auto dir = test::temp_dir("e57_cli_crc");
-  const test::RunResult r = test::run_cli(fmt::format("convert {} {}", (kData / "bad-crc.e57").string(), (dir / "out.ply").string()), dir);
+  const test::RunResult r = test::run_cli(fmt::format("convert {} {}", (test::test_data_path("bad-crc.e57")).string(), (dir / "out.ply").string()), dir);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_TRUE(test::contains(r.err, "page 0")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.ply"));

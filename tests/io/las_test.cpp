@@ -25,17 +25,8 @@ using test::read_bytes;
 
 static_assert(std::endian::native == std::endian::little, "the hand-built files below are assembled in host byte order");
 
-template <typename T>
-void put(std::string& s, std::size_t at, T value) {
-  std::memcpy(s.data() + at, &value, sizeof(T));
-}
-
-template <typename T>
-T get(const std::string& s, std::size_t at) {
-  T value;
-  std::memcpy(&value, s.data() + at, sizeof(T));
-  return value;
-}
+using test::get;
+using test::put;
 
 // A LAS file assembled byte by byte from the public header block layout of the specification.
 struct LasFile {

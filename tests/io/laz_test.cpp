@@ -22,6 +22,7 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/io/io.h"
 #include "support/files.h"
+#include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
@@ -32,18 +33,9 @@ using test::write_bytes;
 
 static_assert(std::endian::native == std::endian::little, "the files below are taken apart in host byte order");
 
-const std::filesystem::path kData = std::filesystem::path(POINTSURF_DATA_DIR) / ".." / "tests" / "data";
 
-template <typename T>
-T get(const std::string& s, std::size_t at) {
-  T value;
-  std::memcpy(&value, s.data() + at, sizeof(T));
-  return value;
-}
-template <typename T>
-void put(std::string& s, std::size_t at, T value) {
-  std::memcpy(s.data() + at, &value, sizeof(T));
-}
+using test::get;
+using test::put;
 
 // One name per process: ctest runs each test in its own process, in parallel.
 std::filesystem::path temp(const std::string& name) {
@@ -67,8 +59,8 @@ void expect_same_clouds(const PointCloud& a, const PointCloud& b) {
 }
 
 TEST(Laz, ReferenceFileDecodesIdenticallyToItsLasTwin) {
-  const PointCloud las = read_point_cloud(kData / "simple.las").cloud;
-  const PointCloud laz = read_point_cloud(kData / "simple.laz").cloud;
+  const PointCloud las = read_point_cloud(test::test_data_path("simple.las")).cloud;
+  const PointCloud laz = read_point_cloud(test::test_data_path("simple.laz")).cloud;
   ASSERT_EQ(las.size(), 1065u);
   expect_same_clouds(las, laz);
 }
@@ -76,8 +68,8 @@ TEST(Laz, ReferenceFileDecodesIdenticallyToItsLasTwin) {
 // The point records themselves: LASzip's chunk decoded to the LAS file's bytes, and the LAS
 // records encoded to LASzip's bytes (the coder matches LASzip's bit for bit, not only itself).
 TEST(Laz, ChunkOfLaszipDecodesToTheLasRecordsAndReencodesToTheSameBytes) {
-  const std::string las = read_bytes(kData / "simple.las");
-  const std::string lzf = read_bytes(kData / "simple.laz");
+  const std::string las = read_bytes(test::test_data_path("simple.las"));
+  const std::string lzf = read_bytes(test::test_data_path("simple.laz"));
   ASSERT_FALSE(las.empty());
   ASSERT_FALSE(lzf.empty());
   const std::size_t n = get<std::uint32_t>(las, 107), record = get<std::uint16_t>(las, 105);
@@ -116,8 +108,8 @@ TEST(Laz, ChunkOfLaszipDecodesToTheLasRecordsAndReencodesToTheSameBytes) {
 }
 
 TEST(Laz, ExtraBytesOfTheReferenceFileBecomeNamedFields) {
-  const PointCloud cloud = read_point_cloud(kData / "extra.laz").cloud;
-  const PointCloud twin = read_point_cloud(kData / "simple.las").cloud;
+  const PointCloud cloud = read_point_cloud(test::test_data_path("extra.laz")).cloud;
+  const PointCloud twin = read_point_cloud(test::test_data_path("simple.las")).cloud;
   ASSERT_EQ(cloud.size(), twin.size());
   for (const char* name : {"Colors_0", "Colors_1", "Colors_2", "Flags_0", "Flags_1", "Intensity", "Time"})
     EXPECT_NE(cloud.fields.find(name), nullptr) << name;
@@ -369,11 +361,11 @@ TEST(Laz, VariableChunksAreReadByTheirTable) {
   HandmadeLaz file;
   file.chunks.resize(3);
   for (std::size_t i = 0; i < 1065; ++i) file.chunks[i < 700 ? 0 : i < 1000 ? 1 : 2].push_back(i);
-  file.build(read_bytes(kData / "simple.las"));
+  file.build(read_bytes(test::test_data_path("simple.las")));
   const auto path = write_bytes(temp("variable.laz"), file.bytes);
   const CloudReadResult read = read_point_cloud(path);
   EXPECT_TRUE(test::contains(read.encoding, "variable chunks")) << read.encoding;
-  expect_same_clouds(read_point_cloud(kData / "simple.las").cloud, read.cloud);
+  expect_same_clouds(read_point_cloud(test::test_data_path("simple.las")).cloud, read.cloud);
   std::filesystem::remove(path);
 }
 
@@ -381,8 +373,8 @@ TEST(Laz, VariableChunksAreReadByTheirTable) {
 // root cube), one chunk per node, the hierarchy page after the chunk table. Read by level and by
 // bounds, decoding only the nodes asked for.
 TEST(Laz, CopcIsReadByOctreeLevelAndBounds) {
-  const std::string las_bytes = read_bytes(kData / "simple.las");
-  const PointCloud las = read_point_cloud(kData / "simple.las").cloud;
+  const std::string las_bytes = read_bytes(test::test_data_path("simple.las"));
+  const PointCloud las = read_point_cloud(test::test_data_path("simple.las")).cloud;
   const BoundingBox box = bounding_box(las.positions);
   const Vector3d center = (box.min + box.max) / 2;
   const double halfsize = (box.max - box.min).maxCoeff() / 2 * 1.01;
@@ -439,8 +431,8 @@ TEST(Laz, CopcIsReadByOctreeLevelAndBounds) {
   // A level is a COPC option: refused for plain LAZ and for other formats.
   ReadOptions level;
   level.copc_level = 2;
-  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(kData / "simple.laz", level); }), "needs a COPC file"));
-  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(kData / "simple.las", level); }), "COPC (LAZ) option"));
+  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(test::test_data_path("simple.laz"), level); }), "needs a COPC file"));
+  EXPECT_TRUE(test::contains(test::error_of<UsageError>([&] { (void)read_point_cloud(test::test_data_path("simple.las"), level); }), "COPC (LAZ) option"));
   std::filesystem::remove(path);
 }
 

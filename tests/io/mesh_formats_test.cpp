@@ -18,15 +18,8 @@ namespace {
 
 using test::expect_error;
 
-std::filesystem::path write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary).write(text.data(), static_cast<std::streamsize>(text.size()));
-  return path;
-}
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using test::read_bytes;
+using test::write_bytes;
 
 // Unit cube with corner i at (i & 1, i >> 1 & 1, i >> 2 & 1), shifted and scaled so that the
 // coordinates need every digit of a double; triangles wind counter-clockwise seen from outside.
@@ -48,7 +41,7 @@ TEST(Off, MeshRoundTripKeepsVerticesNormalsColoursExactly) {
   const auto dir = test::temp_dir("off_roundtrip");
   const TriangleMesh mesh = cube_mesh();
   write_mesh(dir / "cube.off", mesh);
-  EXPECT_EQ(read_text(dir / "cube.off").substr(0, 6), "CNOFF\n");
+  EXPECT_EQ(read_bytes(dir / "cube.off").substr(0, 6), "CNOFF\n");
   const MeshReadResult result = read_mesh(dir / "cube.off");
   EXPECT_EQ(result.format, "off");
   EXPECT_EQ(result.mesh.vertices.positions, mesh.vertices.positions);
@@ -61,7 +54,7 @@ TEST(Off, PointCloudWithNormalsRoundTripsAsNoff) {
   const auto dir = test::temp_dir("off_cloud");
   const PointCloud cloud = test::sample_sphere(50, 2.0, Vector3d(6.5e6, 0, 0), 5);
   write_point_cloud(dir / "cloud.off", cloud);
-  EXPECT_EQ(read_text(dir / "cloud.off").substr(0, 5), "NOFF\n");
+  EXPECT_EQ(read_bytes(dir / "cloud.off").substr(0, 5), "NOFF\n");
   const CloudReadResult result = read_point_cloud(dir / "cloud.off");
   EXPECT_EQ(result.cloud.positions, cloud.positions);
   EXPECT_EQ(result.cloud.normals, cloud.normals);
@@ -70,7 +63,7 @@ TEST(Off, PointCloudWithNormalsRoundTripsAsNoff) {
 
 TEST(Off, ReadsCommentsCoffColoursAndPolygons) {
   const auto dir = test::temp_dir("off_hand");
-  const auto path = write_text(dir / "square.off",
+  const auto path = write_bytes(dir / "square.off",
                                "# made by hand\n"
                                "COFF\n"
                                "# vertices faces edges\n"
@@ -96,12 +89,12 @@ TEST(Off, ReadsCommentsCoffColoursAndPolygons) {
 
 TEST(Off, ReadsCountsOnTheHeaderLineAndFloatColoursWithNormals) {
   const auto dir = test::temp_dir("off_cnoff");
-  const MeshReadResult one = read_mesh(write_text(dir / "a.off", "CNOFF 1 0 0\n0.5 0 -1 0 0 1 1.0 0.5 0.25 1.0\n"));
+  const MeshReadResult one = read_mesh(write_bytes(dir / "a.off", "CNOFF 1 0 0\n0.5 0 -1 0 0 1 1.0 0.5 0.25 1.0\n"));
   ASSERT_EQ(one.mesh.vertex_count(), 1u);
   EXPECT_EQ(one.mesh.vertices.positions[0], Vector3d(0.5, 0, -1));
   EXPECT_EQ(one.mesh.vertices.normals[0], Vector3d(0, 0, 1));
   EXPECT_EQ(one.mesh.vertices.colors[0], Vector3f(1.0f, 0.5f, 0.25f));
-  const MeshReadResult two = read_mesh(write_text(dir / "b.off", "OFF 3 1 3\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  const MeshReadResult two = read_mesh(write_bytes(dir / "b.off", "OFF 3 1 3\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
   EXPECT_EQ(two.mesh.triangles, (std::vector<Triangle>{{0, 1, 2}}));
   EXPECT_FALSE(two.mesh.vertices.colors.size());
 }
@@ -110,20 +103,20 @@ TEST(Off, MalformedFilesNameTheLine) {
   const auto dir = test::temp_dir("off_errors");
   std::string text = "OFF\n10 0 0\n";
   for (int i = 0; i < 9; ++i) text += "0 0 0\n";
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "model.off", text + "1 2\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "model.off", text + "1 2\n")); },
                            "model.off: line 12 (vertex 9): expected 3 coordinates, got 2");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "short.off", text)); }, "short.off: vertex 9 of 10: file ends at line 11");
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "short.off", text)); }, "short.off: vertex 9 of 10: file ends at line 11");
   const std::string quad = "OFF\n4 4 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n3 1 2 3\n";
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "faces.off", quad + "5 0 1 2 3\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "faces.off", quad + "5 0 1 2 3\n")); },
                            "faces.off: line 10 (face 3): 5 indices announced, 4 given");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "few.off", quad)); }, "few.off: face 3 of 4: file ends at line 9");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "range.off", quad + "3 0 1 4\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "few.off", quad)); }, "few.off: face 3 of 4: file ends at line 9");
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "range.off", quad + "3 0 1 4\n")); },
                            "range.off: line 10 (face 3): vertex index 4 out of range [0, 4)");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "word.off", "OFF\n1 0 0\n0 0 zero\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "word.off", "OFF\n1 0 0\n0 0 zero\n")); },
                            "word.off: line 3 (vertex 0): expected a number, got 'zero'");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "4d.off", "4OFF\n1 0 0\n0 0 0 0\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "4d.off", "4OFF\n1 0 0\n0 0 0 0\n")); },
                            "4d.off: line 1: expected the keyword OFF, COFF, NOFF or CNOFF, got '4OFF'");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "color.off", "COFF\n1 0 0\n0 0 0 1 1\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "color.off", "COFF\n1 0 0\n0 0 0 1 1\n")); },
                            "color.off: line 3 (vertex 0): expected 3 or 4 colour values after the coordinates, got 2");
 }
 
@@ -150,7 +143,7 @@ TEST(Obj, PointCloudNormalsWithoutFacesAreTakenInOrder) {
 
 TEST(Obj, ReadsEveryFaceFormNegativeIndicesAndQuads) {
   const auto dir = test::temp_dir("obj_hand");
-  const auto path = write_text(dir / "pyramid.obj",
+  const auto path = write_bytes(dir / "pyramid.obj",
                                "# a square pyramid\n"
                                "mtllib pyramid.mtl\n"
                                "o pyramid\n"
@@ -192,33 +185,33 @@ TEST(Obj, ReadsEveryFaceFormNegativeIndicesAndQuads) {
 
 TEST(Obj, ReadsVertexColoursInEitherRange) {
   const auto dir = test::temp_dir("obj_colors");
-  const CloudReadResult unit = read_point_cloud(write_text(dir / "unit.obj", "v 0 0 0 1 0.5 0\nv 1 2 3 1 0 0.25 0\n"));
+  const CloudReadResult unit = read_point_cloud(write_bytes(dir / "unit.obj", "v 0 0 0 1 0.5 0\nv 1 2 3 1 0 0.25 0\n"));
   ASSERT_EQ(unit.cloud.colors.size(), 2u);
   EXPECT_EQ(unit.cloud.colors[0], Vector3f(1, 0.5f, 0));
   EXPECT_EQ(unit.cloud.positions[1], Vector3d(1, 2, 3));  // "x y z w r g b"
   EXPECT_EQ(unit.cloud.colors[1], Vector3f(0, 0.25f, 0));
-  const CloudReadResult bytes = read_point_cloud(write_text(dir / "bytes.obj", "v 0 0 0 255 51 0\n"));
+  const CloudReadResult bytes = read_point_cloud(write_bytes(dir / "bytes.obj", "v 0 0 0 255 51 0\n"));
   EXPECT_EQ(bytes.cloud.colors[0], Vector3f(1, 51 / 255.0f, 0));
 }
 
 TEST(Obj, MalformedFilesNameTheLine) {
   const auto dir = test::temp_dir("obj_errors");
   const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "zero.obj", tri + "f 0 1 2\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "zero.obj", tri + "f 0 1 2\n")); },
                            "zero.obj: line 4: vertex index 0: OBJ indices start at 1");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "range.obj", tri + "f 1 2 4\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "range.obj", tri + "f 1 2 4\n")); },
                            "range.obj: line 4: vertex index 4 out of range: 3 vertices defined so far");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "relative.obj", tri + "f -1 -2 -4\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "relative.obj", tri + "f -1 -2 -4\n")); },
                            "relative.obj: line 4: vertex index -4 out of range");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "normal.obj", tri + "vn 0 0 1\nf 1//1 2//2 3//1\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "normal.obj", tri + "vn 0 0 1\nf 1//1 2//2 3//1\n")); },
                            "normal.obj: line 5: normal index 2 out of range: 1 normals defined so far");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "short.obj", "v 0 0 0\nv 1 0\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "short.obj", "v 0 0 0\nv 1 0\n")); },
                            "short.obj: line 2: vertex: expected 3 coordinates, got 2");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "text.obj", "v 0 0 0\nv 1 0 x\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "text.obj", "v 0 0 0\nv 1 0 x\n")); },
                            "text.obj: line 2: vertex: expected a number, got 'x'");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "edge.obj", tri + "f 1 2\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "edge.obj", tri + "f 1 2\n")); },
                            "edge.obj: line 4: face: expected at least 3 vertices, got 2");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "junk.obj", tri + "f 1 2 three\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "junk.obj", tri + "f 1 2 three\n")); },
                            "junk.obj: line 4: expected a vertex index, got 'three'");
 }
 
@@ -234,7 +227,7 @@ TEST(Stl, BinaryRoundTripMergesCornersAndRoundsToFloat) {
   const auto dir = test::temp_dir("stl_binary");
   const TriangleMesh mesh = cube_mesh();
   write_mesh(dir / "cube.stl", mesh);
-  const std::string bytes = read_text(dir / "cube.stl");
+  const std::string bytes = read_bytes(dir / "cube.stl");
   EXPECT_EQ(bytes.size(), 84u + 50u * 12u);
   EXPECT_NE(bytes.substr(0, 5), "solid");
   const MeshReadResult result = read_mesh(dir / "cube.stl");
@@ -257,7 +250,7 @@ TEST(Stl, AsciiRoundTripKeepsDoublePrecision) {
   WriteOptions options;
   options.ascii = true;
   write_mesh(dir / "cube.stl", mesh, options);
-  EXPECT_EQ(read_text(dir / "cube.stl").substr(0, 16), "solid pointsurf\n");
+  EXPECT_EQ(read_bytes(dir / "cube.stl").substr(0, 16), "solid pointsurf\n");
   const MeshReadResult result = read_mesh(dir / "cube.stl");
   EXPECT_EQ(result.encoding, "ascii");
   EXPECT_EQ(result.mesh.vertex_count(), 8u);
@@ -266,7 +259,7 @@ TEST(Stl, AsciiRoundTripKeepsDoublePrecision) {
 
 TEST(Stl, ReadsHandWrittenAscii) {
   const auto dir = test::temp_dir("stl_hand");
-  const auto path = write_text(dir / "square.stl",
+  const auto path = write_bytes(dir / "square.stl",
                                "solid square\n"
                                "  facet normal 0 0 1\n"
                                "    outer loop\n"
@@ -308,7 +301,7 @@ std::string binary_cube_stl(std::uint32_t announced, std::size_t facets) {
 
 TEST(Stl, BinaryFacetsMergeIntoEightCubeVertices) {
   const auto dir = test::temp_dir("stl_merge");
-  const MeshReadResult result = read_mesh(write_text(dir / "cube.stl", binary_cube_stl(12, 12)));
+  const MeshReadResult result = read_mesh(write_bytes(dir / "cube.stl", binary_cube_stl(12, 12)));
   EXPECT_EQ(result.mesh.vertex_count(), 8u);
   EXPECT_EQ(result.mesh.triangle_count(), 12u);
   EXPECT_EQ(result.dropped_faces, 0u);
@@ -319,19 +312,19 @@ TEST(Stl, MalformedFilesAndImpossibleWrites) {
   ReadOptions forced;
   forced.format = "stl";
   std::string cut = binary_cube_stl(100, 12) + std::string(20, '\0');
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "cut.stl", cut), forced); }, "cut.stl: binary STL: facet 12 of 100: file ends at byte 704");
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "cut.stl", cut), forced); }, "cut.stl: binary STL: facet 12 of 100: file ends at byte 704");
   EXPECT_THROW(read_mesh(dir / "cut.stl"), InputError);  // detection already refuses it
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "tiny.stl", std::string(40, '\1')), forced); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "tiny.stl", std::string(40, '\1')), forced); },
                            "tiny.stl: binary STL: file ends at byte 40, inside the 84-byte header");
 
   const std::string head = "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n";
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "loop.stl", head + "endloop\nendfacet\nendsolid\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "loop.stl", head + "endloop\nendfacet\nendsolid\n")); },
                            "loop.stl: line 5: expected 'vertex x y z' (corner 2 of 3), got 'endloop'");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "coords.stl", head + "vertex 1 0\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "coords.stl", head + "vertex 1 0\n")); },
                            "coords.stl: line 5: vertex: expected 3 coordinates, got 2");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "ends.stl", head + "vertex 1 0 0\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "ends.stl", head + "vertex 1 0 0\n")); },
                            "ends.stl: line 5: file ends inside facet 0");
-  expect_error<InputError>([&] { read_mesh(write_text(dir / "nofacet.stl", "solid s\nfacet normal 0 0 1\nvertex 0 0 0\n")); },
+  expect_error<InputError>([&] { read_mesh(write_bytes(dir / "nofacet.stl", "solid s\nfacet normal 0 0 1\nvertex 0 0 0\n")); },
                            "nofacet.stl: line 3: expected 'outer loop', got 'vertex'");
 
   expect_error<UsageError>([&] { write_point_cloud(dir / "cloud.stl", test::sample_plane(10)); },

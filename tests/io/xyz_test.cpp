@@ -22,23 +22,13 @@ using test::contains;
 
 namespace fs = std::filesystem;
 
-fs::path write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  return path;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::read_bytes;
+using test::write_bytes;
 
 CloudReadResult read_text_cloud(const fs::path& dir, const std::string& file, const std::string& text, const std::string& columns = {}) {
   ReadOptions options;
   options.columns = columns;
-  return read_point_cloud(write_text(dir / file, text), options);
+  return read_point_cloud(write_bytes(dir / file, text), options);
 }
 
 // Colours that 8-bit storage keeps exactly.
@@ -163,7 +153,7 @@ TEST(Xyz, ColumnSpecOverridesWithSkippedColumns) {
 
 TEST(Xyz, BadColumnSpecsAreUsageErrors) {
   const fs::path dir = test::temp_dir("xyz_spec_bad");
-  write_text(dir / "a.xyz", "1 2 3 4\n");
+  write_bytes(dir / "a.xyz", "1 2 3 4\n");
   ReadOptions options;
   options.columns = "x,y,_,i";
   EXPECT_TRUE(contains(error_of<UsageError>([&] { read_point_cloud(dir / "a.xyz", options); }),
@@ -221,13 +211,13 @@ TEST(Xyz, OtherColumnCountsDefaults) {
 
 TEST(Xyz, ErrorsNameLineAndColumn) {
   const fs::path dir = test::temp_dir("xyz_errors");
-  write_text(dir / "scan.xyz", "1 2 3 0 0 1\n# comment\n4 5 6 0 0 1\n7 8 9 0\n");
+  write_bytes(dir / "scan.xyz", "1 2 3 0 0 1\n# comment\n4 5 6 0 0 1\n7 8 9 0\n");
   EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "scan.xyz"); }), "scan.xyz: line 4: expected 6 values, got 4"));
-  write_text(dir / "bad.xyz", "1 2 3\n4 5 abc\n");
+  write_bytes(dir / "bad.xyz", "1 2 3\n4 5 abc\n");
   EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "bad.xyz"); }), "bad.xyz: line 2, column 3: 'abc' is not a number"));
-  write_text(dir / "two.xyz", "1 2\n3 4\n");
+  write_bytes(dir / "two.xyz", "1 2\n3 4\n");
   EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "two.xyz"); }), "two.xyz: line 1: expected at least 3 values (x y z), got 2"));
-  write_text(dir / "dup.csv", "x,y,z,x\n1,2,3,4\n");
+  write_bytes(dir / "dup.csv", "x,y,z,x\n1,2,3,4\n");
   EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "dup.csv"); }), "dup.csv: line 1: header: columns 1 and 4 both mean 'x'"));
 }
 
@@ -236,7 +226,7 @@ TEST(Xyz, CrlfBlankAndCommentLines) {
   const CloudReadResult r = read_text_cloud(dir, "a.xyz", "# scanner output\r\n\r\n1 2 3\r\n// note\r\n   \r\n4 5 6\r\n\r\n");
   ASSERT_EQ(r.cloud.size(), 2u);
   EXPECT_EQ(r.cloud.positions[1], Vector3d(4, 5, 6));
-  write_text(dir / "b.xyz", "1 2 3\r\n\r\n4 5\r\n");
+  write_bytes(dir / "b.xyz", "1 2 3\r\n\r\n4 5\r\n");
   EXPECT_TRUE(contains(error_of<InputError>([&] { read_point_cloud(dir / "b.xyz"); }), "b.xyz: line 3: expected 3 values, got 2"));
 }
 
@@ -277,9 +267,9 @@ TEST(Xyz, RoundTripKeepsPositionsNormalsColours) {
       ASSERT_TRUE(r.cloud.colors[i].isApprox(cloud.colors[i], 1e-6f)) << file;
     }
   }
-  EXPECT_EQ(read_text(dir / "a.pts").substr(0, 4), "500\n");
-  EXPECT_EQ(read_text(dir / "a.csv").substr(0, 18), "x,y,z,nx,ny,nz,r,g");
-  EXPECT_NE(read_text(dir / "a.xyz").front(), 'x');  // plain numbers, no header
+  EXPECT_EQ(read_bytes(dir / "a.pts").substr(0, 4), "500\n");
+  EXPECT_EQ(read_bytes(dir / "a.csv").substr(0, 18), "x,y,z,nx,ny,nz,r,g");
+  EXPECT_NE(read_bytes(dir / "a.xyz").front(), 'x');  // plain numbers, no header
 }
 
 TEST(Xyz, CsvRoundTripKeepsNamedFields) {

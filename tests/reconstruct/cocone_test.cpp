@@ -26,13 +26,7 @@ namespace {
 
 using test::thin_poisson;
 
-// Well-spaced samples (Poisson-disk thinning of dense uniform samples), the sampling the Crust's
-// guarantees assume. Normals removed unless asked.
-PointCloud spaced(PointCloud dense, double min_distance, bool keep_normals = false) {
-  PointCloud c = thin_poisson(dense, min_distance);
-  if (!keep_normals) c.normals.clear();
-  return c;
-}
+using test::spaced;
 
 double sphere_distance(const Vector3d& x, double r) { return std::abs(x.norm() - r); }
 double torus_distance(const Vector3d& x, double major, double minor) {

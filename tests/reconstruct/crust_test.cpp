@@ -19,11 +19,7 @@
 namespace pointsurf {
 namespace {
 
-PointCloud spaced(const PointCloud& dense, double min_distance) {
-  PointCloud c = test::thin_poisson(dense, min_distance);
-  c.normals.clear();
-  return c;
-}
+using test::spaced;
 
 TEST(Crust, SphereIsWatertightGenusZeroOutwardAndClose) {
   const PointCloud cloud = spaced(test::sample_sphere(30000, 1.0, Vector3d::Zero(), 11), 0.06);

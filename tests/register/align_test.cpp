@@ -17,15 +17,11 @@
 #include "pointsurf/normals/normals.h"
 #include "pointsurf/register/features.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "support/scan_views.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
 namespace {
-
-const PointCloud& kitten() {
-  static const PointCloud cloud = read_point_cloud(test::data_path("kitten.xyz")).cloud;
-  return cloud;
-}
 
 Eigen::Matrix3d random_rotation(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
@@ -52,7 +48,7 @@ struct ScanPair {
 };
 
 ScanPair make_pair(std::uint64_t seed, double noise_in_spacings = 0.1, const Vector3d& shift = Vector3d::Zero()) {
-  const PointCloud& all = kitten();
+  const PointCloud& all = test::kitten();
   std::mt19937_64 rng(seed);
   const Vector3d direction = Vector3d(std::normal_distribution<double>()(rng), std::normal_distribution<double>()(rng),
                                       std::normal_distribution<double>()(rng))
@@ -214,7 +210,7 @@ TEST(AlignGlobal, DegenerateInputsAreAnAnswerNotAnError) {
   };
   // No overlap: a sphere against the kitten.
   PointCloud ball = test::sample_sphere(2500, 0.1, Vector3d(0.3, 0.0, 0.0), 9);
-  r = run(ball, kitten());
+  r = run(ball, test::kitten());
   EXPECT_FALSE(r.converged) << r.message;
   // Two planes: the rotation about their normal and the slide along them are free.
   PointCloud plane_a = test::sample_plane(2500, 1.0, 1), plane_b = test::sample_plane(2500, 1.0, 2);

@@ -15,6 +15,7 @@
 #include "pointsurf/core/rigid_transform.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "support/scan_views.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
@@ -27,13 +28,6 @@ Descriptors describe(const PointCloud& cloud, DescriptorType type, double radius
   params.radius = Length::spacings(radius_in_spacings);
   params.max_neighbors = max_neighbors;
   return compute_descriptors(cloud, tree, params);
-}
-
-PointCloud kitten() {
-  PointCloud cloud = read_point_cloud(test::data_path("kitten.xyz")).cloud;
-  EXPECT_EQ(cloud.size(), 5210u);
-  EXPECT_TRUE(cloud.has_normals());
-  return cloud;
 }
 
 // --- A brute-force oracle, in double, written from the papers' definitions. -----------------
@@ -179,7 +173,7 @@ TEST(Descriptors, PlaneConcentratesInTheMiddleBins) {
 }
 
 TEST(Descriptors, PfhAndFpfhAgreeWithABruteForceOracle) {
-  const PointCloud cloud = kitten();
+  const PointCloud cloud = test::kitten();
   const double radius = 10.0 * mean_spacing(cloud.positions);
   const Descriptors pfh = describe(cloud, DescriptorType::Pfh);
   const Descriptors fpfh = describe(cloud, DescriptorType::Fpfh);
@@ -193,7 +187,7 @@ TEST(Descriptors, PfhAndFpfhAgreeWithABruteForceOracle) {
 }
 
 TEST(Descriptors, InvariantUnderRigidMotionAndAFarShift) {
-  const PointCloud cloud = kitten();
+  const PointCloud cloud = test::kitten();
   PointCloud moved = cloud;
   const Eigen::Matrix3d r = Eigen::AngleAxisd(1.1, Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   RigidTransform(r, Vector3d(1e6, -2e6, 5e5)).apply(moved);
@@ -209,7 +203,7 @@ TEST(Descriptors, InvariantUnderRigidMotionAndAFarShift) {
 }
 
 TEST(Descriptors, InvariantUnderPermutation) {
-  const PointCloud cloud = kitten();
+  const PointCloud cloud = test::kitten();
   std::vector<std::size_t> perm(cloud.size());
   std::iota(perm.begin(), perm.end(), std::size_t(0));
   std::shuffle(perm.begin(), perm.end(), std::mt19937_64(11));

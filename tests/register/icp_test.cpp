@@ -17,6 +17,7 @@
 #include "pointsurf/core/error.h"
 #include "pointsurf/register/icp.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "support/scan_views.h"
 #include "support/shapes.h"
 
 namespace pointsurf {
@@ -38,11 +39,6 @@ RigidTransform exact_motion(std::mt19937_64& rng, double angle_deg, double trans
   return RigidTransform::about(center, Eigen::AngleAxisd(angle_deg * std::numbers::pi / 180.0, axis).toRotationMatrix(), t);
 }
 
-Eigen::Vector3d centroid(const PointCloud& c) {
-  Eigen::Vector3d s = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& p : c.positions) s += p;
-  return s / static_cast<double>(c.size());
-}
 
 // A closed, smooth, asymmetric surface: a sphere of radius 1 with bumps, r(u) = 1 + b(u) for
 // unit directions u, sampled at `n` seeded random directions, normals from the gradient of
@@ -107,7 +103,7 @@ TEST_P(IcpKnownMotion, RecoversSeededMotionsFromANearStartWith70PercentOverlapAn
     const RigidTransform truth = trial == 0 ? RigidTransform(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.08, -0.04, 0.12))  // pure translation
                                             : random_motion(rng, 30.0, 0.2);
     const Pair p = bumpy_pair(truth, 0.1, 100 + static_cast<std::uint64_t>(trial));
-    const Eigen::Vector3d at = centroid(p.source);
+    const Eigen::Vector3d at = test::centroid(p.source);
     // The start: the truth spoiled by 3 degrees and one spacing about the source's centroid.
     const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, at);
     const KdTree tree(p.target.positions);
@@ -133,7 +129,7 @@ INSTANTIATE_TEST_SUITE_P(Metrics, IcpKnownMotion, ::testing::Values(IcpMetric::P
 TEST(Icp, AShiftOf1e6MetresGivesTheSameRelativePose) {
   std::mt19937_64 rng(5);
   const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 9);
-  const RigidTransform start = p.truth * exact_motion(rng, 2.0, p.spacing, centroid(p.source));
+  const RigidTransform start = p.truth * exact_motion(rng, 2.0, p.spacing, test::centroid(p.source));
   const Eigen::Vector3d shift(1.0e6, -2.0e6, 5.0e5);
   for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
     IcpParams params;
@@ -154,7 +150,7 @@ TEST(Icp, AShiftOf1e6MetresGivesTheSameRelativePose) {
     ASSERT_TRUE(r.converged) << r.message;
     EXPECT_EQ(r.iterations, near.iterations);
     EXPECT_LT(RigidTransform::rotation_error_degrees(r.transform, near.transform), 1e-6);
-    const Eigen::Vector3d at = centroid(p.source);
+    const Eigen::Vector3d at = test::centroid(p.source);
     EXPECT_LT((r.transform.apply(at + shift) - shift - near.transform.apply(at)).norm(), 1e-6 * p.spacing);
     EXPECT_NEAR(r.inlier_rmse, near.inlier_rmse, 1e-6 * p.spacing);
     EXPECT_DOUBLE_EQ(r.fitness, near.fitness);
@@ -164,7 +160,7 @@ TEST(Icp, AShiftOf1e6MetresGivesTheSameRelativePose) {
 TEST(Icp, DoesNotDependOnThePointOrder) {
   std::mt19937_64 rng(11);
   const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 12);
-  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, centroid(p.source));
+  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, test::centroid(p.source));
   auto shuffled = [&](const PointCloud& c, std::uint64_t seed) {
     std::vector<std::size_t> order(c.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
@@ -182,7 +178,7 @@ TEST(Icp, DoesNotDependOnThePointOrder) {
     EXPECT_EQ(a.correspondences, b.correspondences);
     EXPECT_DOUBLE_EQ(a.fitness, b.fitness);
     EXPECT_LT(RigidTransform::rotation_error_degrees(a.transform, b.transform), 1e-9);
-    EXPECT_LT(RigidTransform::translation_error(a.transform, b.transform, centroid(p.source)), 1e-9 * p.spacing);
+    EXPECT_LT(RigidTransform::translation_error(a.transform, b.transform, test::centroid(p.source)), 1e-9 * p.spacing);
   }
 }
 
@@ -190,7 +186,7 @@ TEST(Icp, DoesNotDependOnThePointOrder) {
 TEST(Icp, OneThreadGivesTheSameAnswerAsMany) {
   std::mt19937_64 rng(13);
   const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 14);
-  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, centroid(p.source));
+  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, test::centroid(p.source));
   const KdTree tree(p.target.positions);
   for (IcpMetric metric : {IcpMetric::PointToPoint, IcpMetric::PointToPlane}) {
     IcpParams params;
@@ -336,7 +332,7 @@ TEST(Icp, StopsAtTheIterationCapWithConvergedFalse) {
   params.max_iterations = 2;
   params.relative_fitness = 0.0;
   params.relative_rmse = 0.0;
-  const RegistrationResult r = icp(p.source, p.target, tree, p.truth * exact_motion(rng, 5.0, p.spacing, centroid(p.source)), params);
+  const RegistrationResult r = icp(p.source, p.target, tree, p.truth * exact_motion(rng, 5.0, p.spacing, test::centroid(p.source)), params);
   EXPECT_FALSE(r.converged);
   EXPECT_EQ(r.iterations, 2u);
   EXPECT_NE(r.message.find("iteration cap (2)"), std::string::npos) << r.message;
@@ -346,7 +342,7 @@ TEST(Icp, ReportsProgressAndCancels) {
   std::mt19937_64 rng(8);
   const Pair p = bumpy_pair(random_motion(rng, 20.0, 0.2), 0.1, 4);
   const KdTree tree(p.target.positions);
-  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, centroid(p.source));
+  const RigidTransform start = p.truth * exact_motion(rng, 3.0, p.spacing, test::centroid(p.source));
   std::vector<double> seen;
   const RegistrationResult r = icp(p.source, p.target, tree, start, IcpParams{}, [&](double f) {
     seen.push_back(f);

@@ -15,11 +15,6 @@ namespace {
 
 using test::kKittenSpacing;
 
-Eigen::Vector3d centroid(const PointCloud& c) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& p : c.positions) sum += p;
-  return sum / double(c.size());
-}
 
 // The truth mapping scan 1 of `s` onto scan 0.
 RigidTransform truth_1_to_0(const test::ScanViews& s) { return s.truth[0].inverse() * s.truth[1]; }
@@ -27,7 +22,7 @@ RigidTransform truth_1_to_0(const test::ScanViews& s) { return s.truth[0].invers
 void expect_recovered(const RegisterPairResult& r, const RigidTransform& truth, const PointCloud& source, const std::string& what,
                       bool converged = true) {
   EXPECT_LT(RigidTransform::rotation_error_degrees(r.result.transform, truth), 0.5) << what;
-  EXPECT_LT(RigidTransform::translation_error(r.result.transform, truth, centroid(source)), 0.5 * kKittenSpacing) << what;
+  EXPECT_LT(RigidTransform::translation_error(r.result.transform, truth, test::centroid(source)), 0.5 * kKittenSpacing) << what;
   if (converged) {
     EXPECT_TRUE(r.result.converged) << what << ": " << r.result.message;
   }
@@ -93,7 +88,7 @@ TEST(RegisterPair, SameRelativePoseOneMillionMetresAway) {
   // The same relative motion: far * T_near * far^-1 == T_far.
   const RigidTransform expected = far * near_result.result.transform * far.inverse();
   EXPECT_LT(RigidTransform::rotation_error_degrees(far_result.result.transform, expected), 0.01);
-  EXPECT_LT(RigidTransform::translation_error(far_result.result.transform, expected, centroid(a)), 0.01 * kKittenSpacing);
+  EXPECT_LT(RigidTransform::translation_error(far_result.result.transform, expected, test::centroid(a)), 0.01 * kKittenSpacing);
 }
 
 TEST(RegisterPair, SymmetricShapeEndsWithAFit) {

@@ -43,4 +43,10 @@ PointCloud thin_poisson(const PointCloud& cloud, double min_distance) {
   return cloud.select(kept);
 }
 
+PointCloud spaced(PointCloud dense, double min_distance, bool keep_normals) {
+  PointCloud c = thin_poisson(dense, min_distance);
+  if (!keep_normals) c.normals.clear();
+  return c;
+}
+
 }  // namespace pointsurf::test

@@ -9,5 +9,7 @@ namespace pointsurf::test {
 /// Greedy Poisson-disk thinning: visits the points in input order and keeps each one farther than
 /// `min_distance` from every point kept so far (all attributes kept). Deterministic.
 PointCloud thin_poisson(const PointCloud& cloud, double min_distance);
+/// Well-spaced samples of `dense` (thin_poisson), normals removed unless `keep_normals`.
+PointCloud spaced(PointCloud dense, double min_distance, bool keep_normals = false);
 
 }  // namespace pointsurf::test

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // File and error helpers shared by the io and cli tests.
+#include <cstddef>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -9,6 +11,18 @@
 
 namespace pointsurf::test {
 
+/// Stores `value` at byte `at` of `s` in host byte order (hand-built binary files).
+template <typename T>
+void put(std::string& s, std::size_t at, T value) {
+  std::memcpy(s.data() + at, &value, sizeof(T));
+}
+/// The value of type T at byte `at` of `s`, in host byte order.
+template <typename T>
+T get(const std::string& s, std::size_t at) {
+  T value;
+  std::memcpy(&value, s.data() + at, sizeof(T));
+  return value;
+}
 /// Writes `bytes` to `path` (binary) and returns the path.
 std::filesystem::path write_bytes(const std::filesystem::path& path, const std::string& bytes);
 /// The whole content of `path` ("" when it cannot be read).

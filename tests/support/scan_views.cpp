@@ -11,6 +11,12 @@
 
 namespace pointsurf::test {
 
+Eigen::Vector3d centroid(const PointCloud& cloud) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : cloud.positions) sum += p;
+  return sum / double(cloud.size());
+}
+
 const PointCloud& kitten() {
   static const PointCloud cloud = read_point_cloud(std::filesystem::path(POINTSURF_DATA_DIR) / "kitten.xyz").cloud;
   return cloud;

@@ -15,6 +15,8 @@ inline constexpr double kKittenSpacing = 0.0172;  // mean spacing of data/kitten
 
 /// data/kitten.xyz: 5210 points with normals, about 1 unit tall along y. Read once.
 const PointCloud& kitten();
+/// The mean of a cloud's positions.
+Eigen::Vector3d centroid(const PointCloud& cloud);
 
 struct ScanViews {
   std::vector<PointCloud> clouds;     // each in its own frame, with normals

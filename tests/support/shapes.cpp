@@ -95,6 +95,12 @@ std::filesystem::path data_path(const std::string& name) {
   return p;
 }
 
+std::filesystem::path test_data_path(const std::string& name) {
+  const std::filesystem::path p = std::filesystem::path(POINTSURF_DATA_DIR).parent_path() / "tests" / "data" / name;
+  EXPECT_TRUE(std::filesystem::exists(p)) << "test data missing: " << p;
+  return p;
+}
+
 std::filesystem::path temp_dir(const std::string& name) {
   const std::filesystem::path p = std::filesystem::temp_directory_path() /
                                   ("pointsurf_test_" + name + "_" + std::to_string(::getpid()));

@@ -23,6 +23,8 @@ void add_noise(PointCloud& cloud, double sigma, std::uint64_t seed = 7);
 
 /// Path of a file shipped in data/ (the test fails if it is missing).
 std::filesystem::path data_path(const std::string& name);
+/// Path of a file made for the tests in tests/data/ (the test fails if it is missing).
+std::filesystem::path test_data_path(const std::string& name);
 /// A fresh empty directory under the system temp dir for one test.
 std::filesystem::path temp_dir(const std::string& name);
 
