@@ -87,7 +87,7 @@ const SimplifiedTable& distance_metrics() {
   }();
   return table;
 }
-const SimplifiedTable& spacing_metrics() {
+const SimplifiedTable& chamfer_in_spacings_metrics() {
   static const SimplifiedTable table = [] {
     SimplifiedTable t;
     t.number("chamfer_in_spacings", &Simplified::chamfer_in_spacings, "Chamfer distance in mean spacings of the input")
@@ -99,7 +99,7 @@ const SimplifiedTable& spacing_metrics() {
 }
 std::vector<ResultSpec> simplify_specs() {
   std::vector<ResultSpec> out = counted(simplified_counts().specs());
-  for (const SimplifiedTable* t : {&reduction_metrics(), &length_metrics(), &distance_metrics(), &spacing_metrics()}) append(out, t->specs());
+  for (const SimplifiedTable* t : {&reduction_metrics(), &length_metrics(), &distance_metrics(), &chamfer_in_spacings_metrics()}) append(out, t->specs());
   return out;
 }
 
@@ -173,7 +173,7 @@ void run_simplify(StageRun& run) {
     report.hausdorff = std::max(in_to_out.second, out_to_in.second);
     report.chamfer_in_spacings = spacing > 0.0 ? 0.5 * (in_to_out.first + out_to_in.first) / spacing : 0.0;
     rec.add(distance_metrics(), report);
-    if (spacing > 0.0) rec.add(spacing_metrics(), report);
+    if (spacing > 0.0) rec.add(chamfer_in_spacings_metrics(), report);
   }
   run.progress ? (void)run.progress(1.0) : (void)0;
   std::string extra;
