@@ -24,14 +24,14 @@ using detail::IsoLattice;
 using detail::IsoSurface;
 using detail::IsoSurfaceParams;
 
-using Field = std::function<double(const Vector3d&)>;
+using ScalarFunction = std::function<double(const Vector3d&)>;
 using Refine = std::function<bool(int level, const Vector3d& centre, double half_size)>;
 
 /// An analytic function (inside positive) with a numerical gradient, on an octree that `refine`
 /// describes from each cell's centre and half size.
 class AnalyticIso : public IsoFunction {
  public:
-  AnalyticIso(Field value, IsoLattice lattice, Refine refine)
+  AnalyticIso(ScalarFunction value, IsoLattice lattice, Refine refine)
       : value_(std::move(value)), lattice_(lattice), refine_(std::move(refine)) {}
   void corner_values(int level, const std::uint32_t* corners, std::size_t n, double* values) const override {
     for (std::size_t i = 0; i < n; ++i)
@@ -55,7 +55,7 @@ class AnalyticIso : public IsoFunction {
   }
 
  private:
-  Field value_;
+  ScalarFunction value_;
   IsoLattice lattice_;
   Refine refine_;
 };
@@ -70,7 +70,7 @@ IsoLattice unit_lattice(int depth) {
 }
 
 /// Refined where |f| at the cell centre is below the cell's half diagonal (f 1-Lipschitz).
-Refine near_surface(const Field& f, int depth) {
+Refine near_surface(const ScalarFunction& f, int depth) {
   return [f, depth](int level, const Vector3d& c, double half) {
     return level < depth && std::abs(f(c)) <= std::sqrt(3.0) * half * 1.01;
   };
@@ -129,21 +129,21 @@ MeshTopology expect_closed_manifold(const IsoSurface& s, bool smooth = true) {
   return topo;
 }
 
-double max_abs(const IsoSurface& s, const Field& distance) {
+double max_abs(const IsoSurface& s, const ScalarFunction& distance) {
   double worst = 0.0;
   for (const Vector3d& v : s.vertices) worst = std::max(worst, std::abs(distance(v)));
   return worst;
 }
 
-Field sphere(const Vector3d& c, double r) {
+ScalarFunction sphere(const Vector3d& c, double r) {
   return [c, r](const Vector3d& p) { return r - (p - c).norm(); };
 }
-Field torus(double R, double r) {
+ScalarFunction torus(double R, double r) {
   return [R, r](const Vector3d& p) { return r - std::hypot(std::hypot(p.x(), p.y()) - R, p.z()); };
 }
 
 TEST(IsoSurface, SphereNearSurfaceOctreeIsClosedGenusZeroAndOnTheSurface) {
-  const Field f = sphere(Vector3d(0.05, -0.02, 0.03), 0.7);
+  const ScalarFunction f = sphere(Vector3d(0.05, -0.02, 0.03), 0.7);
   const IsoLattice lattice = unit_lattice(6);
   const AnalyticIso iso(f, lattice, near_surface(f, 6));
   const double h = lattice.size / 64;
@@ -161,7 +161,7 @@ TEST(IsoSurface, SphereNearSurfaceOctreeIsClosedGenusZeroAndOnTheSurface) {
 }
 
 TEST(IsoSurface, UniformAndNearSurfaceOctreesGiveTheSameMesh) {
-  const Field f = sphere(Vector3d(0.1, 0.0, -0.1), 0.6);
+  const ScalarFunction f = sphere(Vector3d(0.1, 0.0, -0.1), 0.6);
   const IsoLattice lattice = unit_lattice(5);
   const IsoSurface a = extract_iso_surface(AnalyticIso(f, lattice, near_surface(f, 5)), lattice, {});
   const IsoSurface b = extract_iso_surface(AnalyticIso(f, lattice, everywhere()), lattice, {});
@@ -170,7 +170,7 @@ TEST(IsoSurface, UniformAndNearSurfaceOctreesGiveTheSameMesh) {
 }
 
 TEST(IsoSurface, TorusIsClosedGenusOne) {
-  const Field f = torus(0.55, 0.22);
+  const ScalarFunction f = torus(0.55, 0.22);
   const IsoLattice lattice = unit_lattice(6);
   const IsoSurface s = extract_iso_surface(AnalyticIso(f, lattice, near_surface(f, 6)), lattice, {});
   const MeshTopology topo = expect_closed_manifold(s);
@@ -182,8 +182,8 @@ TEST(IsoSurface, TorusIsClosedGenusOne) {
 TEST(IsoSurface, TwoNearbySpheresStayTwoSpheres) {
   // Gap of 1.3 finest cells between them.
   const double h = 2.0 / 64;
-  const Field a = sphere(Vector3d(-0.4 - 0.65 * h, 0, 0), 0.4), b = sphere(Vector3d(0.4 + 0.65 * h, 0, 0), 0.4);
-  const Field f = [a, b](const Vector3d& p) { return std::max(a(p), b(p)); };
+  const ScalarFunction a = sphere(Vector3d(-0.4 - 0.65 * h, 0, 0), 0.4), b = sphere(Vector3d(0.4 + 0.65 * h, 0, 0), 0.4);
+  const ScalarFunction f = [a, b](const Vector3d& p) { return std::max(a(p), b(p)); };
   const IsoLattice lattice = unit_lattice(6);
   const IsoSurface s = extract_iso_surface(AnalyticIso(f, lattice, near_surface(f, 6)), lattice, {});
   const MeshTopology topo = expect_closed_manifold(s);
@@ -194,7 +194,7 @@ TEST(IsoSurface, TwoNearbySpheresStayTwoSpheres) {
 TEST(IsoSurface, ThinPlateIsOneClosedBox) {
   // A 1.5-cell thick plate: most cells see both of its faces.
   const double h = 2.0 / 64;
-  const Field f = [h](const Vector3d& p) {
+  const ScalarFunction f = [h](const Vector3d& p) {
     return std::min({0.75 * h - std::abs(p.z() - 0.3 * h), 0.6 - std::abs(p.x()), 0.6 - std::abs(p.y())});
   };
   const IsoLattice lattice = unit_lattice(6);
@@ -208,7 +208,7 @@ TEST(IsoSurface, ThinPlateIsOneClosedBox) {
 TEST(IsoSurface, LevelJumpsAcrossTheSurfaceStayCrackFree) {
   // Refined to depth 7 for x < 0.2, to depth 3 elsewhere: the surface crosses leaves four levels
   // apart, and most of it lies in coarse leaves.
-  const Field f = torus(0.5, 0.3);
+  const ScalarFunction f = torus(0.5, 0.3);
   const IsoLattice lattice = unit_lattice(7);
   const Refine refine = [f](int level, const Vector3d& c, double half) {
     const int limit = c.x() - half < 0.2 ? 7 : 3;
@@ -223,7 +223,7 @@ TEST(IsoSurface, LevelJumpsAcrossTheSurfaceStayCrackFree) {
 
 TEST(IsoSurface, OctreeShallowerThanTheLatticeIsMeshedAtItsDeepestLevel) {
   // Leaves stop at level 5 in a depth-7 lattice: the mesh is the depth-5 one.
-  const Field f = torus(0.5, 0.23);
+  const ScalarFunction f = torus(0.5, 0.23);
   const IsoLattice deep = unit_lattice(7), shallow = unit_lattice(5);
   const IsoSurface a = extract_iso_surface(AnalyticIso(f, deep, near_surface(f, 5)), deep, {});
   const IsoSurface b = extract_iso_surface(AnalyticIso(f, shallow, near_surface(f, 5)), shallow, {});
@@ -234,7 +234,7 @@ TEST(IsoSurface, OctreeShallowerThanTheLatticeIsMeshedAtItsDeepestLevel) {
 
 TEST(IsoSurface, CoarseOnlyOctreeIsSeededFromCoarseEdges) {
   // No finest leaf near the sphere: refined to level 2 everywhere, to 5 only along the face x = 1.
-  const Field f = sphere(Vector3d(0.02, 0.01, 0.0), 0.55);
+  const ScalarFunction f = sphere(Vector3d(0.02, 0.01, 0.0), 0.55);
   const IsoLattice lattice = unit_lattice(5);
   const Refine refine = [](int level, const Vector3d& c, double half) { return level < 2 || (level < 5 && c.x() + half > 0.99); };
   const IsoSurface s = extract_iso_surface(AnalyticIso(f, lattice, refine), lattice, {});
@@ -331,7 +331,7 @@ TEST(IsoSurface, RandomSmoothFieldIsClosedAndManifold) {
   std::normal_distribution<double> normal;
   std::vector<std::pair<Vector3d, double>> waves;
   for (int i = 0; i < 12; ++i) waves.emplace_back(Vector3d(normal(rng), normal(rng), normal(rng)) * 9.0, 6.28 * std::uniform_real_distribution<double>()(rng));
-  const Field f = [waves](const Vector3d& p) {
+  const ScalarFunction f = [waves](const Vector3d& p) {
     double s = 0.0;
     for (const auto& [k, phase] : waves) s += std::sin(k.dot(p) + phase);
     // |noise| <= 0.3 sqrt(12) < 1.1: negative on the lattice's faces, so the surface is closed.
@@ -346,7 +346,7 @@ TEST(IsoSurface, RandomSmoothFieldIsClosedAndManifold) {
 }
 
 TEST(IsoSurface, SameMeshUnderAnyThreadCount) {
-  const Field f = torus(0.5, 0.25);
+  const ScalarFunction f = torus(0.5, 0.25);
   const IsoLattice lattice = unit_lattice(6);
   const AnalyticIso iso(f, lattice, near_surface(f, 6));
   IsoSurfaceParams params;
@@ -360,7 +360,7 @@ TEST(IsoSurface, SameMeshUnderAnyThreadCount) {
 }
 
 TEST(IsoSurface, SurfaceLeavingTheLatticeIsOpenOnlyAtItsFaces) {
-  const Field f = sphere(Vector3d(0.9, 0.0, 0.0), 0.5);
+  const ScalarFunction f = sphere(Vector3d(0.9, 0.0, 0.0), 0.5);
   const IsoLattice lattice = unit_lattice(5);
   const IsoSurface s = extract_iso_surface(AnalyticIso(f, lattice, near_surface(f, 5)), lattice, {});
   const MeshTopology topo = analyze_topology(to_mesh(s));
@@ -372,7 +372,7 @@ TEST(IsoSurface, SurfaceLeavingTheLatticeIsOpenOnlyAtItsFaces) {
 }
 
 TEST(IsoSurface, CancelsAndRejectsBadLattices) {
-  const Field f = sphere(Vector3d::Zero(), 0.5);
+  const ScalarFunction f = sphere(Vector3d::Zero(), 0.5);
   IsoLattice lattice = unit_lattice(4);
   const AnalyticIso iso(f, lattice, everywhere());
   EXPECT_THROW(extract_iso_surface(iso, lattice, {}, [](double) { return false; }), CancelledError);
