@@ -155,6 +155,28 @@ void ProgressBar::update(double fraction) {
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& text) { write_file_atomically(path, text); }
 
+void write_failure_report(const CommonOptions& common, const std::string& command, const std::string& origin, const Error& e) {
+  if (common.report_path.empty()) return;
+  RunReport failed;
+  failed.command = command;
+  failed.origin = origin;
+  failed.fail(e);
+  try {
+    write_text_atomically(common.report_path, report_json(failed));
+  } catch (const Error&) {
+  }
+}
+
+Pipeline build_with_report(const std::vector<StepText>& steps, const std::string& origin, const CommonOptions& common,
+                           const std::string& command) {
+  try {
+    return build_pipeline(steps, origin);
+  } catch (const Error& e) {
+    write_failure_report(common, command, origin, e);
+    throw;
+  }
+}
+
 void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command, std::string* report_text) {
   Context context;
   RunReport report;

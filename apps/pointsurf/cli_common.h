@@ -67,6 +67,13 @@ private:
 /// writes the report (also on failure) when asked. Rethrows the run's error. `report_text`, when
 /// given, receives the report's JSON after a successful run.
 void run_with_report(const Pipeline& pipeline, const CommonOptions& common, const std::string& command, std::string* report_text = nullptr);
+/// build_pipeline(steps, origin) for `command`; when the steps are refused (a value out of range,
+/// an unknown key) the report, when asked, is written with the error before it is rethrown.
+Pipeline build_with_report(const std::vector<StepText>& steps, const std::string& origin, const CommonOptions& common,
+                           const std::string& command);
+/// Writes, when --report was given, the report of a run refused before any work: `e` and where.
+/// A failure to write it is ignored (the run's own error matters more).
+void write_failure_report(const CommonOptions& common, const std::string& command, const std::string& origin, const Error& e);
 /// Writes the HTML report of a run (its JSON text, named `origin`) to `out_path` (cmd_report.cpp).
 void write_html_report(const std::string& run_json, const std::string& origin, const std::string& out_path, const HtmlReportParams& params,
                        const CommonOptions& common);

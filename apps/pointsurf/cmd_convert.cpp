@@ -45,7 +45,7 @@ int run_convert(const std::vector<std::string>& args) {
   StepText read{"read", "in", {}, read_params}, write{"write", "out", {}, write_params};
   read.params.emplace_back("filename", positionals[0]);
   write.params.emplace_back("filename", positionals[1]);
-  const Pipeline pipeline = build_pipeline({read, write}, "convert");
+  const Pipeline pipeline = build_with_report({read, write}, "convert", common, "convert");
   run_with_report(pipeline, common, "convert");
   return 0;
 }

@@ -53,18 +53,7 @@ int run_run(const std::vector<std::string>& args) {
   try {
     pipeline = parse_pipeline(text.str(), file, sets);
   } catch (const Error& e) {
-    // The report is written also when the pipeline is refused before any work.
-    if (!common.report_path.empty()) {
-      RunReport failed;
-      failed.command = "run";
-      failed.origin = file;
-      failed.fail(e);
-      try {
-        write_text_atomically(common.report_path, report_json(failed));
-      } catch (const Error&) {
-        // The pipeline's own error matters more.
-      }
-    }
+    write_failure_report(common, "run", file, e);  // also when refused before any work
     throw;
   }
   if (!html.empty()) check_output_path(html, common.no_clobber, "html");

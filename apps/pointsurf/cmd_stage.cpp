@@ -116,8 +116,7 @@ using KeyValues = std::vector<std::pair<std::string, std::string>>;
 
 // Builds and runs a checked pipeline for one command, in the command line's words.
 void run_steps(const StageSpec& s, const std::vector<StepText>& steps, const CommonOptions& common) {
-  (void)s;
-  const Pipeline pipeline = build_pipeline(steps, "cli");
+  const Pipeline pipeline = build_with_report(steps, "cli", common, s.name);
   run_with_report(pipeline, common, s.name);
 }
 

@@ -5,8 +5,11 @@
 #include "pointsurf/io/formats.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fcntl.h>
 #include <limits>
 #include <random>
 #include <unistd.h>
@@ -73,6 +76,13 @@ void check_output_path(const std::filesystem::path& path, bool no_clobber, const
     if (no_clobber) throw UsageError(fmt::format("{}: exists (--no-clobber)", path.string()));
     if (::access(path.c_str(), W_OK) != 0) throw UsageError(fmt::format("{}: exists and is not writable", path.string()));
   }
+  // A writer makes its temporary file beside the output and renames it into place: make one now
+  // (removed at once), so that a directory where no file can be made (a read-only mount, /proc,
+  // a full disk's quota) is refused before any work, whatever access() says for root.
+  const TemporaryOutput probe(path);
+  const int fd = ::open(probe.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) throw UsageError(fmt::format("{}: cannot write in directory {}: {}", path.string(), dir.string(), std::strerror(errno)));
+  ::close(fd);
 }
 
 void remove_output(const std::filesystem::path& path) noexcept {

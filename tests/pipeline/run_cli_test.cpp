@@ -228,6 +228,29 @@ TEST_F(RunCli, StagesOnAMeshKeepOrDropItsFacesAndSaySo) {
 namespace pointsurf {
 namespace {
 
+TEST_F(RunCli, ACommandRefusedAfterParsingStillWritesItsReport) {
+  const test::CliResult r = test::run_cli("normals " + path("in.ply") + " " + path("o.ply") + " --k 1 --report " + path("r.json"), dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "--k: 1 is out of range [3, inf)")) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["command"], "normals");
+  EXPECT_EQ(report["status"], "failed");
+  EXPECT_EQ(report["error"]["exit_code"], 1);
+  EXPECT_EQ(report["error"]["kind"], "usage");
+  EXPECT_EQ(report["error"]["key"], "k");
+  EXPECT_TRUE(report["stages"].empty());
+  EXPECT_FALSE(std::filesystem::exists(path("o.ply")));
+}
+
+TEST_F(RunCli, ADirectoryWhereNoFileCanBeMadeIsRefusedBeforeAnyWork) {
+  // /proc takes no new file, whatever access() answers for root.
+  if (!std::filesystem::is_directory("/proc")) GTEST_SKIP() << "no /proc";
+  const test::CliResult r = test::run_cli("normals " + path("in.ply") + " /proc/pointsurf_out.ply", dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "/proc/pointsurf_out.ply: cannot write in directory /proc")) << r.err;
+  EXPECT_FALSE(test::contains(r.err, "[1/")) << "work was done before the refusal:\n" << r.err;
+}
+
 TEST_F(RunCli, AFailedRunStillWritesItsReport) {
   const std::string file = write_pipeline("f.json", "[\"" + path("in.ply") + "\", {\"type\": \"crop\", \"min\": [9, 9, 9]}, \"" + path("o.ply") + "\"]");
   const test::CliResult r = test::run_cli("run " + file + " --report " + path("r.json"), dir_);
