@@ -163,11 +163,15 @@ void run_normals(StageRun& run) {
   rec.add(spacing_metrics(), SpacingValue{spacing});
   const bool by_radius = params.neighborhood != NeighborhoodKind::Knn;
   if (estimated.degenerate == cloud.size()) {
-    if (by_radius)
-      throw key_error("radius", fmt::format("every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
-                                   "neighbourhood (mean spacing {:.4g}): no normal; use a radius of a few mean spacings "
-                                   "(--radius 3sp gives {:.4g}) or --k",
-                                   cloud.size(), estimated.radius_used, spacing, 3.0 * spacing));
+    if (by_radius) {
+      // A valid radius that found no neighbourhood: the computation failed (exit 3), about --radius.
+      ComputeError e(fmt::format("radius: every one of the {} points has fewer than 3 neighbours within {:.4g} or a degenerate "
+                                 "neighbourhood (mean spacing {:.4g}): no normal; use a radius of a few mean spacings "
+                                 "(--radius 3sp gives {:.4g}) or --k",
+                                 cloud.size(), estimated.radius_used, spacing, 3.0 * spacing));
+      e.set_key("radius");
+      throw e;
+    }
     throw InputError(fmt::format("every one of the {} points has a degenerate neighbourhood (collinear or coincident points): no normal",
                                  cloud.size()));
   }

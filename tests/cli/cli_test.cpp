@@ -179,7 +179,8 @@ TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
   EXPECT_TRUE(test::contains(r.out + r.err, "(radius 0.1)")) << r.out << r.err;
   EXPECT_TRUE(test::contains(r.err, "20 points have (0.99 %) fewer than 3 neighbours within 0.1")) << r.err;
 
-  expect_failure("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_, 1,
+  // A valid radius that finds no neighbourhood is a failure of the computation (exit 3).
+  expect_failure("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_, 3,
                  "radius: every one of the 2020 points has fewer than 3 neighbours within 0.001");
 
   // Later stages refuse all-zero normals and say what they skip when only some are zero.
