@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "cli_common.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -155,6 +157,29 @@ void ProgressBar::update(double fraction) {
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& text) { write_file_atomically(path, text); }
 
+namespace {
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_interrupt(int) {
+  if (g_interrupted) {  // the second Ctrl-C: no more waiting
+    std::signal(SIGINT, SIG_DFL);
+    std::raise(SIGINT);
+  }
+  g_interrupted = 1;
+}
+}  // namespace
+
+void install_interrupt_handler() {
+  struct sigaction old {};
+  if (::sigaction(SIGINT, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) return;
+  struct sigaction action {};
+  action.sa_handler = on_interrupt;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, nullptr);
+}
+
+bool interrupt_requested() noexcept { return g_interrupted != 0; }
+
 void write_failure_report(const CommonOptions& common, const std::string& command, const std::string& origin, const Error& e) {
   if (common.report_path.empty()) return;
   RunReport failed;
@@ -190,7 +215,7 @@ void run_with_report(const Pipeline& pipeline, const CommonOptions& common, cons
     ProgressBar* b = bar.get();
     return [b](double f) {
       b->update(f);
-      return true;
+      return !interrupt_requested();  // false: the stage stops (CancelledError)
     };
   };
   options.stage_done = [&](const StageRecord& r) {

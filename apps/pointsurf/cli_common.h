@@ -63,6 +63,13 @@ private:
   std::chrono::steady_clock::time_point start_, last_;
 };
 
+/// Ctrl-C: the first SIGINT asks the running stage to stop at its next progress report (it then
+/// fails with CancelledError: the report says "cancelled", no output is left, exit 130); a second
+/// one ends the process at once. Not installed when SIGINT was inherited ignored (a background job).
+void install_interrupt_handler();
+/// True once SIGINT arrived.
+bool interrupt_requested() noexcept;
+
 /// Runs `pipeline` with the CLI's progress bars, summary lines and warnings on stderr, then
 /// writes the report (also on failure) when asked. Rethrows the run's error. `report_text`, when
 /// given, receives the report's JSON after a successful run.

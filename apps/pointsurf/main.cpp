@@ -93,6 +93,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   args.erase(args.begin());
+  cli::install_interrupt_handler();
   try {
     std::optional<tbb::global_control> threads;
     if (const int n = threads_from(args); n > 0)

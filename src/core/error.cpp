@@ -24,8 +24,8 @@ int Error::exit_code() const noexcept {
   switch (kind()) {
     case ErrorKind::Usage: return 1;
     case ErrorKind::Input: return 2;
-    case ErrorKind::Compute:
-    case ErrorKind::Cancelled: return 3;
+    case ErrorKind::Compute: return 3;
+    case ErrorKind::Cancelled: return 130;  // 128 + SIGINT, as a shell reports Ctrl-C
   }
   return 3;
 }

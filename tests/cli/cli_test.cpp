@@ -167,6 +167,22 @@ TEST_F(Cli, NormalsTakeTheInputsSidesAndWarnWhenAnotherOrientationDisagrees) {
                  "orient input: the input has no normals to agree with");
 }
 
+TEST_F(Cli, CtrlCStopsTheStageLeavesNoOutputAndReportsCancelled) {
+  // Screened Poisson of 200,000 sphere samples takes seconds: SIGINT arrives while it runs.
+  write_point_cloud(path("sphere.ply"), test::sample_sphere(200000, 1.0, Vector3d::Zero(), 3));
+  const test::InterruptedRun run = test::run_cli_interrupted(
+      "reconstruct " + path("sphere.ply") + " " + path("mesh.ply") + " --method poisson --report " + path("r.json"), dir_, "[1/3]");
+  ASSERT_TRUE(run.interrupted) << "the run ended before SIGINT: " << run.result.err;
+  EXPECT_EQ(run.result.exit_code, 130) << run.result.err;
+  EXPECT_TRUE(test::contains(run.result.err, "cancelled")) << run.result.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("r.json")));
+  EXPECT_EQ(report["status"], "cancelled");
+  EXPECT_EQ(report["error"]["kind"], "cancelled");
+  EXPECT_EQ(report["error"]["exit_code"], 130);
+  for (const auto& entry : std::filesystem::directory_iterator(dir_))  // neither the mesh nor its temporary file
+    EXPECT_FALSE(test::contains(entry.path().filename().string(), "mesh.ply")) << entry.path();
+}
+
 TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
   // 2000 points on a unit square (spacing about 0.02) and 20 isolated points 1 apart, far away:
   // within radius 0.1 the square's points have neighbours, the isolated ones none.

@@ -13,5 +13,14 @@ struct RunResult {
 
 /// Runs `pointsurf ARGS` through the shell with stdout and stderr captured in files under `dir`.
 RunResult run_cli(const std::string& args, const std::filesystem::path& dir);
+/// Runs the CLI with `args` (split at spaces; no quoting), SIGINT at its default whatever this
+/// process inherited, and sends it SIGINT once its stderr holds `after` (as Ctrl-C would). The
+/// result's exit code is -1 if the process did not exit normally; `interrupted` says whether the
+/// signal was sent before it ended.
+struct InterruptedRun {
+  RunResult result;
+  bool interrupted = false;
+};
+InterruptedRun run_cli_interrupted(const std::string& args, const std::filesystem::path& dir, const std::string& after);
 
 }  // namespace pointsurf::test

@@ -168,7 +168,7 @@ std::string report_json(const RunReport& report) {
   json out = {{"command", report.command},
               {"version", POINTSURF_VERSION},
               {"pipeline", report.origin},
-              {"status", report.ok ? "ok" : "failed"},
+              {"status", report.ok ? "ok" : report.error_kind == "cancelled" ? "cancelled" : "failed"},
               {"stages", stages},
               {"outputs", report.outputs},
               {"warnings", report.warnings},
