@@ -70,7 +70,7 @@ TEST(Errors, ExitCodes) {
   EXPECT_EQ(UsageError("x").exit_code(), 1);
   EXPECT_EQ(InputError("x").exit_code(), 2);
   EXPECT_EQ(ComputeError("x").exit_code(), 3);
-  EXPECT_EQ(CancelledError().exit_code(), 3);
+  EXPECT_EQ(CancelledError().exit_code(), 130);  // 128 + SIGINT
 }
 
 }  // namespace
