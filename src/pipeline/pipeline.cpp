@@ -350,7 +350,10 @@ private:
       } else if (by_type.size() == 1) {
         target = by_type.front();
       } else if (by_type.size() > 1) {
-        throw UsageError(fmt::format("--set \"{}\": {} stages have type \"{}\"; name one by its tag", o, by_type.size(), stage));
+        std::vector<std::string> tags;  // the tags of those stages, as the user would write them
+        for (const std::size_t i : by_type) tags.push_back(fmt::format("\"{}.{}={}\"", names[2 * i], key, value));
+        throw UsageError(fmt::format("--set \"{}\": {} stages have type \"{}\"; name one by its tag: {}", o, by_type.size(), stage,
+                                     join(tags, " or ")));
       } else {
         const std::string near = closest_name(stage, names);
         throw UsageError(fmt::format("--set \"{}\": no stage tagged or typed \"{}\"{}", o, stage,

@@ -149,7 +149,8 @@ TEST_F(PipelineRun, SetOverridesByTypeOrTagAndChecksTypes) {
   EXPECT_TRUE(p.steps[2].args.given("k"));
   EXPECT_TRUE(p.steps[3].args.boolean("ascii"));
   test::expect_error<UsageError>([&] { parse_pipeline(json, "p.json", {"normals.k=12"}); },
-                                 "--set \"normals.k=12\": 2 stages have type \"normals\"; name one by its tag");
+                                 "--set \"normals.k=12\": 2 stages have type \"normals\"; name one by its tag: "
+                                 "\"normals2.k=12\" or \"again.k=12\"");
   test::expect_error<UsageError>([&] { parse_pipeline(json, "p.json", {"again.k=abc"}); }, "p.json: stage 3 (normals): k: \"abc\" is not an integer");
   test::expect_error<UsageError>([&] { parse_pipeline(json, "p.json", {"again.k=2"}); }, "p.json: stage 3 (normals): k: 2 is out of range [3, inf)");
   test::expect_error<UsageError>([&] { parse_pipeline(json, "p.json", {"agian.k=12"}); }, "no stage tagged or typed \"agian\"; did you mean \"again\"?");
