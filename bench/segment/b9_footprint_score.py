@@ -23,7 +23,7 @@ import sys
 
 import numpy as np
 
-from b9_outline_picture import outline_points, read_ply, write_picture
+from b9_outline_picture import feature_rings, outline_points, read_ply, write_picture
 
 CLASSES = {0: "ground", 1: "vegetation", 2: "roof"}
 # Picture colours: ground sand, vegetation green, roof red; unstroked points grey, darker the
@@ -44,20 +44,17 @@ def inside_loop(xy, loop):
 
 
 def footprint_mask(xy, features, segments):
-    """Points (x, y) inside the footprint of any of `segments`."""
+    """Points (x, y) inside the footprint of any of `segments`: inside a Polygon's outer ring and
+    in none of its holes."""
     mask = np.zeros(len(xy), dtype=bool)
-    for s in segments:
-        outer = np.zeros(len(xy), dtype=bool)
-        hole = np.zeros(len(xy), dtype=bool)
-        for f in features:
-            if f["properties"]["group"] != s:
-                continue
-            loop = np.array(f["geometry"]["coordinates"], dtype=float)[:, :2]
-            if f["properties"]["hole"]:
-                hole |= inside_loop(xy, loop)
-            else:
-                outer |= inside_loop(xy, loop)
-        mask |= outer & ~hole
+    for f in features:
+        if f["properties"]["group"] not in segments or f["geometry"]["type"] != "Polygon":
+            continue
+        outer, *holes = [ring[:-1, :2] for ring in feature_rings(f)]
+        inside = inside_loop(xy, outer)
+        for hole in holes:
+            inside &= ~inside_loop(xy, hole)
+        mask |= inside
     return mask
 
 
@@ -73,9 +70,9 @@ def main():
     buildings = [s for s in outlined if np.median(xyz[seg == s, 2]) - ground >= min_height]
     # Origin at the tile's corner: the even-odd test in georeferenced coordinates loses digits.
     origin = xyz[:, :2].min(axis=0)
-    for f in features:
-        f["geometry"]["coordinates"] = (np.array(f["geometry"]["coordinates"], dtype=float) - [*origin, 0.0]).tolist()
-    inside = footprint_mask(xyz[:, :2] - origin, features, buildings)
+    shifted = [{"properties": f["properties"], "geometry": {"type": f["geometry"]["type"], "coordinates":
+                [(ring - [*origin, 0.0]).tolist() for ring in feature_rings(f)]}} for f in features if f["geometry"]["type"] == "Polygon"]
+    inside = footprint_mask(xyz[:, :2] - origin, shifted, buildings)
     counts = {name: int((label == c).sum()) for c, name in CLASSES.items()}
     hits = {name: int((inside & (label == c)).sum()) for c, name in CLASSES.items()}
     inside_strokes = sum(hits.values())
@@ -91,8 +88,6 @@ def main():
         grey = np.clip(235 - (xyz[:, 2] - ground) * (145 / 15), 90, 235)
         rgb = np.array([COLOURS.get(int(c), (g, g, g)) for c, g in zip(label, grey)], dtype=np.uint8)
         kept = [f for f in features if f["properties"]["group"] in buildings]
-        for f in kept:
-            f["geometry"]["coordinates"] = (np.array(f["geometry"]["coordinates"]) + [*origin, 0.0]).tolist()
         line_xyz = outline_points(kept, 0.05)
         write_picture(picture, np.concatenate([xyz, line_xyz]), np.concatenate([rgb, np.zeros((len(line_xyz), 3), np.uint8)]),
                       np.concatenate([label, np.full(len(line_xyz), -2, np.int32)]))

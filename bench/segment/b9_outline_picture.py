@@ -25,12 +25,20 @@ def read_ply(path):
         return np.frombuffer(f.read(n * np.dtype(fields).itemsize), dtype=np.dtype(fields), count=n)
 
 
+def feature_rings(feature):
+    """The lines of a GeoJSON feature as arrays (M x 3): a Polygon's outer ring, then its holes
+    (each ring ends at its first point); a LineString as one."""
+    geometry = feature["geometry"]
+    if geometry["type"] == "Polygon":
+        return [np.array(ring, dtype=float) for ring in geometry["coordinates"]]
+    return [np.array(geometry["coordinates"], dtype=float)]
+
+
 def outline_points(features, step, lift=1.0):
     """The outlines of GeoJSON features as points every `step`, lifted `lift` so that a top view
     shows them above the cloud (N x 3)."""
     lines = []
-    for feature in features:
-        c = np.array(feature["geometry"]["coordinates"], dtype=float)
+    for c in (ring for feature in features for ring in feature_rings(feature)):
         for a, b in zip(c[:-1], c[1:]):
             k = max(int(np.linalg.norm(b - a) / step), 1)
             lines.append(a + (b - a) * np.linspace(0.0, 1.0, k, endpoint=False)[:, None])

@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "pointsurf/core/point_cloud.h"
 
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <set>
+
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -22,30 +27,98 @@ int geokey_value(const std::vector<std::uint8_t>& dir, int id) {
   return 0;
 }
 
-// The name in `KEYWORD["name"` for the first CRS keyword of a WKT string.
-std::string wkt_name(const std::string& wkt) {
-  std::size_t best = std::string::npos;
-  for (const char* key : {"COMPD_CS[", "COMPOUNDCRS[", "PROJCRS[", "PROJCS[", "GEOGCRS[", "GEOGCS[", "GEODCRS[", "GEOCCS[", "VERT_CS[", "VERTCRS["}) {
-    const std::size_t at = wkt.find(key);
-    if (at != std::string::npos && (best == std::string::npos || at < best)) best = at;
+// One node of a WKT string: `KEYWORD[value, ..., CHILD[...], ...]`, with `[]` or `()` as
+// brackets. Values keep their text (quoted ones without the quotes, a doubled `""` as one quote).
+struct WktNode {
+  std::string keyword;
+  std::vector<std::string> values;
+  std::vector<WktNode> children;
+};
+
+// Reads the node that starts at `at` (after blanks) and moves `at` past it. A node that ends
+// early (a truncated WKT) keeps what was read.
+WktNode read_wkt_node(const std::string& wkt, std::size_t& at) {
+  auto blank = [&] { while (at < wkt.size() && std::isspace(static_cast<unsigned char>(wkt[at]))) ++at; };
+  WktNode node;
+  blank();
+  while (at < wkt.size() && (std::isalnum(static_cast<unsigned char>(wkt[at])) || wkt[at] == '_')) node.keyword += wkt[at++];
+  blank();
+  if (at >= wkt.size() || (wkt[at] != '[' && wkt[at] != '(')) return node;
+  ++at;
+  while (at < wkt.size()) {
+    blank();
+    if (at >= wkt.size()) break;
+    const char c = wkt[at];
+    if (c == ']' || c == ')') {
+      ++at;
+      break;
+    }
+    if (c == ',') {
+      ++at;
+    } else if (c == '"') {
+      std::string text;
+      for (++at; at < wkt.size(); ++at) {
+        if (wkt[at] != '"') text += wkt[at];
+        else if (at + 1 < wkt.size() && wkt[at + 1] == '"') text += wkt[++at];
+        else break;
+      }
+      ++at;
+      node.values.push_back(std::move(text));
+    } else {
+      // A number, an enumeration (NORTH) or a child keyword: a child when a bracket follows.
+      const std::size_t start = at;
+      while (at < wkt.size() && !std::strchr(",[]()\"", wkt[at]) && !std::isspace(static_cast<unsigned char>(wkt[at]))) ++at;
+      std::size_t next = at;
+      while (next < wkt.size() && std::isspace(static_cast<unsigned char>(wkt[next]))) ++next;
+      if (next < wkt.size() && (wkt[next] == '[' || wkt[next] == '(')) {
+        at = start;
+        node.children.push_back(read_wkt_node(wkt, at));
+      } else if (at == start) {
+        ++at;  // a stray quote or bracket: skip it
+      } else {
+        node.values.push_back(wkt.substr(start, at - start));
+      }
+    }
   }
-  if (best == std::string::npos) return {};
-  const std::size_t open = wkt.find('"', best), close = open == std::string::npos ? open : wkt.find('"', open + 1);
-  return close == std::string::npos ? std::string() : wkt.substr(open + 1, close - open - 1);
+  return node;
+}
+
+// The CRS a WKT string describes: its outermost node when that is a CRS keyword (WKT1 or
+// WKT2), the source CRS of a WKT2 BOUNDCRS; nullptr for anything else.
+const WktNode* wkt_crs(const WktNode& root) {
+  static const std::set<std::string> crs_keywords = {
+      "PROJCS", "PROJCRS", "PROJECTEDCRS", "GEOGCS", "GEOGCRS", "GEOGRAPHICCRS", "GEODCRS", "GEODETICCRS", "GEOCCS", "COMPD_CS",
+      "COMPOUNDCRS", "VERT_CS", "VERTCRS", "VERTICALCRS", "LOCAL_CS", "ENGCRS", "ENGINEERINGCRS"};
+  if (root.keyword == "BOUNDCRS") {
+    for (const WktNode& child : root.children)
+      if (child.keyword == "SOURCECRS" && !child.children.empty()) return wkt_crs(child.children.front());
+    return nullptr;
+  }
+  return crs_keywords.contains(root.keyword) ? &root : nullptr;
+}
+
+// The EPSG code of the CRS's own AUTHORITY["EPSG","code"] (WKT1) or ID["EPSG",code] (WKT2):
+// a direct child of the CRS node, not one of its unit, datum, axis or base CRS; 0 if none.
+int wkt_epsg(const WktNode& crs) {
+  for (const WktNode& child : crs.children) {
+    if ((child.keyword != "AUTHORITY" && child.keyword != "ID") || child.values.size() < 2) continue;
+    std::string authority = child.values[0];
+    for (char& c : authority) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    const std::string& code = child.values[1];
+    const bool digits = !code.empty() && code.size() <= 9 && std::all_of(code.begin(), code.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (authority == "EPSG" && digits) return std::stoi(code);
+  }
+  return 0;
 }
 
 }  // namespace
 
 int CoordinateSystem::epsg() const {
   if (!wkt.empty()) {
-    // The outermost authority closes the WKT, so it is the last one.
-    const std::size_t at = wkt.rfind("\"EPSG\"");
-    if (at == std::string::npos) return 0;
-    std::size_t i = at + 6;
-    while (i < wkt.size() && (wkt[i] == ',' || wkt[i] == ' ' || wkt[i] == '"')) ++i;
-    int code = 0;
-    for (; i < wkt.size() && wkt[i] >= '0' && wkt[i] <= '9' && code < 10000000; ++i) code = code * 10 + (wkt[i] - '0');
-    return code;
+    std::size_t at = 0;
+    const WktNode root = read_wkt_node(wkt, at);
+    const WktNode* crs = wkt_crs(root);
+    return crs != nullptr ? wkt_epsg(*crs) : 0;
   }
   const int projected = geokey_value(geokeys, 3072);
   return projected != 0 && projected != 32767 ? projected : geokey_value(geokeys, 2048);
@@ -56,9 +129,13 @@ std::string CoordinateSystem::describe() const {
   const int code = epsg();
   const std::string epsg_text = code > 0 && code != 32767 ? fmt::format("EPSG:{}", code) : std::string();
   if (wkt.empty()) return epsg_text.empty() ? std::string("GeoTIFF keys (user-defined)") : epsg_text + " (GeoTIFF keys)";
-  const std::string name = wkt_name(wkt);
-  if (name.empty()) return !epsg_text.empty() ? epsg_text : wkt.size() <= 60 ? wkt : std::string("WKT");
-  return epsg_text.empty() ? name : fmt::format("{} ({})", name, epsg_text);
+  std::size_t at = 0;
+  const WktNode root = read_wkt_node(wkt, at);
+  const WktNode* crs = wkt_crs(root);
+  const std::string name = crs != nullptr && !crs->values.empty() ? crs->values.front() : std::string();
+  // A WKT without a code of its own is still the CRS: say so rather than show nothing.
+  if (name.empty()) return !epsg_text.empty() ? epsg_text : fmt::format("{} (no EPSG code)", wkt.size() <= 60 ? wkt : std::string("WKT"));
+  return fmt::format("{} ({})", name, epsg_text.empty() ? "no EPSG code" : epsg_text);
 }
 
 void PointCloud::validate() const {

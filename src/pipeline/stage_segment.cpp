@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The segment stage: one integer label per point in the field "segment" (-1 unassigned), by
 // region growing, Euclidean clusters, RANSAC primitives or HK surface type.
+#include <cctype>
+#include <filesystem>
+
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
@@ -196,10 +199,11 @@ void run_boundary(StageRun& run) {
   for (std::size_t i = 0; i < o.outlines.size(); ++i) {
     const SegmentOutline& s = o.outlines[i];
     std::size_t h = 0;
+    const std::size_t first = lines.size();
     for (std::size_t k = 0; k < s.loops.size(); ++k) {
       lines.push_back(s.loops[k]);
       write.group.push_back(s.segment);
-      write.hole.push_back(s.hole[k]);
+      write.outer.push_back(s.outer[k] < 0 ? -1 : std::int64_t(first) + s.outer[k]);
       h += s.hole[k];
     }
     holes += h;
@@ -212,6 +216,12 @@ void run_boundary(StageRun& run) {
   rec.add(outline_totals(), totals);
   const std::string& path = a.text("outlines");
   if (!path.empty()) write_polylines(path, lines, write);
+  // GeoJSON names a CRS by its EPSG code: say so when the input's CRS has none (a WKT of its
+  // own making) rather than leave the outlines' CRS unnamed silently.
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (write.crs.empty() && !cloud.crs.empty() && (ext == ".geojson" || ext == ".json"))
+    rec.warnings.push_back(fmt::format("the GeoJSON outlines name no CRS: the input's CRS is {} (give one with --crs)", cloud.crs.describe()));
   rec.summary = fmt::format("boundary: {} of {} on the boundary; {} outlines ({} loops, {} holes) of planar segments from the {}, area {:.4g}, length {:.4g}{}",
                             b.count, plural(cloud.size(), "point"), o.outlines.size(), lines.size(), holes, source, area, length,
                             path.empty() ? "" : ", written to " + path);

@@ -240,9 +240,10 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
     out.normal = normal;
     for (std::size_t k = 0; k < order.size(); ++k) {
       const std::vector<Eigen::Vector2d>& l = loops2[order[k]];
-      bool is_hole = false;
-      for (std::size_t m = 0; m < k && !is_hole; ++m)
-        if (!out.hole[m]) is_hole = inside(l.front(), loops2[order[m]]);
+      std::int32_t around = -1;
+      for (std::size_t m = 0; m < k && around < 0; ++m)
+        if (!out.hole[m] && inside(l.front(), loops2[order[m]])) around = static_cast<std::int32_t>(m);
+      const bool is_hole = around >= 0;
       const std::vector<Eigen::Vector2d> moved = offset_loop(l, params.offset_in_spacings * spacing, !is_hole);
       Polyline line;
       line.closed = true;
@@ -252,6 +253,7 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
       out.perimeter += line.length();
       out.loops.push_back(std::move(line));
       out.hole.push_back(is_hole);
+      out.outer.push_back(around);
     }
     if (!out.loops.empty()) result.outlines.push_back(std::move(out));
   }

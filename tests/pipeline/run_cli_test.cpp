@@ -328,6 +328,25 @@ TEST_F(RunCli, CoordinateSystemIsShownByInfoAndKeptThroughAStageChain) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::contains(test::read_bytes(path("rim.geojson")), "EPSG:32633"));
   EXPECT_EQ(read_point_cloud(path("rim.las")).cloud.crs.wkt, cloud.crs.wkt);
+
+  // A WKT whose only authority is its unit's has no EPSG code: info says so and keeps the WKT;
+  // the GeoJSON outlines name no CRS, and the stage warns.
+  plate.crs.wkt = R"w(PROJCS["site grid (ftUS)",GEOGCS["NAD83"],UNIT["foot",0.3048,AUTHORITY["EPSG","9002"]]])w";
+  write_point_cloud(path("feet.las"), plate);
+  r = test::run_cli("info " + path("feet.las"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.out, "crs          site grid (ftUS) (no EPSG code)\n")) << r.out;
+  r = test::run_cli("info " + path("feet.las") + " --json", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json feet = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(feet["crs"].contains("epsg")) << feet["crs"];
+  EXPECT_EQ(feet["crs"]["name"], "site grid (ftUS) (no EPSG code)");
+  EXPECT_EQ(feet["crs"]["wkt"], plate.crs.wkt);
+  r = test::run_cli("boundary " + path("feet.las") + " " + path("feet_rim.las") + " --outlines " + path("feet.geojson"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "warning: the GeoJSON outlines name no CRS: the input's CRS is site grid (ftUS) (no EPSG code)")) << r.err;
+  EXPECT_FALSE(nlohmann::json::parse(test::read_bytes(path("feet.geojson"))).contains("crs"));
+  EXPECT_EQ(read_point_cloud(path("feet_rim.las")).cloud.crs.wkt, plate.crs.wkt);
 }
 
 }  // namespace

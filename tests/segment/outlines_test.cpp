@@ -39,6 +39,7 @@ void check_square_with_hole(const Eigen::Vector3d& shift) {
   ASSERT_EQ(o.loops.size(), 2u);
   EXPECT_EQ(o.hole[0], 0);
   EXPECT_EQ(o.hole[1], 1);
+  EXPECT_EQ(o.outer, (std::vector<std::int32_t>{-1, 0}));
   EXPECT_NEAR(o.loops[0].length(), 8.0, 0.02 * 8.0);
   EXPECT_NEAR(o.loops[1].length(), 2 * M_PI * 0.4, 0.02 * 2 * M_PI * 0.4);
   EXPECT_NEAR(o.area, 4.0 - M_PI * 0.16, 0.02 * (4.0 - M_PI * 0.16));
@@ -47,6 +48,27 @@ void check_square_with_hole(const Eigen::Vector3d& shift) {
 TEST(OutlinePlanarSegments, SquareWithARoundHoleHasOneOuterAndOneInnerLoop) { check_square_with_hole(Eigen::Vector3d::Zero()); }
 
 TEST(OutlinePlanarSegments, SameFarFromTheOrigin) { check_square_with_hole(Eigen::Vector3d(1e6, -1e6, 1e6)); }
+
+TEST(OutlinePlanarSegments, AHoleNamesTheOuterLoopAroundIt) {
+  // One planar segment in two pieces: a plain square (area 4) and a smaller rectangle (area
+  // 3.24) with a round hole. Loops come largest first, so the hole's outer loop is the second.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  PointCloud cloud;
+  while (cloud.positions.size() < 40000) {
+    const double x = u(rng), y = u(rng);
+    cloud.positions.emplace_back(x, y, 0.0);
+    const Eigen::Vector2d q(3.9 + 0.9 * x, 0.9 * y);
+    if ((q - Eigen::Vector2d(3.9, 0.0)).norm() > 0.4) cloud.positions.emplace_back(q.x(), q.y(), 0.0);
+  }
+  const OutlineResult r = outline_planar_segments(cloud, std::vector<std::int32_t>(cloud.size(), 0));
+  ASSERT_EQ(r.outlines.size(), 1u);
+  const SegmentOutline& o = r.outlines[0];
+  ASSERT_EQ(o.loops.size(), 3u);
+  EXPECT_EQ(o.hole, (std::vector<std::uint8_t>{0, 0, 1}));
+  EXPECT_EQ(o.outer, (std::vector<std::int32_t>{-1, -1, 1}));
+  EXPECT_NEAR(o.loops[1].points.front().x(), 3.0, 0.05);  // the rectangle's loop
+}
 
 // Outlines of the square with a hole agree loop by loop within `tolerance` (relative).
 void expect_same_outline(const OutlineResult& a, const OutlineResult& b, double tolerance) {

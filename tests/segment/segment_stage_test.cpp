@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The segment stage end to end through the command line.
+#include <algorithm>
+#include <cmath>
 #include <map>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "pointsurf/io/io.h"
 #include "support/cli_run.h"
@@ -101,9 +104,22 @@ TEST(BoundaryStage, MarksTheRimAndWritesOutlines) {
   }
   EXPECT_GT(double(recalled), 0.5 * double(rim));
   EXPECT_GT(double(both), 0.8 * double(marked));  // random samples leave wide gaps at ~0.5 % of interior points
-  const std::string geo = test::read_bytes(lines);
-  EXPECT_TRUE(test::contains(geo, "EPSG:25832"));
-  EXPECT_TRUE(test::contains(geo, "LineString"));
+  // The plate's outline is one closed loop: a Polygon, counter-clockwise, around the square.
+  const nlohmann::json geo = nlohmann::json::parse(test::read_bytes(lines));
+  EXPECT_EQ(geo["crs"]["properties"]["name"], "EPSG:25832");
+  ASSERT_EQ(geo["features"].size(), 1u);
+  EXPECT_EQ(geo["features"][0]["geometry"]["type"], "Polygon");
+  const nlohmann::json& ring = geo["features"][0]["geometry"]["coordinates"][0];
+  ASSERT_GE(ring.size(), 5u);
+  EXPECT_EQ(ring.front(), ring.back());
+  double twice_area = 0.0, reach = 0.0;
+  for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+    const double x0 = ring[i][0], y0 = ring[i][1], x1 = ring[i + 1][0], y1 = ring[i + 1][1];
+    twice_area += x0 * y1 - x1 * y0;
+    reach = std::max(reach, std::max(std::abs(x0), std::abs(y0)));
+  }
+  EXPECT_NEAR(0.5 * twice_area, 4.0, 0.2);  // positive: counter-clockwise
+  EXPECT_NEAR(reach, 1.0, 0.05);
   const test::RunResult bad = test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + (dir / "x.dxf").string(), dir);
   EXPECT_NE(bad.exit_code, 0);
 }

@@ -24,10 +24,13 @@ struct CoordinateSystem {
   std::vector<std::uint8_t> geokeys, geodouble, geoascii;
 
   bool empty() const noexcept { return wkt.empty() && geokeys.empty(); }
-  /// One short line: the WKT's CRS name (and EPSG code when it names one), else the EPSG code
-  /// of the GeoTIFF ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048); "" when empty.
+  /// One short line: the WKT's CRS name and its EPSG code, "NAME (no EPSG code)" when the WKT
+  /// names none of its own; else the EPSG code of the GeoTIFF ProjectedCSTypeGeoKey (3072) or
+  /// GeographicTypeGeoKey (2048); "" when empty.
   std::string describe() const;
-  /// The EPSG code named by the WKT's outermost authority or by the GeoTIFF keys; 0 if none.
+  /// The CRS's own EPSG code: the AUTHORITY (WKT1) or ID (WKT2) that is a direct child of the
+  /// WKT's outermost CRS node (of a BOUNDCRS's source CRS), never one of its unit, datum or base
+  /// CRS; else the GeoTIFF keys' code; 0 if none.
   int epsg() const;
 };
 

@@ -40,6 +40,8 @@ struct SegmentOutline {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // of the segment's plane
   std::vector<Polyline> loops;                     // closed, by enclosed area, largest first
   std::vector<std::uint8_t> hole;                  // per loop: 1 when it lies inside another
+  std::vector<std::int32_t> outer;                 // per loop: for a hole, the index of the loop
+                                                   // it lies inside; -1 for an outer loop
   double area = 0.0;                               // outer loops' areas minus the holes', units^2
   double perimeter = 0.0;                          // all loops' lengths, cloud units
 };
