@@ -189,6 +189,7 @@ void run_normals(StageRun& run) {
   } else if (orient.method != Orientation::None) {
     const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
     rec.add(OrientResult::results(orient.method), r);
+    rec.warnings.insert(rec.warnings.end(), r.warnings.begin(), r.warnings.end());
     oriented_text = orient.method == Orientation::Mst ? fmt::format("oriented mst ({}, {} flipped)", plural(r.components, "component"), r.flipped)
                                                       : fmt::format("oriented by {} ({} flipped)", orientation_name(orient.method), r.flipped);
   }
@@ -214,8 +215,9 @@ void estimate_missing_normals_impl(StageRun& run, int k, const ProgressCallback&
   params.k = k;
   params.keep_variation = false;
   estimate_normals(cloud, params, &tree, sub_progress(progress, 0.0, 0.5));
-  orient_normals(cloud, {}, &tree, sub_progress(progress, 0.5, 1.0));
+  const OrientResult oriented = orient_normals(cloud, {}, &tree, sub_progress(progress, 0.5, 1.0));
   run.record.warnings.push_back(fmt::format("no normals in the input; estimated (PCA, k = {}) and MST-oriented", k));
+  run.record.warnings.insert(run.record.warnings.end(), oriented.warnings.begin(), oriented.warnings.end());
 }
 
 // What curvature reports besides CurvatureScale and CurvatureResult.

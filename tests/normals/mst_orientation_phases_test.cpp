@@ -314,6 +314,43 @@ TEST(MstOrientationPhases, DownwardPlaneIsTerrainAndTurnedUp) {
   EXPECT_TRUE(mst.has_terrain());
 }
 
+// Points of LAS class 2 decide: on an outward sphere whose bottom cap is labelled ground, the
+// ground must face up, so the whole component is reversed, and it counts as terrain.
+TEST(MstOrientationPhases, ClassifiedGroundDecidesTheSign) {
+  PointCloud cloud = sphere(1.0);
+  std::vector<double>& classes = cloud.fields.add("classification", cloud.size(), ScalarType::UInt8).values;
+  for (std::size_t i = 0; i < cloud.size(); ++i) classes[i] = cloud.positions[i].z() < -0.5 ? 2.0 : 1.0;
+  const OrientParams params;
+  MstOrientation mst(cloud, params, nullptr);
+  one_component(mst);
+  mst.tally_votes();
+  EXPECT_LT(mst.votes.ground_sum[0], 0.0);
+  EXPECT_NEAR(-mst.votes.ground_sum[0], mst.votes.ground_absolute[0], 1e-9);
+  mst.decide_component_signs();
+  EXPECT_EQ(mst.terrain, (std::vector<std::uint8_t>{1}));
+  EXPECT_EQ(mst.flip_component, (std::vector<std::uint8_t>{1}));
+  EXPECT_DOUBLE_EQ(mst.agreement[0], 1.0);
+}
+
+// A closed sphere has a top and a bottom over its columns: not open, so not terrain, though
+// its extent in z is small against nothing; a plane has one layer everywhere.
+TEST(MstOrientationPhases, ColumnsTellOpenSheetsFromClosedSurfaces) {
+  const PointCloud ball = sphere(1.0, 2000);
+  const OrientParams params;
+  MstOrientation closed(ball, params, nullptr);
+  one_component(closed);
+  closed.tally_votes();
+  ASSERT_GT(closed.votes.cells[0], 0u);
+  EXPECT_LT(double(closed.votes.single_layer[0]), 0.15 * double(closed.votes.cells[0]));
+  const PointCloud plane = grid(kUp);
+  MstOrientation open(plane, params, nullptr);
+  one_component(open);
+  open.tally_votes();
+  ASSERT_GT(open.votes.cells[0], 0u);
+  EXPECT_EQ(open.votes.single_layer[0], open.votes.cells[0]);
+  EXPECT_DOUBLE_EQ(open.votes.bottom_sum[0], double(open.votes.columns[0]));
+}
+
 TEST(MstOrientationPhases, ComponentSignsToggleOnlyPointsWithADirection) {
   PointCloud cloud = line({0.0, 1.0, 2.0, 10.0});
   cloud.normals[1] = Vector3d::Zero();

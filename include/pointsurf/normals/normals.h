@@ -3,6 +3,8 @@
 // Normal estimation by PCA of local neighbourhoods and consistent orientation.
 #include <optional>
 #include <span>
+#include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -77,6 +79,7 @@ struct OrientParams {
 struct OrientResult {
   std::size_t components = 0;   // connected components of the graph, after joining (Mst)
   std::size_t flipped = 0;      // normals whose sign changed
+  std::vector<std::string> warnings;  // Mst: a close vote on a component's sign (see orient_normals)
 
   /// The reported members (core/results.h) of an orientation by `method`: the components with
   /// Mst only.
@@ -89,14 +92,26 @@ struct OrientResult {
 /// reaches stay apart as separate objects), with edge weights 1 - |ni·nj| + 0.3 x length in kNN
 /// reaches (smooth paths first, short steps among them), takes its minimum spanning forest,
 /// and propagates the sign along it from one seed per connected component. Each
-/// component's global sign is then decided by all its points:
-///  - terrain-like components (mostly horizontal surfaces, mean |n_z| >= 0.7, forming an open
-///    sheet) face up (+z), the convention of aerial and ground LiDAR; inside them, smooth
-///    regions cut at creases (> 45 degrees) that face down are turned up (roofs joined to the
-///    ground only through walls);
+/// component's global sign is then decided by all its points, in this order:
+///  - classified: a component with points of LAS class 2 in a field "classification" is
+///    terrain, and its ground points face up (the sum of their n_z is positive);
+///  - terrain-like: a mostly horizontal open sheet (mean |n_z| >= 0.7, mean unit normal at
+///    least 0.5 long), or a component that is open, level and low whatever stands on it: of
+///    its xy columns (2 kNN reaches wide) holding two points or more, at least 15 % hold a
+///    single layer (closed surfaces: a top and a bottom over each), the lowest points of the
+///    columns have mean |n_z| >= 0.6, and its z extent is at most half its larger xy extent.
+///    Terrain faces up (+z), the convention of aerial and ground LiDAR: the lowest point of
+///    each column (the ground, under trees, eaves and bridges) votes with its n_z. Inside
+///    terrain, smooth level regions (cut at creases > 45 degrees and where a normal within 45
+///    degrees of vertical meets one that is not) that face down are turned up (roofs joined
+///    to the ground only through walls or trees);
 ///  - other components face outward: sum n·(p - centroid) > 0, which holds for closed surfaces
 ///    and for single views of convex objects.
-/// For a scan whose sensor position is known, Viewpoint is the safer choice.
+/// A vote whose winning side holds less than 60 % of its weight (|n_z| for up, |n·(p - c)|
+/// for outward) on a component of at least 1 % of the points is close: OrientResult::warnings
+/// says so (a single vertical wall, with no inside and no up, scores 50 %).
+/// For a scan whose sensor position is known, Viewpoint is the safer choice (the positions of
+/// an E57 file's scanners are not kept in the cloud).
 /// Memory O(k N), no dense structure; graph construction parallel. Reuses `tree` if given
 /// (built over `cloud.positions`). Throws UsageError on missing normals or bad parameters;
 /// CancelledError when `progress` returns false.

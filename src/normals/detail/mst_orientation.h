@@ -64,6 +64,15 @@ public:
     std::vector<double> horizontal_sum;      // sum of |n_z|
     std::vector<Eigen::Vector3d> normal_sum; // sum of unit normals
     std::vector<std::size_t> directed;       // points with a normal
+    // Columns: the component's points binned on an xy grid (tally_columns).
+    std::vector<std::size_t> columns;        // occupied columns
+    std::vector<std::size_t> cells;          // columns holding at least two points
+    std::vector<std::size_t> single_layer;   // of those, the ones whose points span at most the column's width in z
+    std::vector<double> bottom_sum;          // sum of n_z of the lowest point of each cell
+    std::vector<double> bottom_absolute;     // sum of |n_z| of those points
+    std::vector<double> ground_sum;          // sum of n_z over points of LAS class 2 (field "classification")
+    std::vector<double> ground_absolute;     // sum of |n_z| over those points
+    std::vector<Eigen::Vector3d> low, high;  // bounding box, relative to origin
   };
 
   /// Checks the cloud's size (non-empty) against the graph's limits and builds a kd-tree when
@@ -95,10 +104,13 @@ public:
   /// Reads seed and adjacency; produces flip: each seed facing away from its centroid, each
   /// child agreeing with its nearest ancestor that has a direction.
   void propagate_from_seeds();
-  /// Reads flip, component and centroid; produces votes.
+  /// Reads flip, component, centroid and the cloud's field "classification"; produces votes.
   void tally_votes();
-  /// Reads votes; produces terrain (open, mostly horizontal sheets) and flip_component (the
-  /// components whose sign the vote reverses).
+  /// Reads component, flip and votes' boxes (tally_votes calls it); produces votes' columns.
+  void tally_columns();
+  /// Reads votes; produces terrain (classified ground, or open, level and low sheets: see
+  /// orient_normals.cpp), flip_component (the components whose sign the vote reverses) and
+  /// agreement (the winning side's share of the deciding vote, 0.5..1; 1 when undecided).
   void decide_component_signs();
   /// Reads flip_component; toggles flip on those components' points with a direction.
   void apply_component_signs();
@@ -138,6 +150,7 @@ public:
   Votes votes;                                // tally_votes
   std::vector<std::uint8_t> flip_component;   // decide_component_signs
   std::vector<std::uint8_t> terrain;
+  std::vector<double> agreement;
   DisjointSets regions;                       // cut_at_creases
 
 private:
