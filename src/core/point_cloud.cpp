@@ -35,9 +35,13 @@ struct WktNode {
   std::vector<WktNode> children;
 };
 
+// Deeper nesting than any CRS has (a compound of projected CRSs nests about 6 deep) is not
+// followed: the rest is dropped, so a crafted WKT cannot exhaust the stack.
+constexpr int kMaxWktDepth = 32;
+
 // Reads the node that starts at `at` (after blanks) and moves `at` past it. A node that ends
 // early (a truncated WKT) keeps what was read.
-WktNode read_wkt_node(const std::string& wkt, std::size_t& at) {
+WktNode read_wkt_node(const std::string& wkt, std::size_t& at, int depth = 0) {
   auto blank = [&] { while (at < wkt.size() && std::isspace(static_cast<unsigned char>(wkt[at]))) ++at; };
   WktNode node;
   blank();
@@ -71,8 +75,12 @@ WktNode read_wkt_node(const std::string& wkt, std::size_t& at) {
       std::size_t next = at;
       while (next < wkt.size() && std::isspace(static_cast<unsigned char>(wkt[next]))) ++next;
       if (next < wkt.size() && (wkt[next] == '[' || wkt[next] == '(')) {
+        if (depth >= kMaxWktDepth) {
+          at = wkt.size();
+          break;
+        }
         at = start;
-        node.children.push_back(read_wkt_node(wkt, at));
+        node.children.push_back(read_wkt_node(wkt, at, depth + 1));
       } else if (at == start) {
         ++at;  // a stray quote or bracket: skip it
       } else {

@@ -132,6 +132,21 @@ TEST(CoordinateSystem, CompoundCrsIsItsOwnCodeNotAComponents) {
   EXPECT_EQ(unnamed.describe(), "UTM 32N + NN2000 (no EPSG code)");
 }
 
+TEST(CoordinateSystem, ADeeplyNestedWktIsReadWithoutRecursingWithoutEnd) {
+  // The largest WKT a LAS record holds (64 KiB), all opening brackets: no crash, no code, and a
+  // real CRS with its own code after a deep but legal nesting still reads.
+  std::string deep;
+  while (deep.size() + 2 <= 65535) deep += "A[";
+  EXPECT_EQ(wkt_crs_of(deep).epsg(), 0);
+  EXPECT_FALSE(wkt_crs_of(deep).describe().empty());
+  std::string nested = "PROJCS[\"n\",";
+  for (int i = 0; i < 20; ++i) nested += "X[";
+  nested += "1";
+  for (int i = 0; i < 20; ++i) nested += "]";
+  nested += ",AUTHORITY[\"EPSG\",\"25832\"]]";
+  EXPECT_EQ(wkt_crs_of(nested).epsg(), 25832);
+}
+
 TEST(CoordinateSystem, QuotedNamesMayHoldBracketsAndQuotes) {
   const CoordinateSystem odd = wkt_crs_of(
       R"w(PROJCS["grid ]), AUTHORITY[EPSG,1] (",GEOGCS["WGS 84",AUTHORITY["EPSG","4326"]],UNIT["metre",1,AUTHORITY["EPSG","9001"]],)w"
