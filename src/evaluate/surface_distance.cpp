@@ -53,16 +53,19 @@ std::vector<Vector3d> sample_mesh_surface(const TriangleMesh& mesh, std::size_t 
 }
 
 std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, const SurfaceView& to, bool exact, std::size_t samples,
-                                              std::uint64_t seed, const TriangleBvh* bvh) {
+                                              std::uint64_t seed, const TriangleBvh* bvh, const KdTree* tree_over_points) {
   std::vector<double> out(points.size(), 0.0);
   const std::vector<std::uint32_t> order = points.size() > 10000 ? morton_order(points) : std::vector<std::uint32_t>{};
   if (to.is_mesh() && exact) {
     std::optional<TriangleBvh> own;
     if (bvh == nullptr) bvh = &own.emplace(to.points, to.triangles);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::optional<Vector3d> previous;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
         const std::size_t i = order.empty() ? k : order[k];
-        out[i] = std::sqrt(bvh->closest(points[i]).squared_distance);
+        const ClosestPoint c = bvh->closest_near(points[i], previous);
+        previous = c.point;
+        out[i] = std::sqrt(c.squared_distance);
       }
     });
     return out;
@@ -74,10 +77,12 @@ std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, 
     targets = sampled;
   }
   if (targets.empty()) throw InputError("the surface measured to has no points");
-  const KdTree tree(targets);
+  std::optional<KdTree> own_tree;
+  const KdTree& tree = tree_over_points != nullptr && sampled.empty() ? *tree_over_points : own_tree.emplace(targets);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<Neighbor> nn;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::size_t i = order.empty() ? k : order[k];
       tree.knn(points[i], 1, nn);
       out[i] = std::sqrt(nn.front().squared_distance);
     }

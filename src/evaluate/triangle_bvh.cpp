@@ -258,6 +258,21 @@ ClosestPoint TriangleBvh::closest(const Vector3d& query, double max_distance) co
   return best;
 }
 
+ClosestPoint TriangleBvh::closest_near(const Vector3d& query, const std::optional<Vector3d>& on_mesh, double max_distance) const {
+  // A point of the mesh at distance b from the query bounds the answer by b, so boxes farther
+  // than b are skipped from the start. They hold no closest triangle, and the walk visits the
+  // rest in the same order, so the first closest triangle found is the same. The bound is
+  // widened by 1e-9 against rounding; should nothing lie within it, the plain walk answers.
+  if (on_mesh) {
+    const double bound = (query - *on_mesh).norm() * (1.0 + 1e-9) + 1e-300;
+    if (bound < max_distance) {
+      const ClosestPoint c = closest(query, bound);
+      if (c.found()) return c;
+    }
+  }
+  return closest(query, max_distance);
+}
+
 double TriangleBvh::winding_number(const Vector3d& query, double accuracy) const {
   if (nodes_.empty()) return 0.0;
   std::call_once(dipoles_once_, [this] {

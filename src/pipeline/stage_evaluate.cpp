@@ -2,11 +2,16 @@
 // The evaluate stage (signed deviation of a reference from a mesh, its statistics, Chamfer and
 // Hausdorff, the mesh's quality) and the quality stage (the quality block alone).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <span>
 #include <stdexcept>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
@@ -18,6 +23,7 @@
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/evaluate/triangle_bvh.h"
 #include "pointsurf/pipeline/context.h"
+#include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::detail {
 namespace {
@@ -171,6 +177,25 @@ double box_gap(const BoundingBox& a, const BoundingBox& b) {
   return gap.norm();
 }
 
+// Per point: whether it lies exactly at a vertex used by a triangle of `mesh` (sorted vertex
+// positions searched in parallel; -0 equals +0, as a distance test would have it).
+std::vector<char> at_used_vertex(const TriangleMesh& mesh, std::span<const Vector3d> points) {
+  std::vector<char> is_used(mesh.vertices.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) is_used[static_cast<std::size_t>(t[c])] = 1;
+  using Key = std::array<double, 3>;
+  const auto key = [](const Vector3d& p) { return Key{p.x() + 0.0, p.y() + 0.0, p.z() + 0.0}; };
+  std::vector<Key> used;
+  for (std::size_t v = 0; v < is_used.size(); ++v)
+    if (is_used[v]) used.push_back(key(mesh.vertices.positions[v]));
+  tbb::parallel_sort(used.begin(), used.end());
+  std::vector<char> out(points.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = std::binary_search(used.begin(), used.end(), key(points[i])) ? 1 : 0;
+  });
+  return out;
+}
+
 // The best fit of the reference onto the mesh, recorded under align/.
 RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const std::string& ref_tag) {
   const StageArgs& a = run.args;
@@ -248,20 +273,11 @@ void run_evaluate(StageRun& run) {
 
   // The points that did not become vertices of the mesh (removed by cleaning or
   // simplification, or left out by the reconstruction): their deviation on its own.
-  std::vector<Vector3d> used;
-  {
-    std::vector<char> is_used(mesh.vertices.positions.size(), 0);
-    for (const Triangle& t : mesh.triangles)
-      for (int c = 0; c < 3; ++c) is_used[static_cast<std::size_t>(t[c])] = 1;
-    for (std::size_t v = 0; v < mesh.vertices.positions.size(); ++v)
-      if (is_used[v]) used.push_back(mesh.vertices.positions[v]);
-  }
-  const KdTree vertex_tree(used);
   std::vector<double> unused;
-  std::vector<Neighbor> nn;
-  for (std::size_t i = 0; i < ref.cloud().size(); ++i) {
-    vertex_tree.knn(ref.cloud().positions[i], 1, nn);
-    if (nn.empty() || nn.front().squared_distance > 0.0) unused.push_back(dist.distances[i]);
+  {
+    const std::vector<char> is_vertex = at_used_vertex(mesh, ref.cloud().positions);
+    for (std::size_t i = 0; i < is_vertex.size(); ++i)
+      if (!is_vertex[i]) unused.push_back(dist.distances[i]);
   }
   counts.points_not_vertices = unused.size();
   rec.add_counts(not_vertices_counts(), counts);
@@ -284,7 +300,10 @@ void run_evaluate(StageRun& run) {
   const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
   const SurfaceView ref_view{measured, ref.mesh.triangles};
-  const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);
+  // The context's kd-tree over the reference serves unless the points were moved.
+  const KdTree* ref_tree = fit || ref.is_mesh ? nullptr : &run.context.tree(ref_tag);
+  const std::vector<double> back =
+      on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view, sd.exact, sd.samples, sd.seed, nullptr, ref_tree);
   double back_sum = 0.0, back_max = 0.0;
   for (double d : back) {
     back_sum += d;

@@ -51,13 +51,16 @@ struct SurfaceDistanceResult {
 };
 
 class TriangleBvh;
+class KdTree;
 
 /// Nearest distances from `points` to `to` (exact to the triangle for a mesh when `exact`,
 /// through `bvh` when it is a hierarchy over `to` already built; else through `samples` seeded
-/// samples of it, or its vertices when samples is 0). Queries run in Morton order. Parallel;
-/// thread-safe.
+/// samples of it, or its vertices when samples is 0). A cloud `to` is searched through
+/// `tree_over_points` when it is a kd-tree over to.points already built. Queries run in Morton
+/// order. Parallel; thread-safe.
 std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, const SurfaceView& to, bool exact = true,
-                                              std::size_t samples = 100000, std::uint64_t seed = 3, const TriangleBvh* bvh = nullptr);
+                                              std::size_t samples = 100000, std::uint64_t seed = 3, const TriangleBvh* bvh = nullptr,
+                                              const KdTree* tree_over_points = nullptr);
 
 /// Chamfer and Hausdorff distances between `a` and `b`. Throws InputError when a side is empty.
 SurfaceDistanceResult surface_distance(const SurfaceView& a, const SurfaceView& b, const SurfaceDistanceParams& params = {});
