@@ -14,7 +14,7 @@ namespace {
 
 // Equal bins over [lo, hi] (widened around a single value); values outside go to the end bins.
 void fill_histogram(std::span<const double> values, std::size_t bins, double lo, double hi, std::vector<double>& edges,
-                    std::vector<std::size_t>& counts) {
+                    std::vector<std::size_t>& counts, std::size_t* below = nullptr, std::size_t* above = nullptr) {
   if (!(hi > lo)) {
     const double half = lo != 0.0 ? 0.5 * std::abs(lo) : 0.5;
     lo -= half;
@@ -26,6 +26,8 @@ void fill_histogram(std::span<const double> values, std::size_t bins, double lo,
   for (double v : values) {
     const double f = (v - lo) / (hi - lo) * static_cast<double>(bins);
     counts[static_cast<std::size_t>(std::clamp(f, 0.0, static_cast<double>(bins - 1)))]++;
+    if (below && v < lo) ++*below;
+    if (above && v > hi) ++*above;
   }
 }
 
@@ -125,13 +127,31 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
   s.mean_positive = s.positive > 0 ? sum_pos / static_cast<double>(s.positive) : 0.0;
   s.mean_negative = s.negative > 0 ? sum_neg / static_cast<double>(s.negative) : 0.0;
   s.within_tolerance = params.tolerance > 0.0 ? static_cast<double>(within) / n : 0.0;
+  if (params.tolerance > 0.0) {
+    std::size_t above = 0, below = 0;
+    for (double d : values) {
+      above += d > params.tolerance ? 1 : 0;
+      below += d < -params.tolerance ? 1 : 0;
+    }
+    s.above_tolerance = static_cast<double>(above) / n;
+    s.below_tolerance = static_cast<double>(below) / n;
+    s.out_of_tolerance = static_cast<double>(above + below) / n;
+  }
+  {
+    std::vector<double> magnitudes(values.size());
+    std::transform(values.begin(), values.end(), magnitudes.begin(), [](double d) { return std::abs(d); });
+    std::sort(magnitudes.begin(), magnitudes.end());
+    s.abs_p95 = percentile_of_sorted(magnitudes, 95.0);
+    s.abs_p99 = percentile_of_sorted(magnitudes, 99.0);
+  }
 
   std::sort(values.begin(), values.end());
   for (double p : params.percentiles) s.percentile_values.push_back(percentile_of_sorted(values, p));
   double lo = params.histogram_min, hi = params.histogram_max;
   if (!(hi > lo)) {
-    lo = values.front();
-    hi = values.back();
+    // The robust range, widened to show the tolerance band, within the data's extremes.
+    lo = std::max(values.front(), std::min(percentile_of_sorted(values, 0.5), -params.tolerance));
+    hi = std::min(values.back(), std::max(percentile_of_sorted(values, 99.5), params.tolerance));
   }
   std::size_t bins = params.bins;
   if (bins == 0) {
@@ -141,7 +161,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
     const double wanted = width > 0.0 ? std::ceil((hi - lo) / width) : 10.0;
     bins = static_cast<std::size_t>(std::clamp(std::isfinite(wanted) ? wanted : 10.0, 10.0, 200.0));
   }
-  fill_histogram(values, bins, lo, hi, s.histogram_edges, s.histogram_counts);
+  fill_histogram(values, bins, lo, hi, s.histogram_edges, s.histogram_counts, &s.histogram_below, &s.histogram_above);
   return s;
 }
 
@@ -165,6 +185,16 @@ const ResultTable<DeviationStats>& DeviationStats::results() {
     const std::string u = "cloud units";
     ResultTable<D> t;
     t.count("count", &D::count, "Finite deviations summarised").in_headline();
+    // What a reader looks at first: how much is out of tolerance, then robust and extreme sizes.
+    t.number("out_of_tolerance", &D::out_of_tolerance, "Share (0..1) of deviations beyond the tolerance, either side (0 without one)")
+        .lower_is_better()
+        .in_headline();
+    t.number("above_tolerance", &D::above_tolerance, "Share (0..1) of deviations above +tolerance").lower_is_better().in_headline();
+    t.number("below_tolerance", &D::below_tolerance, "Share (0..1) of deviations below -tolerance").lower_is_better().in_headline();
+    t.number("tolerance", &D::tolerance, "The tolerance band, as given").with_unit(u).in_headline();
+    t.number("within_tolerance", &D::within_tolerance, "Share (0..1) of deviations within the tolerance").higher_is_better().in_headline();
+    t.number("abs_p95", &D::abs_p95, "95th percentile of |deviation|: robust beside the maxima").with_unit(u).lower_is_better().in_headline();
+    t.number("abs_p99", &D::abs_p99, "99th percentile of |deviation|: robust beside the maxima").with_unit(u).lower_is_better().in_headline();
     t.number("max_positive", &D::max_positive, "Largest deviation above the surface (0 when none)").with_unit(u).lower_is_better().in_headline();
     t.number("max_negative", &D::max_negative, "Most negative deviation, below the surface (0 when none)").with_unit(u).higher_is_better().in_headline();
     t.number("mean_positive", &D::mean_positive, "Mean of the deviations above the surface").with_unit(u).lower_is_better().in_headline();
@@ -173,8 +203,6 @@ const ResultTable<DeviationStats>& DeviationStats::results() {
     t.number("mean_absolute", &D::mean_absolute, "Mean absolute deviation").with_unit(u).lower_is_better().in_headline();
     t.number("rms", &D::rms, "Root mean square deviation").with_unit(u).lower_is_better().in_headline();
     t.number("std", &D::std, "Standard deviation about the mean").with_unit(u).lower_is_better().in_headline();
-    t.number("tolerance", &D::tolerance, "The tolerance band, as given").with_unit(u).in_headline();
-    t.number("within_tolerance", &D::within_tolerance, "Share (0..1) of deviations within the tolerance").higher_is_better().in_headline();
     t.count("positive", &D::positive, "Deviations above the surface");
     t.count("negative", &D::negative, "Deviations below the surface");
     t.count("ignored", &D::ignored, "Non-finite deviations left out (beyond a distance limit)").lower_is_better();
@@ -193,6 +221,8 @@ const ResultTable<DeviationStats>& DeviationStats::results() {
         .with_unit(u);
     t.numbers("histogram/edges", &D::histogram_edges, "Histogram bin edges (bins + 1)").with_unit(u);
     t.numbers("histogram/counts", &D::histogram_counts, "Deviations per bin; values outside the edges in the end bins");
+    t.count("histogram/below", &D::histogram_below, "Deviations below the first edge, counted in the first bin");
+    t.count("histogram/above", &D::histogram_above, "Deviations above the last edge, counted in the last bin");
     return t;
   }();
   return table;

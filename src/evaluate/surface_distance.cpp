@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -87,6 +88,44 @@ std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, 
       out[i] = std::sqrt(nn.front().squared_distance);
     }
   });
+  return out;
+}
+
+std::vector<double> vertex_deviation_from_points(const TriangleMesh& mesh, std::span<const Vector3d> points, std::span<const double> deviations,
+                                                 const TriangleBvh* bvh) {
+  if (points.size() != deviations.size())
+    throw InputError(fmt::format("vertex_deviation_from_points: {} deviations for {} points", deviations.size(), points.size()));
+  const std::size_t nv = mesh.vertices.positions.size();
+  std::vector<double> out(nv, std::numeric_limits<double>::quiet_NaN());
+  if (mesh.triangles.empty() || points.empty()) return out;
+  std::optional<TriangleBvh> own;
+  if (bvh == nullptr) bvh = &own.emplace(mesh);
+  std::vector<int> triangle(points.size(), -1);
+  const std::vector<std::uint32_t> order = points.size() > 10000 ? morton_order(points) : std::vector<std::uint32_t>{};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::optional<Vector3d> previous;
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const std::size_t i = order.empty() ? k : order[k];
+      if (!std::isfinite(deviations[i]) || !points[i].allFinite()) continue;
+      const ClosestPoint c = bvh->closest_near(points[i], previous);
+      previous = c.point;
+      triangle[i] = c.triangle;
+    }
+  });
+  // Sums per vertex, in point order (the same result on every run).
+  std::vector<double> sum(nv, 0.0), sum_sq(nv, 0.0);
+  std::vector<std::uint32_t> count(nv, 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (triangle[i] < 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t v = static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(triangle[i])][c]);
+      sum[v] += deviations[i];
+      sum_sq[v] += deviations[i] * deviations[i];
+      ++count[v];
+    }
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (count[v] > 0) out[v] = (sum[v] < 0.0 ? -1.0 : 1.0) * std::sqrt(sum_sq[v] / static_cast<double>(count[v]));
   return out;
 }
 

@@ -325,12 +325,12 @@ void run_evaluate(StageRun& run) {
 
   record_quality(rec, q);
 
-  rec.summary = fmt::format("evaluate: {}{} against \"{}\" ({}): max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}, {:.1f}% within +-{:.4g}; "
-                            "Hausdorff {:.4g}; mesh {}",
+  rec.summary = fmt::format("evaluate: {:.1f}% out of tolerance +-{:.4g} ({:.1f}% above, {:.1f}% below) of {}{} against \"{}\" ({}); "
+                            "|d| p95 {:.4g}, p99 {:.4g}; max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}; Hausdorff {:.4g}; mesh {}",
+                            100.0 * stats.out_of_tolerance, stats.tolerance, 100.0 * stats.above_tolerance, 100.0 * stats.below_tolerance,
                             plural(ref.cloud().size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
-                            distance_sign_names().name(dist.sign_used), stats.max_positive,
-                            stats.max_negative, stats.mean_positive, stats.mean_negative, stats.rms, 100.0 * stats.within_tolerance,
-                            stats.tolerance, std::max(forward_max, back_max), quality_line(q));
+                            distance_sign_names().name(dist.sign_used), stats.abs_p95, stats.abs_p99, stats.max_positive, stats.max_negative,
+                            stats.mean_positive, stats.mean_negative, stats.rms, std::max(forward_max, back_max), quality_line(q));
 
   // The output: the measured points with their deviation.
   run.context.copy(ref_tag, run.output);
@@ -338,6 +338,7 @@ void run_evaluate(StageRun& run) {
   out.mesh.triangles.clear();
   out.is_mesh = false;
   out.cloud().fields.add("deviation", out.cloud().size()).values = dist.distances;
+  out.measured = MeasuredField{"deviation", sp.tolerance};
   if (fit) fit->apply(out.cloud());
 }
 

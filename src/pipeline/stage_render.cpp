@@ -60,19 +60,23 @@ void run_render(StageRun& run) {
     c.ortho_height = (c.target - c.eye).norm();
     p.camera = c;
   }
+  // After evaluate: its field and tolerance unless given.
+  const std::optional<MeasuredField>& measured = item.measured;
+  if (measured && !a.given("field") && item.cloud().fields.contains(measured->field)) p.field = measured->field;
+  const double tolerance = a.given("tolerance") || !measured || p.field != measured->field ? a.number("tolerance") : measured->tolerance;
   if (!p.field.empty()) {
     const ScalarField* f = item.cloud().fields.find(p.field);
     std::vector<double> axis;
     if (f == nullptr && (p.field == "x" || p.field == "y" || p.field == "z"))
       for (const Vector3d& q : item.cloud().positions) axis.push_back(q[p.field[0] - 'x']);
     if (f != nullptr || !axis.empty()) {
-      ColorScale s = default_color_scale(f ? std::span<const double>(f->values) : std::span<const double>(axis), p.field, a.boolean("diverging"));
+      ColorScale s =
+          default_color_scale(f ? std::span<const double>(f->values) : std::span<const double>(axis), p.field, a.boolean("diverging"), tolerance);
       const std::vector<double>& range = a.numbers("range");
       if (range.size() == 2) {
         s.min = range[0];
         s.max = range[1];
       }
-      s.tolerance = a.number("tolerance");
       s.unit = a.text("unit");
       p.scale = s;
     }
@@ -100,8 +104,11 @@ StageSpec render_stage() {
   s.shape = CommandShape::Picture;
   s.summary = "Draw a PNG picture of a cloud or mesh: shaded, coloured by a field with its legend, auto-framed views";
   s.description = "A software rasterizer (no display or GPU): z-buffer, supersampled anti-aliasing, Blinn-Phong lighting of meshes, "
-                  "point splats with eye-dome lighting. A field named deviation or distance* gets a diverging map symmetric about 0; "
-                  "others viridis between their 1st and 99th percentiles. In a pipeline it writes its file and passes its input on.";
+                  "point splats with eye-dome lighting. A field named deviation or distance* gets a diverging map symmetric about 0, clipped "
+                  "at the 99th percentile of |value| (at least twice the tolerance), with the values beyond it in over- and "
+                  "under-range colours; others viridis between their 1st and 99th percentiles. After evaluate in a pipeline it "
+                  "colours by evaluate's deviation and tolerance unless field or tolerance are given. In a pipeline it writes its file "
+                  "and passes its input on.";
   s.order = 140;
   s.consumes = {Slot{"data", DataKind::Any}};
   s.writes_param = "filename";

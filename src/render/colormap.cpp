@@ -35,27 +35,41 @@ std::array<std::uint8_t, 3> lookup(const Stop (&stops)[N], double t) {
 
 }  // namespace
 
+double ColorScale::low() const noexcept { return kind == ColorMapKind::Diverging ? -std::max(std::abs(min), std::abs(max)) : min; }
+double ColorScale::high() const noexcept { return kind == ColorMapKind::Diverging ? std::max(std::abs(min), std::abs(max)) : max; }
+
 std::array<std::uint8_t, 3> ColorScale::color(double value) const noexcept {
   if (!std::isfinite(value)) return {128, 128, 128};
+  if (out_of_range && value > high()) return kOverRange;
+  if (out_of_range && value < low()) return kUnderRange;
   if (kind == ColorMapKind::Diverging) {
     if (tolerance > 0.0 && std::abs(value) <= tolerance) return {64, 176, 72};
-    const double half = std::max(std::abs(min), std::abs(max));
+    const double half = high();
     return lookup(kCoolWarm, half > 0.0 ? 0.5 + 0.5 * value / half : 0.5);
   }
   return lookup(kViridis, max > min ? (value - min) / (max - min) : 0.5);
 }
 
-ColorScale default_color_scale(std::span<const double> values, const std::string& field_name, bool diverging) {
+ColorScale default_color_scale(std::span<const double> values, const std::string& field_name, bool diverging, double tolerance) {
   ColorScale s;
   const bool signed_field = diverging || field_name == "deviation" || field_name.rfind("distance", 0) == 0;
   std::vector<double> finite;
   finite.reserve(values.size());
   for (double v : values)
-    if (std::isfinite(v)) finite.push_back(v);
+    if (std::isfinite(v)) finite.push_back(signed_field ? std::abs(v) : v);
   if (signed_field) {
     s.kind = ColorMapKind::Diverging;
+    s.out_of_range = true;
+    s.tolerance = tolerance;
     double half = 0.0;
-    for (double v : finite) half = std::max(half, std::abs(v));
+    if (finite.size() >= 1000) {  // nearest rank, as the deviation statistics' abs_p99
+      const auto k = static_cast<std::ptrdiff_t>(std::ceil(0.99 * static_cast<double>(finite.size()))) - 1;
+      std::nth_element(finite.begin(), finite.begin() + k, finite.end());
+      half = finite[static_cast<std::size_t>(k)];
+    } else {
+      for (double v : finite) half = std::max(half, v);
+    }
+    half = std::max(half, 2.0 * tolerance);
     if (half == 0.0) half = 1.0;
     s.min = -half;
     s.max = half;

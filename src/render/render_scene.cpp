@@ -355,8 +355,7 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
   const int bar_w = std::max(10, img.width / 60);
   const int top = lay.plot_y0 + img.height / 8, bottom = lay.plot_y0 + lay.plot_h - img.height / 8;
   const int x = lay.legend_x + font;
-  const double lo = scale.kind == ColorMapKind::Diverging ? -std::max(std::abs(scale.min), std::abs(scale.max)) : scale.min;
-  const double hi = scale.kind == ColorMapKind::Diverging ? -lo : scale.max;
+  const double lo = scale.low(), hi = scale.high();
   auto row_of = [&](double v) { return int(std::lround(bottom - (v - lo) / (hi - lo) * double(bottom - top))); };
   for (int y = top; y <= bottom; ++y) {
     const double v = hi - (hi - lo) * double(y - top) / double(std::max(1, bottom - top));
@@ -369,7 +368,9 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
     std::fill_n(img.at(x + k, top - 1), 3, std::uint8_t(60));
     std::fill_n(img.at(x + k, bottom + 1), 3, std::uint8_t(60));
   }
-  std::vector<std::pair<double, std::string>> ticks = {{hi, number_label(hi)}, {lo, number_label(lo)}};
+  // With out-of-range boxes the ends are labelled there ("> +h", "< -h").
+  std::vector<std::pair<double, std::string>> ticks = {{hi, scale.out_of_range ? "" : number_label(hi)},
+                                                       {lo, scale.out_of_range ? "" : number_label(lo)}};
   if (scale.kind == ColorMapKind::Diverging) {
     ticks.emplace_back(0.0, "0");
     if (scale.tolerance > 0.0 && scale.tolerance < hi) {
@@ -384,13 +385,31 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
   for (const auto& [v, label] : ticks) {
     const int y = row_of(v);
     for (int k = 0; k < 5; ++k) std::fill_n(img.at(x + bar_w + k, std::clamp(y, 0, img.height - 1)), 3, std::uint8_t(60));
-    if (y - last_y < font + 2) continue;  // tolerance labels close to zero: keep the tick, drop the text
+    if (label.empty() || y - last_y < font + 2) continue;  // tolerance labels close to zero: keep the tick, drop the text
     text.draw(img, x + bar_w + 8, y + font / 2 - 1, label, font, {30, 30, 30});
     last_y = y;
   }
-  text.draw(img, std::max(0, x - font / 2), top - font, legend_head(field, scale), font, {20, 20, 20});
+  // Out-of-range boxes: over above the bar, under below it, each with its threshold.
+  int head_y = top - font, band_y = bottom + 2 * font;
+  if (scale.out_of_range) {
+    const int box = font, gap = font / 2;
+    const auto swatch = [&](int y0, const Rgb& c, const std::string& label) {
+      for (int y = y0; y < y0 + box; ++y)
+        for (int k = -1; k <= bar_w; ++k) {
+          const bool edge = y == y0 || y == y0 + box - 1 || k == -1 || k == bar_w;
+          std::copy(c.begin(), c.end(), img.at(x + k, std::clamp(y, 0, img.height - 1)));
+          if (edge) std::fill_n(img.at(x + k, std::clamp(y, 0, img.height - 1)), 3, std::uint8_t(60));
+        }
+      text.draw(img, x + bar_w + 8, y0 + box - 2, label, font, {30, 30, 30});
+    };
+    swatch(top - 1 - gap - box, ColorScale::kOverRange, "> " + (hi > 0.0 ? std::string("+") : std::string()) + number_label(hi));
+    swatch(bottom + 2 + gap, ColorScale::kUnderRange, "< " + number_label(lo));
+    head_y -= box + gap;
+    band_y += box + gap;
+  }
+  text.draw(img, std::max(0, x - font / 2), head_y, legend_head(field, scale), font, {20, 20, 20});
   const std::string band = legend_band(scale);
-  if (!band.empty()) text.draw(img, std::max(0, x - font / 2), bottom + 2 * font, band, std::max(9, font - 2), {30, 110, 40});
+  if (!band.empty()) text.draw(img, std::max(0, x - font / 2), band_y, band, std::max(9, font - 2), {30, 110, 40});
 }
 
 // A bar of a round length (1, 2 or 5 times a power of ten) about a fifth of the plot wide.
@@ -734,8 +753,10 @@ const ResultTable<RenderResult>& RenderResult::results(bool by_field) {
       t.count("triangles_drawn", &R::triangles_drawn, "Triangles drawn").as_count();
     }
     ResultTable<R>& t = out[1];  // coloured by a field
-    t.computed("scale_min", ResultType::Number, [](const R& r) { return ResultValue(r.scale.min); }, "Value of the colour scale's low end");
-    t.computed("scale_max", ResultType::Number, [](const R& r) { return ResultValue(r.scale.max); }, "Value of the colour scale's high end");
+    t.computed("scale_min", ResultType::Number, [](const R& r) { return ResultValue(r.scale.low()); }, "Value of the colour scale's low end");
+    t.computed("scale_max", ResultType::Number, [](const R& r) { return ResultValue(r.scale.high()); }, "Value of the colour scale's high end");
+    t.computed("scale_tolerance", ResultType::Number, [](const R& r) { return ResultValue(r.scale.tolerance); },
+               "Diverging map: the green band's half width (0: none)");
     t.computed("colormap", ResultType::Text,
                [](const R& r) { return ResultValue(std::string(r.scale.kind == ColorMapKind::Diverging ? "diverging" : "sequential")); },
                "Colour map: sequential or diverging");

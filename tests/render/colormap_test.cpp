@@ -68,5 +68,35 @@ TEST(ColorMap, DefaultScales) {
   EXPECT_LT(constant.min, constant.max);
 }
 
+// A deviation map is clipped at the 99th percentile of |d|, never stretched by a few outliers,
+// at least twice the tolerance wide, and shows what lies beyond in its own colours.
+TEST(ColorMap, DeviationScaleIsClippedWithOutOfRangeColours) {
+  std::vector<double> dev(10000);
+  for (std::size_t i = 0; i < dev.size(); ++i) dev[i] = (i % 2 ? 1.0 : -1.0) * 0.001 * double(i % 1000) / 999.0;  // |d| <= 0.001
+  for (std::size_t i = 0; i < 50; ++i) dev[i] = i % 2 ? 0.5 : -0.4;  // 0.5 % far outliers
+  const ColorScale s = default_color_scale(dev, "deviation", false, 0.0002);
+  EXPECT_EQ(s.kind, ColorMapKind::Diverging);
+  EXPECT_TRUE(s.out_of_range);
+  EXPECT_DOUBLE_EQ(s.tolerance, 0.0002);
+  EXPECT_NEAR(s.high(), 0.001, 2e-5);  // the 99th percentile of |d|, not 0.5
+  EXPECT_DOUBLE_EQ(s.low(), -s.high());
+  EXPECT_EQ(s.color(0.5), ColorScale::kOverRange);
+  EXPECT_EQ(s.color(-0.4), ColorScale::kUnderRange);
+  EXPECT_NE(s.color(0.0009), ColorScale::kOverRange);
+  EXPECT_EQ(s.color(0.0001), (Rgb{64, 176, 72}));  // the tolerance band
+  EXPECT_NE(ColorScale::kOverRange, ColorScale::kUnderRange);
+  for (double v : {-0.0009, -0.0005, 0.0005, 0.0009}) {  // neither out-of-range colour is in the map
+    EXPECT_NE(s.color(v), ColorScale::kOverRange);
+    EXPECT_NE(s.color(v), ColorScale::kUnderRange);
+  }
+  // A wide tolerance: the map reaches twice it, so the band never fills the whole bar.
+  const ColorScale wide = default_color_scale(dev, "deviation", false, 0.01);
+  EXPECT_DOUBLE_EQ(wide.high(), 0.02);
+  // Without out_of_range (a sequential field, or set off) values beyond the ends are clamped.
+  ColorScale clamped = s;
+  clamped.out_of_range = false;
+  EXPECT_EQ(clamped.color(0.5), clamped.color(s.high()));
+}
+
 }  // namespace
 }  // namespace pointsurf

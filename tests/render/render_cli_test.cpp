@@ -4,6 +4,8 @@
 
 #include "pointsurf/io/io.h"
 #include "pointsurf/render/image.h"
+
+#include <nlohmann/json.hpp>
 #include "support/cli_run.h"
 #include "support/files.h"
 #include "support/mesh_shapes.h"
@@ -74,6 +76,31 @@ TEST(RenderCli, PipelineRendersAndPassesItsInputOn) {
                                               " --view top --size 200x150 --threads 1 --quiet", dir);
   ASSERT_EQ(c.exit_code, 0) << c.err;
   EXPECT_EQ(test::read_bytes(dir / "cli.png"), test::read_bytes(dir / "a.png"));
+}
+
+// After evaluate, render colours by its deviation with its tolerance, unless told otherwise.
+TEST(RenderCli, AfterEvaluateTakesItsFieldAndTolerance) {
+  const auto dir = test::temp_dir("render_after_evaluate");
+  write_point_cloud(dir / "c.ply", test::sample_sphere(800));
+  const auto png = [&](const char* name) { return (dir / name).string(); };
+  const std::string pipeline = "[\"" + (dir / "c.ply").string() + "\", {\"type\": \"normals\", \"k\": 12}, {\"type\": \"reconstruct\", \"method\": "
+                               "\"triangulate\"}, {\"type\": \"evaluate\", \"tolerance\": 0.003}, {\"type\": \"render\", \"filename\": \"" +
+                               png("a.png") + "\", \"size\": \"160x120\"}, {\"type\": \"render\", \"filename\": \"" + png("b.png") +
+                               "\", \"size\": \"160x120\", \"tolerance\": 0.001}, {\"type\": \"render\", \"filename\": \"" + png("c.png") +
+                               "\", \"size\": \"160x120\", \"field\": \"z\"}]";
+  test::write_bytes(dir / "p.json", pipeline);
+  const test::RunResult r = test::run_cli("run " + (dir / "p.json").string() + " --quiet --report " + (dir / "r.json").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(dir / "r.json"));
+  std::vector<nlohmann::json> renders;
+  for (const nlohmann::json& st : report["stages"])
+    if (st["type"] == "render") renders.push_back(st["metrics"]);
+  ASSERT_EQ(renders.size(), 3u);
+  EXPECT_EQ(renders[0]["colormap"], "diverging");
+  EXPECT_DOUBLE_EQ(renders[0]["scale_tolerance"].get<double>(), 0.003);
+  EXPECT_GE(renders[0]["scale_max"].get<double>(), 0.006);  // at least twice the tolerance
+  EXPECT_DOUBLE_EQ(renders[1]["scale_tolerance"].get<double>(), 0.001);  // given
+  EXPECT_EQ(renders[2]["colormap"], "sequential");                         // another field given
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/core/error.h"
+#include "pointsurf/render/colormap.h"
 #include "pointsurf/evaluate/deviation_stats.h"
 #include "support/files.h"
 #include "support/mesh_shapes.h"
@@ -103,10 +104,12 @@ TEST(HtmlReportView, DeviationRowsAreTheDeclaredHeadlineMembers) {
   const HtmlReportView v = html_report_view(inputs(r));
   std::vector<std::string> keys;
   for (const auto& [key, text] : v.deviation.statistics) keys.push_back(key);
-  EXPECT_EQ(keys, (std::vector<std::string>{"count", "max_positive", "max_negative", "mean_positive", "mean_negative", "mean",
-                                            "mean_absolute", "rms", "std", "tolerance", "within_tolerance"}));
+  // The share out of tolerance comes first, then the robust sizes beside the extremes.
+  EXPECT_EQ(keys, (std::vector<std::string>{"count", "out_of_tolerance", "above_tolerance", "below_tolerance", "tolerance", "within_tolerance",
+                                            "abs_p95", "abs_p99", "max_positive", "max_negative", "mean_positive", "mean_negative", "mean",
+                                            "mean_absolute", "rms", "std"}));
   EXPECT_EQ(v.deviation.statistics[0].second, "10");
-  EXPECT_EQ(v.deviation.statistics[7].second, "0.25");
+  EXPECT_EQ(v.deviation.statistics[14].second, "0.25");
 }
 
 TEST(HtmlReportView, DeviationIsTheEvaluateStagesBlock) {
@@ -114,8 +117,8 @@ TEST(HtmlReportView, DeviationIsTheEvaluateStagesBlock) {
   EXPECT_TRUE(v.deviation.evaluated);
   EXPECT_DOUBLE_EQ(v.deviation.tolerance, 0.005);
   // The known keys present, in the table's order; others ("extra", "histogram") are left out.
-  const TextRows statistics = {{"count", "2000"}, {"max_positive", "0.02"}, {"max_negative", "-0.03"}, {"rms", "0.01"},
-                               {"tolerance", "0.005"}, {"within_tolerance", "0.6"}};
+  const TextRows statistics = {{"count", "2000"},         {"tolerance", "0.005"}, {"within_tolerance", "0.6"},
+                               {"max_positive", "0.02"}, {"max_negative", "-0.03"}, {"rms", "0.01"}};
   EXPECT_EQ(v.deviation.statistics, statistics);
   ASSERT_TRUE(v.deviation.histogram);
   ASSERT_EQ(v.deviation.histogram->centres.size(), 3u);
@@ -175,7 +178,7 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   in.mesh.triangles = sphere.triangles;
   in.cloud = test::sample_sphere(500, 1.0, at);
   ScalarField& d = in.cloud.fields.add("deviation", in.cloud.size());
-  for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] = in.cloud.positions[i].z() > at.z() ? 0.01 : -0.01;
+  for (std::size_t i = 0; i < d.values.size(); ++i) d.values[i] = in.cloud.positions[i].z() > at.z() ? 0.0075 : -0.0075;
   HtmlReportParams params;
   params.view_width = 64;
   params.view_height = 48;
@@ -199,12 +202,22 @@ TEST(HtmlReportView, GeometryIsColouredByDeviationAboutItsCentre) {
   EXPECT_DOUBLE_EQ(v.legend->tolerance, 0.005);
   EXPECT_EQ(v.legend->stops.size(), 21u);
   EXPECT_NE(v.legend->stops.front(), v.legend->stops.back());
-  // A vertex shows the colour of its nearest point (brute force here).
-  std::size_t nearest = 0;
-  for (std::size_t j = 0; j < in.cloud.size(); ++j)
-    if ((in.cloud.positions[j] - sphere.vertices.positions[0]).norm() < (in.cloud.positions[nearest] - sphere.vertices.positions[0]).norm()) nearest = j;
-  for (int k = 0; k < 3; ++k) EXPECT_EQ(v.mesh->colors[std::size_t(k)], v.cloud->colors[3 * nearest + std::size_t(k)]);
-  EXPECT_EQ(v.notes, std::vector<std::string>{"mesh coloured by the deviation of the nearest measured point"});
+  EXPECT_EQ(v.legend->over, ColorScale::kOverRange);
+  EXPECT_EQ(v.legend->under, ColorScale::kUnderRange);
+  // A vertex shows the deviation of the points measured against its triangles: well above the
+  // equator they are all +0.0075, so it has the colour of such a point (the cloud's first one
+  // above the equator), and well below that of a -0.0075 point.
+  std::size_t up = 0, down = 0;
+  while (in.cloud.positions[up].z() <= at.z()) ++up;
+  while (in.cloud.positions[down].z() > at.z()) ++down;
+  for (std::size_t j = 0; j < sphere.vertices.positions.size(); ++j) {
+    const double z = sphere.vertices.positions[j].z() - at.z();
+    if (std::abs(z) < 0.5) continue;
+    const std::size_t point = z > 0 ? up : down;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(v.mesh->colors[3 * j + std::size_t(k)], v.cloud->colors[3 * point + std::size_t(k)]) << "vertex " << j;
+  }
+  EXPECT_EQ(v.notes, std::vector<std::string>{"mesh coloured at each vertex by the deviation of the measured points closest to its triangles "
+                                              "(their signed RMS; grey: no point measured there); the measured points by their own deviation"});
   std::vector<std::string> captions;
   for (const PictureView& p : v.pictures) {
     captions.push_back(p.caption);

@@ -15,7 +15,10 @@ namespace pointsurf {
 struct DeviationParams {
   double tolerance = 0.0;            // cloud units; within_tolerance counts |d| <= tolerance; 0: not reported
   std::size_t bins = 0;              // histogram bins; 0: from the data (Freedman-Diaconis, 10..200)
-  double histogram_min = 0.0;        // cloud units; both 0: the data's range
+  /// Both 0: the robust range, from the 0.5th to the 99.5th percentile widened to +-tolerance
+  /// (never past the data's extremes), so a few outliers do not squeeze the bins; the values
+  /// beyond it are counted in the end bins (histogram_below, histogram_above).
+  double histogram_min = 0.0;        // cloud units
   double histogram_max = 0.0;
   std::vector<double> percentiles = {1, 5, 25, 50, 75, 95, 99};  // in percent, of the signed values
   /// Key, unit, range and doc of each field (core/fields.h).
@@ -39,10 +42,15 @@ struct DeviationStats {
   double std = 0.0;                  // standard deviation about the mean (population)
   double tolerance = 0.0;            // as given
   double within_tolerance = 0.0;     // share (0..1) of values with |d| <= tolerance; larger is better
+  double out_of_tolerance = 0.0;     // share (0..1) with |d| > tolerance (0 without a tolerance)
+  double above_tolerance = 0.0;      // share with d > tolerance
+  double below_tolerance = 0.0;      // share with d < -tolerance
+  double abs_p95 = 0.0, abs_p99 = 0.0;  // nearest-rank percentiles of |d|: robust beside the maxima
   std::vector<double> percentile_ranks;   // percent, as asked
   std::vector<double> percentile_values;  // nearest-rank percentiles, cloud units
-  std::vector<double> histogram_edges;    // bins + 1
+  std::vector<double> histogram_edges;    // bins + 1; by default over the robust range (below)
   std::vector<std::size_t> histogram_counts;  // bins; values outside the edges go to the end bins
+  std::size_t histogram_below = 0, histogram_above = 0;  // values beyond the edges, counted in the end bins
 
   /// The reported members: key, unit, which way is better, doc (core/results.h).
   static const ResultTable<DeviationStats>& results();

@@ -62,6 +62,17 @@ std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, 
                                               std::size_t samples = 100000, std::uint64_t seed = 3, const TriangleBvh* bvh = nullptr,
                                               const KdTree* tree_over_points = nullptr);
 
+/// Per vertex of `mesh`: the deviation of the measured points seen at the vertex, for colouring
+/// the mesh. Each point of `points` is assigned to its closest triangle (through `bvh` when it
+/// is a hierarchy over `mesh`), and its value `deviations[i]` to that triangle's three corners;
+/// a vertex gets the signed RMS of its values (the root mean square, with the sign of their
+/// mean), so a triangle that cuts a chord under the scan shows the scan's offset across it,
+/// and noise beyond the tolerance shows as such instead of averaging to zero. Vertices no point
+/// is assigned to get NaN (drawn grey: not measured). Non-finite deviations are skipped.
+/// Throws InputError when the sizes differ. Parallel; thread-safe.
+std::vector<double> vertex_deviation_from_points(const TriangleMesh& mesh, std::span<const Vector3d> points, std::span<const double> deviations,
+                                                 const TriangleBvh* bvh = nullptr);
+
 /// Chamfer and Hausdorff distances between `a` and `b`. Throws InputError when a side is empty.
 SurfaceDistanceResult surface_distance(const SurfaceView& a, const SurfaceView& b, const SurfaceDistanceParams& params = {});
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,19 @@
 namespace pointsurf {
 
 /// One named item: a cloud (the vertices of `mesh`, without triangles) or a mesh.
+/// What `evaluate` measured on an item: the field holding the deviation and the tolerance it
+/// was judged by; `render` takes both by default.
+struct MeasuredField {
+  std::string field;
+  double tolerance = 0.0;  // cloud units
+};
+
 struct DataItem {
   TriangleMesh mesh;  // a mesh's face fields are cleared with its triangles
   bool is_mesh = false;
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
   std::vector<ScanPose> scans;  // E57 scans read with keep_poses: the pose of each value of field "scan"
+  std::optional<MeasuredField> measured;  // set by evaluate
 
   /// The points: a cloud's, or a mesh's vertices with their attributes.
   PointCloud& cloud() noexcept { return mesh.vertices; }

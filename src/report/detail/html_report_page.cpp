@@ -82,7 +82,9 @@ json payload(const HtmlReportView& view) {
   if (const auto& c = view.cloud)
     p["cloud"] = {{"positions", base64(c->positions)}, {"colors", base64(c->colors)}, {"points", c->points}, {"original_points", c->original_points}};
   if (const auto& l = view.legend)
-    p["legend"] = {{"field", "deviation"}, {"min", l->min}, {"max", l->max}, {"tolerance", l->tolerance}, {"stops", hex_list(l->stops)}};
+    p["legend"] = {{"field", "deviation"}, {"min", l->min},          {"max", l->max},
+                   {"tolerance", l->tolerance}, {"stops", hex_list(l->stops)}, {"under", hex_list({l->under})[0]},
+                   {"over", hex_list({l->over})[0]}};
   if (const auto& h = view.deviation.histogram)
     p["histogram"] = {{"centres", h->centres}, {"counts", h->counts}, {"colors", hex_list(h->colors)}};
   json stages = json::array();

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <unordered_map>
@@ -15,6 +16,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/evaluate/deviation_stats.h"
+#include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/render/render_scene.h"
 #include "pointsurf/spatial/kd_tree.h"
 
@@ -147,7 +149,7 @@ void decimate(std::vector<Vector3d>& vertices, std::vector<double>& values, std:
     std::vector<std::int32_t> map(vertices.size());
     std::vector<Vector3d> sum;
     std::vector<double> vsum;
-    std::vector<int> count;
+    std::vector<int> count, measured;
     for (std::size_t i = 0; i < vertices.size(); ++i) {
       const Vector3d q = (vertices[i] - box.min) / cell;
       const std::uint64_t key = (std::uint64_t(q.x()) & 0x1FFFFF) | (std::uint64_t(q.y()) & 0x1FFFFF) << 21 | (std::uint64_t(q.z()) & 0x1FFFFF) << 42;
@@ -156,10 +158,14 @@ void decimate(std::vector<Vector3d>& vertices, std::vector<double>& values, std:
         sum.push_back(Vector3d::Zero());
         vsum.push_back(0.0);
         count.push_back(0);
+        measured.push_back(0);
       }
       map[i] = it->second;
       sum[std::size_t(it->second)] += vertices[i];
-      if (!values.empty()) vsum[std::size_t(it->second)] += values[i];
+      if (!values.empty() && std::isfinite(values[i])) {  // NaN: not measured
+        vsum[std::size_t(it->second)] += values[i];
+        ++measured[std::size_t(it->second)];
+      }
       ++count[std::size_t(it->second)];
     }
     std::vector<Triangle> kept;
@@ -170,25 +176,13 @@ void decimate(std::vector<Vector3d>& vertices, std::vector<double>& values, std:
     if (kept.size() > target && attempt + 1 < 8) continue;
     for (std::size_t c = 0; c < sum.size(); ++c) {
       sum[c] /= double(count[c]);
-      vsum[c] /= double(count[c]);
+      vsum[c] = measured[c] > 0 ? vsum[c] / double(measured[c]) : std::numeric_limits<double>::quiet_NaN();
     }
     vertices = std::move(sum);
     if (!values.empty()) values = std::move(vsum);
     triangles = std::move(kept);
     return;
   }
-}
-
-// Each mesh vertex shows the deviation of its nearest measured point.
-std::vector<double> nearest_deviation(const PointCloud& mesh_vertices, const PointCloud& cloud, const ScalarField& deviation) {
-  const KdTree tree(cloud.positions);
-  std::vector<Neighbor> nn;
-  std::vector<double> values(mesh_vertices.size());
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    tree.knn(mesh_vertices.positions[i], 1, nn);
-    values[i] = nn.empty() ? 0.0 : deviation.values[nn.front().index];
-  }
-  return values;
 }
 
 BrowserMesh browser_mesh(const HtmlReportInputs& in, const std::vector<double>& mesh_values, const ColorScale& scale, const Vector3d& centre,
@@ -304,14 +298,11 @@ HtmlReportView html_report_view(const HtmlReportInputs& in, const HtmlReportPara
   // still colours the histogram.
   const ScalarField* deviation = in.cloud.fields.find("deviation");
   ColorScale scale;
-  if (deviation) {
-    scale = default_color_scale(deviation->values, "deviation");
-    scale.tolerance = evaluated_tolerance(stages);
-  }
+  if (deviation) scale = default_color_scale(deviation->values, "deviation", false, evaluated_tolerance(stages));
   view.deviation = deviation_view(stages, scale);
   if (deviation) {
-    LegendView legend{scale.min, scale.max, view.deviation.tolerance, {}};
-    for (int k = 0; k <= 20; ++k) legend.stops.push_back(scale.color(scale.min + (scale.max - scale.min) * k / 20.0));
+    LegendView legend{scale.low(), scale.high(), view.deviation.tolerance, {}, ColorScale::kUnderRange, ColorScale::kOverRange};
+    for (int k = 0; k <= 20; ++k) legend.stops.push_back(scale.color(scale.low() + (scale.high() - scale.low()) * k / 20.0));
     view.legend = std::move(legend);
   }
 
@@ -325,8 +316,10 @@ HtmlReportView html_report_view(const HtmlReportInputs& in, const HtmlReportPara
   const bool has_mesh = !in.mesh.triangles.empty();
   std::vector<double> mesh_values;
   if (has_mesh && deviation) {
-    mesh_values = nearest_deviation(in.mesh.vertices, in.cloud, *deviation);
-    view.notes.push_back("mesh coloured by the deviation of the nearest measured point");
+    mesh_values = vertex_deviation_from_points(in.mesh, in.cloud.positions, deviation->values);
+    view.notes.push_back(
+        "mesh coloured at each vertex by the deviation of the measured points closest to its triangles (their signed RMS; grey: no "
+        "point measured there); the measured points by their own deviation");
   }
   if (has_mesh) view.mesh = browser_mesh(in, mesh_values, scale, centre, params, view);
   if (!in.cloud.empty()) view.cloud = browser_cloud(in.cloud, deviation, scale, centre, params, view);

@@ -62,6 +62,7 @@ struct DeviationView {
 struct LegendView {
   double min = 0.0, max = 0.0, tolerance = 0.0;  // field units
   std::vector<Rgb> stops;                   // 21 colours from min to max
+  Rgb under{}, over{};                      // the colours of values below min and above max
 };
 
 /// The geometry of the 3D view, about `centre`: float32 positions (x, y, z per vertex), uint8

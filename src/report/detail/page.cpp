@@ -114,8 +114,10 @@ ul.warn li { color: #8a5a00; }
   if (data.legend) {
     var l = data.legend, el = document.getElementById("legend3d");
     el.innerHTML = "<div>" + l.field + (l.tolerance > 0 ? " (green: |d| &le; " + l.tolerance.toPrecision(3) + ")" : "") + "</div>" +
-      "<div class=\"bar\" style=\"background: linear-gradient(to right, " + l.stops.join(", ") + ")\"></div>" +
-      "<div class=\"ticks\"><span>" + l.min.toPrecision(3) + "</span><span>0</span><span>" + l.max.toPrecision(3) + "</span></div>";
+      "<div class=\"bar\" style=\"background: linear-gradient(to right, " + l.under + " 0 5%, " +
+      l.stops.map(function (c, i) { return c + " " + (5 + 90 * i / (l.stops.length - 1)).toFixed(1) + "%"; }).join(", ") +
+      ", " + l.over + " 95% 100%)\"></div>" +
+      "<div class=\"ticks\"><span>&lt; " + l.min.toPrecision(3) + "</span><span>0</span><span>&gt; +" + l.max.toPrecision(3) + "</span></div>";
   }
 
   // The 3D view.
