@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The segment stage: one integer label per point in the field "segment" (-1 unassigned), by
 // region growing, Euclidean clusters, RANSAC primitives or HK surface type.
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 
@@ -71,7 +72,7 @@ const ResultTable<OutlineRow>& outline_metrics() {
   return table;
 }
 struct Outlines {
-  std::size_t points = 0, outlines = 0, loops = 0, holes = 0, nonplanar_segments = 0;
+  std::size_t points = 0, outlines = 0, loops = 0, holes = 0, nonplanar_segments = 0, small_segments = 0;
   double outline_area = 0.0, outline_length = 0.0;
   std::string outline_source;
 };
@@ -90,6 +91,7 @@ const ResultTable<Outlines>& outline_counts() {
     t.count("loops", &Outlines::loops, "Their loops");
     t.count("holes", &Outlines::holes, "Loops that are holes");
     t.count("nonplanar_segments", &Outlines::nonplanar_segments, "Segments skipped as not planar");
+    t.count("small_segments", &Outlines::small_segments, "Segments skipped for fewer than min_points points");
     return t;
   }();
   return table;
@@ -138,6 +140,8 @@ void run_segment(StageRun& run) {
   const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.3 : 0.0, 1.0);
   std::vector<std::int32_t> labels;
   std::size_t segments = 0, unassigned = 0;
+  std::vector<SegmentPlane>& planes = run.context.item(run.output).segment_planes;
+  planes.clear();  // the field "segment" is about to change
   if (method == "region") {
     const SegmentResult r = segment_region_growing(cloud, read_params<RegionGrowingParams>(a), &run.context.tree(run.output), progress);
     labels = r.labels, segments = r.sizes.size(), unassigned = r.unassigned;
@@ -153,6 +157,10 @@ void run_segment(StageRun& run) {
     const PrimitiveResult r = detect_primitives(cloud, read_params<PrimitiveParams>(a), progress);
     labels = r.labels, segments = r.primitives.size(), unassigned = r.unassigned;
     record_primitives(rec, r);
+    // The planes, with their band, for boundary's outlines.
+    for (std::size_t i = 0; i < r.primitives.size(); ++i)
+      if (r.primitives[i].type == PrimitiveType::Plane)
+        planes.push_back({static_cast<std::int32_t>(i), r.primitives[i].point, r.primitives[i].axis, r.epsilon_used});
   }
   std::vector<double>& field = cloud.fields.add("segment", cloud.size(), ScalarType::Int32).values;
   for (std::size_t i = 0; i < labels.size(); ++i) field[i] = labels[i];
@@ -188,7 +196,21 @@ void run_boundary(StageRun& run) {
     labels = segment_region_growing(cloud, {}, &run.context.tree(run.output)).labels;
     source = "region growing";
   }
-  const OutlineResult o = outline_planar_segments(cloud, labels, read_params<OutlineParams>(a));
+  // A RANSAC segmentation in this pipeline gave its planes: each outlined on its own plane and
+  // band, as segment found it (a file read back carries no planes: the least-squares test).
+  const std::vector<SegmentPlane>& own = segments != nullptr ? run.context.item(run.output).segment_planes : std::vector<SegmentPlane>{};
+  const OutlineParams op = read_params<OutlineParams>(a);
+  const OutlineResult o = outline_planar_segments(cloud, labels, op, own);
+  std::size_t labelled = 0;
+  {
+    std::vector<std::int32_t> distinct;
+    for (std::int32_t l : labels)
+      if (l >= 0) distinct.push_back(l);
+    std::sort(distinct.begin(), distinct.end());
+    labelled = static_cast<std::size_t>(std::unique(distinct.begin(), distinct.end()) - distinct.begin());
+  }
+  if (const std::string skipped = describe_skipped(o, labelled, op); !skipped.empty())
+    rec.warnings.push_back(skipped + (own.empty() ? "" : "; RANSAC's planes and band were used"));
   rec.set_used("alpha_used", o.alpha_used);
   std::vector<Polyline> lines;
   PolylineWriteOptions write;
@@ -211,7 +233,7 @@ void run_boundary(StageRun& run) {
     length += s.perimeter;
     rec.add(outline_metrics(), OutlineRow{&s, h}, fmt::format("outline_{}", i));
   }
-  const Outlines totals{cloud.size(), o.outlines.size(), lines.size(), holes, o.nonplanar, area, length, source};
+  const Outlines totals{cloud.size(), o.outlines.size(), lines.size(), holes, o.nonplanar, o.too_small, area, length, source};
   rec.add_counts(outline_counts(), totals);
   rec.add(outline_totals(), totals);
   const std::string& path = a.text("outlines");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <unordered_map>
 
@@ -167,7 +168,30 @@ void OutlineParams::validate() const {
   fields().validate(*this, fn);
 }
 
-OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params) {
+std::string describe_skipped(const OutlineResult& r, std::size_t segments, const OutlineParams& params) {
+  if (r.skipped.empty()) return {};
+  std::vector<std::string> parts;
+  if (r.nonplanar > 0) {
+    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+    bool own = false;
+    for (const SkippedSegment& s : r.skipped)
+      if (s.reason == SkipReason::NotPlanar) {
+        lo = std::min(lo, s.rms), hi = std::max(hi, s.rms);
+        own = own || s.threshold != params.max_rms_in_spacings * r.spacing;
+      }
+    const double sp = r.spacing > 0.0 ? r.spacing : 1.0;
+    parts.push_back(fmt::format("{} not planar (RMS to their plane {:.3g}{} mean spacings, above {}{})", r.nonplanar, lo / sp,
+                                hi > lo ? fmt::format("-{:.3g}", hi / sp) : std::string(), own ? "their band or " : "",
+                                fmt::format("max_rms_in_spacings {:g}", params.max_rms_in_spacings)));
+  }
+  if (r.too_small > 0) parts.push_back(fmt::format("{} with fewer than min_points {} points", r.too_small, params.min_points));
+  std::string joined;
+  for (std::size_t i = 0; i < parts.size(); ++i) joined += (i ? ", " : "") + parts[i];
+  return fmt::format("{} of {} segments have no outline: {}", r.skipped.size(), segments, joined);
+}
+
+OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params,
+                                      std::span<const SegmentPlane> planes) {
   constexpr std::string_view fn = "outline_planar_segments";
   params.validate();
   if (labels.size() != cloud.size())
@@ -177,12 +201,23 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
   const double spacing = mean_spacing(cloud.positions);
   const double alpha = params.alpha.resolve(spacing);
   result.alpha_used = alpha;
+  result.spacing = spacing;
+  std::map<std::int32_t, const SegmentPlane*> own_plane;
+  for (const SegmentPlane& p : planes) {
+    if (!(p.point.allFinite() && p.normal.allFinite() && p.normal.norm() > 0.0 && std::isfinite(p.band) && p.band >= 0.0))
+      throw UsageError(fmt::format("{}: the plane of segment {} is not a plane (a finite point, a non-zero normal, a band >= 0)", fn, p.segment));
+    own_plane[p.segment] = &p;
+  }
   if (!(alpha > 0.0)) return result;
   std::map<std::int32_t, std::vector<std::uint32_t>> members;
   for (std::uint32_t i = 0; i < labels.size(); ++i)
     if (labels[i] >= 0) members[labels[i]].push_back(i);
   for (const auto& [label, idx] : members) {
-    if (idx.size() < params.min_points) continue;
+    if (idx.size() < params.min_points) {
+      ++result.too_small;
+      result.skipped.push_back({label, idx.size(), SkipReason::TooSmall, 0.0, 0.0});
+      continue;
+    }
     // The least-squares plane, relative to the first point (georeferenced clouds).
     const Eigen::Vector3d origin = cloud.positions[idx.front()];
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -195,12 +230,32 @@ OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const s
     }
     cov /= double(idx.size());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(cov);
-    if (!(std::sqrt(std::max(eigen.eigenvalues()[0], 0.0)) <= params.max_rms_in_spacings * spacing) || !(eigen.eigenvalues()[1] > 0.0)) {
+    // The segment's own plane (RANSAC's, with its band) when given, else the least-squares one.
+    Eigen::Vector3d normal = eigen.eigenvectors().col(0).normalized();
+    double rms = std::sqrt(std::max(eigen.eigenvalues()[0], 0.0));
+    double threshold = params.max_rms_in_spacings * spacing;
+    if (const auto it = own_plane.find(label); it != own_plane.end()) {
+      normal = it->second->normal.normalized();
+      const Eigen::Vector3d on = it->second->point - origin;
+      double sum = 0.0;
+      for (std::uint32_t i : idx) {
+        const double d = normal.dot(cloud.positions[i] - origin - on);
+        sum += d * d;
+      }
+      rms = std::sqrt(sum / double(idx.size()));
+      threshold = std::max(threshold, it->second->band);
+      mean -= normal.dot(mean - on) * normal;  // the centroid, on the plane
+    }
+    if (!(rms <= threshold) || !(eigen.eigenvalues()[1] > 0.0)) {
       ++result.nonplanar;
+      result.skipped.push_back({label, idx.size(), SkipReason::NotPlanar, rms, threshold});
       continue;
     }
-    const Eigen::Vector3d normal = eigen.eigenvectors().col(0).normalized();
-    const Eigen::Vector3d u = eigen.eigenvectors().col(2).normalized(), v = normal.cross(u);
+    // In-plane axes: the direction of largest spread, made perpendicular to the normal.
+    Eigen::Vector3d u = eigen.eigenvectors().col(2) - normal.dot(eigen.eigenvectors().col(2)) * normal;
+    if (!(u.norm() > 1e-9)) u = normal.unitOrthogonal();
+    u.normalize();
+    const Eigen::Vector3d v = normal.cross(u);
     std::vector<std::pair<K::Point_2, std::uint32_t>> flat;
     std::vector<Eigen::Vector2d> uv(idx.size());
     for (std::uint32_t j = 0; j < idx.size(); ++j) {

@@ -191,5 +191,50 @@ TEST(OutlinePlanarSegments, FootprintsOfABlockOfFlatRoofs) {
   }
 }
 
+// A RANSAC plane of a rough roof: points within a band of +-2 mean spacings of their plane (as
+// RANSAC's epsilon lets in), RMS above the least-squares test's 0.5 spacings. Without the plane
+// the segment is skipped and said to be; with RANSAC's own plane and band it is outlined, on that
+// plane. A second, tiny segment is skipped for its size, and counted as such.
+TEST(OutlinePlanarSegments, ARansacPlaneIsOutlinedOnItsOwnPlaneAndBand) {
+  const Eigen::Vector3d shift(6e5, 5.3e6, 40.0);
+  PointCloud cloud = square_with_hole(20000, shift);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Vector3d normal = rotation * Eigen::Vector3d::UnitZ();
+  const double spacing = 2.0 / std::sqrt(20000.0);  // about the mean spacing of the square
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> rough(-2.0 * spacing, 2.0 * spacing);
+  for (Eigen::Vector3d& p : cloud.positions) p += rough(rng) * normal;
+  std::vector<std::int32_t> labels(cloud.size(), 0);
+  for (int i = 0; i < 10; ++i) {
+    cloud.positions.push_back(shift + Eigen::Vector3d(5.0 + 0.01 * i, 5.0, 5.0 + 0.02 * (i % 3)));
+    labels.push_back(1);
+  }
+  const OutlineResult plain = outline_planar_segments(cloud, labels);
+  EXPECT_TRUE(plain.outlines.empty());
+  EXPECT_EQ(plain.nonplanar, 1u);
+  EXPECT_EQ(plain.too_small, 1u);
+  ASSERT_EQ(plain.skipped.size(), 2u);
+  EXPECT_EQ(plain.skipped[0].reason, SkipReason::NotPlanar);
+  EXPECT_GT(plain.skipped[0].rms, 0.5 * plain.spacing);
+  const std::string why = describe_skipped(plain, 2, OutlineParams{});
+  EXPECT_NE(why.find("2 of 2 segments have no outline: 1 not planar (RMS to their plane"), std::string::npos) << why;
+  EXPECT_NE(why.find("max_rms_in_spacings 0.5"), std::string::npos) << why;
+  EXPECT_NE(why.find("1 with fewer than min_points 30 points"), std::string::npos) << why;
+
+  const SegmentPlane plane{0, shift, normal, 2.0 * spacing};
+  const OutlineResult own = outline_planar_segments(cloud, labels, {}, std::span<const SegmentPlane>(&plane, 1));
+  ASSERT_EQ(own.outlines.size(), 1u);
+  EXPECT_EQ(own.nonplanar, 0u);
+  EXPECT_EQ(own.too_small, 1u);
+  const SegmentOutline& o = own.outlines[0];
+  EXPECT_LT(std::abs(std::abs(o.normal.dot(normal)) - 1.0), 1e-12);
+  ASSERT_EQ(o.loops.size(), 2u);  // the square and its hole
+  for (const Polyline& loop : o.loops)
+    for (const Eigen::Vector3d& q : loop.points) EXPECT_LT(std::abs(normal.dot(q - shift)), 1e-6);  // on RANSAC's plane
+  EXPECT_NEAR(o.area, 4.0 - 3.14159265 * 0.16, 0.25);
+  const SegmentPlane bad{0, shift, Eigen::Vector3d::Zero(), 1.0};
+  EXPECT_THROW(outline_planar_segments(cloud, labels, {}, std::span<const SegmentPlane>(&bad, 1)), UsageError);
+}
+
 }  // namespace
 }  // namespace pointsurf

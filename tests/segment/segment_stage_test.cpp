@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "pointsurf/io/io.h"
+#include "pointsurf/spatial/kd_tree.h"
 #include "support/cli_run.h"
 #include "support/files.h"
 #include "support/primitive_scene.h"
@@ -122,6 +124,48 @@ TEST(BoundaryStage, MarksTheRimAndWritesOutlines) {
   EXPECT_NEAR(reach, 1.0, 0.05);
   const test::RunResult bad = test::run_cli("boundary " + (dir / "plate.ply").string() + " " + out + " --outlines " + (dir / "x.dxf").string(), dir);
   EXPECT_NE(bad.exit_code, 0);
+}
+
+// RANSAC finds a rough plate (within +-2 mean spacings of its plane, epsilon 3 spacings) as a
+// plane. In a pipeline, boundary outlines it on RANSAC's own plane and band. From a file (no
+// planes) the least-squares test skips it, and boundary says so: how many, why, which knob.
+TEST(BoundaryStage, OutlinesRansacPlanesOnTheirOwnBandAndSaysWhatItSkips) {
+  const std::filesystem::path dir = test::temp_dir("boundary_ransac");
+  PointCloud plate = test::sample_plane(20000, 1.0, 6);
+  const double spacing = mean_spacing(plate.positions);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> rough(-2.0 * spacing, 2.0 * spacing);
+  for (Eigen::Vector3d& p : plate.positions) p.z() += rough(rng);
+  write_point_cloud(dir / "plate.ply", plate);
+  const std::string pipeline = "[\"" + (dir / "plate.ply").string() +
+                               "\", {\"type\": \"segment\", \"method\": \"ransac\", \"types\": \"plane\", \"epsilon\": \"3sp\"}, \"" +
+                               (dir / "seg.ply").string() + "\", {\"type\": \"boundary\", \"outlines\": \"" + (dir / "a.geojson").string() + "\"}]";
+  test::write_bytes(dir / "p.json", pipeline);
+  const test::RunResult r = test::run_cli("run " + (dir / "p.json").string() + " --quiet --report " + (dir / "r.json").string(), dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(dir / "r.json"));
+  const nlohmann::json* seg = nullptr;
+  const nlohmann::json* bnd = nullptr;
+  for (const nlohmann::json& st : report["stages"]) {
+    if (st["type"] == "segment") seg = &st;
+    if (st["type"] == "boundary") bnd = &st;
+  }
+  ASSERT_TRUE(seg && bnd);
+  ASSERT_EQ((*seg)["counts"]["segments"], 1) << seg->dump();
+  EXPECT_EQ((*bnd)["counts"]["outlines"], 1) << bnd->dump();
+  EXPECT_EQ((*bnd)["counts"]["nonplanar_segments"], 0);
+  // The same labels read back from the file: no planes, the 0.5-spacing RMS test, a warning.
+  const test::RunResult f = test::run_cli("boundary " + (dir / "seg.ply").string() + " " + (dir / "b.ply").string() + " --report " +
+                                              (dir / "f.json").string(), dir);
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  const nlohmann::json file_report = nlohmann::json::parse(test::read_bytes(dir / "f.json"));
+  nlohmann::json fb;
+  for (const nlohmann::json& st : file_report["stages"])
+    if (st["type"] == "boundary") fb = st;
+  EXPECT_EQ(fb["counts"]["outlines"], 0) << fb.dump();
+  EXPECT_EQ(fb["counts"]["nonplanar_segments"], 1);
+  EXPECT_TRUE(test::contains(f.err, "1 of 1 segments have no outline: 1 not planar")) << f.err;
+  EXPECT_TRUE(test::contains(f.err, "max_rms_in_spacings 0.5")) << f.err;
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/io/io.h"
 #include "pointsurf/spatial/kd_tree.h"
+#include "pointsurf/segment/outlines.h"
 
 namespace pointsurf {
 
@@ -31,6 +32,7 @@ struct DataItem {
   std::string source;  // tag of the cloud a mesh was built from, or the file it was read from
   std::vector<ScanPose> scans;  // E57 scans read with keep_poses: the pose of each value of field "scan"
   std::optional<MeasuredField> measured;  // set by evaluate
+  std::vector<SegmentPlane> segment_planes;  // set by segment (ransac): the planes of field "segment"
 
   /// The points: a cloud's, or a mesh's vertices with their attributes.
   PointCloud& cloud() noexcept { return mesh.vertices; }

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "pointsurf/core/fields.h"
@@ -46,18 +47,48 @@ struct SegmentOutline {
   double perimeter = 0.0;                          // all loops' lengths, cloud units
 };
 
+/// A segment's own plane, when the segmentation fitted one (RANSAC): the outline uses it instead
+/// of a least-squares plane, and the segment counts as planar when the RMS distance of its points
+/// to it is at most `band` (RANSAC's epsilon: its inliers all lie within it).
+struct SegmentPlane {
+  std::int32_t segment = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // on the plane, cloud units
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit
+  double band = 0.0;                                  // cloud units
+};
+
+enum class SkipReason : unsigned char { TooSmall, NotPlanar };
+
+/// A segment that got no outline, and why.
+struct SkippedSegment {
+  std::int32_t segment = -1;
+  std::size_t points = 0;
+  SkipReason reason = SkipReason::NotPlanar;
+  double rms = 0.0;       // NotPlanar: RMS distance to its plane, cloud units
+  double threshold = 0.0; // NotPlanar: the RMS it had to stay within, cloud units
+};
+
 struct OutlineResult {
   std::vector<SegmentOutline> outlines;  // by segment label
   std::size_t nonplanar = 0;             // segments skipped as not planar
+  std::size_t too_small = 0;             // segments skipped for fewer than min_points points
+  std::vector<SkippedSegment> skipped;   // each skipped segment, by label
   double alpha_used = 0.0;               // cloud units
+  double spacing = 0.0;                  // the cloud's mean spacing, cloud units
 };
 
 /// For each segment of `labels` (one per point, -1 none) of at least `min_points` points that
-/// is planar: its points projected onto their least-squares plane, the regularized 2D alpha
+/// is planar: its points projected onto its plane (its own from `planes` when listed there,
+/// else their least-squares plane), the regularized 2D alpha
 /// shape of squared radius alpha^2 (Edelsbrunner, Kirkpatrick, Seidel 1983; CGAL
 /// Alpha_shape_2), whose boundary edges are chained into closed loops; a loop inside another is
 /// a hole; each loop is then simplified by Douglas-Peucker (Douglas, Peucker 1973). Throws UsageError for a bad parameter or a label count other than the point count.
 /// Deterministic; thread-safe (reads its inputs).
-OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params = {});
+OutlineResult outline_planar_segments(const PointCloud& cloud, std::span<const std::int32_t> labels, const OutlineParams& params = {},
+                                      std::span<const SegmentPlane> planes = {});
+
+/// "3 of 7 segments have no outline: 2 not planar (RMS to their plane 0.61-1.3 mean spacings,
+/// above 0.5), 1 with fewer than 30 points"; empty when none was skipped.
+std::string describe_skipped(const OutlineResult& result, std::size_t segments, const OutlineParams& params);
 
 }  // namespace pointsurf
