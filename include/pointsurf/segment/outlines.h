@@ -49,7 +49,8 @@ struct SegmentOutline {
 
 /// A segment's own plane, when the segmentation fitted one (RANSAC): the outline uses it instead
 /// of a least-squares plane, and the segment counts as planar when the RMS distance of its points
-/// to it is at most `band` (RANSAC's epsilon: its inliers all lie within it).
+/// to it is at most 1.5 `band` (RANSAC's epsilon: its inliers lie within it of the candidate
+/// plane, and a little farther from the refitted one it reports).
 struct SegmentPlane {
   std::int32_t segment = -1;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();    // on the plane, cloud units
