@@ -240,15 +240,27 @@ void run_evaluate(StageRun& run) {
                                  "coordinate system? (allow_far measures it anyway)",
                                  ref_tag, gap, mesh_tag, ref_box.diagonal(), mesh_box.diagonal()));
 
-  // The points measured: the reference cloud, or the vertices of a reference mesh; moved onto
-  // the mesh first when asked to (a best fit).
+  // The points measured: the reference cloud, or the surface of a reference mesh (`samples`
+  // area-uniform samples of its triangles, seeded: a CAD mesh's vertices are only its corners);
+  // moved onto the mesh first when asked to (a best fit).
+  const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
+  const bool surface = !ref.mesh.triangles.empty();
   const std::optional<RigidTransform> fit = a.boolean("align") ? std::optional(align_reference(run, mesh, ref_tag)) : std::nullopt;
+  std::vector<Vector3d> ref_vertices;  // a reference mesh's vertices, moved
+  if (fit && surface) {
+    ref_vertices = ref.cloud().positions;
+    fit->apply(std::span<Vector3d>(ref_vertices));
+  }
   std::vector<Vector3d> moved;
-  if (fit) {
+  if (surface) {
+    moved = sample_mesh_surface(fit ? std::span<const Vector3d>(ref_vertices) : std::span<const Vector3d>(ref.cloud().positions), ref.mesh.triangles,
+                                sd.samples, sd.seed + 1);
+    if (moved.empty()) throw InputError(fmt::format("the reference mesh \"{}\" has no area to sample", ref_tag));
+  } else if (fit) {
     moved = ref.cloud().positions;
     fit->apply(std::span<Vector3d>(moved));
   }
-  const std::vector<Vector3d>& measured = fit ? moved : ref.cloud().positions;
+  const std::vector<Vector3d>& measured = surface || fit ? moved : ref.cloud().positions;
 
   const TriangleBvh bvh(mesh);
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
@@ -259,12 +271,12 @@ void run_evaluate(StageRun& run) {
 
   DeviationParams sp = read_params<DeviationParams>(a);
   if (sp.tolerance == 0.0) {
-    sp.tolerance = run.context.mean_spacing(ref_tag);
+    sp.tolerance = surface ? mean_spacing(measured) : run.context.mean_spacing(ref_tag);
     rec.set_used("tolerance", sp.tolerance);
   }
   const DeviationStats stats = summarize_deviation(dist.distances, sp);
   EvaluateCounts counts;
-  counts.reference_points = ref.cloud().size();
+  counts.reference_points = measured.size();
   counts.mesh_triangles = mesh.triangles.size();
   rec.add_counts(size_counts(), counts);
   rec.add(evaluate_text_results(), EvaluateTexts{ref_tag, distance_sign_names().name(dist.sign_used), ""});
@@ -275,7 +287,7 @@ void run_evaluate(StageRun& run) {
   // simplification, or left out by the reconstruction): their deviation on its own.
   std::vector<double> unused;
   {
-    const std::vector<char> is_vertex = at_used_vertex(mesh, ref.cloud().positions);
+    const std::vector<char> is_vertex = at_used_vertex(mesh, surface ? std::span<const Vector3d>(measured) : ref.cloud().positions);
     for (std::size_t i = 0; i < is_vertex.size(); ++i)
       if (!is_vertex[i]) unused.push_back(dist.distances[i]);
   }
@@ -285,8 +297,11 @@ void run_evaluate(StageRun& run) {
 
   // Per region, when the reference carries labels.
   std::string region = a.text("region_field");
-  if (region.empty()) region = ref.cloud().fields.contains("segment") ? "segment" : ref.cloud().fields.contains("region") ? "region" : "";
-  else if (!ref.cloud().fields.contains(region))
+  if (surface && !region.empty())
+    throw InputError(fmt::format("region_field: the reference \"{}\" is a mesh, measured by its surface samples, which carry no labels", ref_tag));
+  if (region.empty()) {
+    if (!surface) region = ref.cloud().fields.contains("segment") ? "segment" : ref.cloud().fields.contains("region") ? "region" : "";
+  } else if (!ref.cloud().fields.contains(region))
     throw InputError(fmt::format("region_field: the reference \"{}\" has no field \"{}\"", ref_tag, region));
   if (!region.empty()) {
     rec.add(region_text_results(), EvaluateTexts{"", "", region});
@@ -297,9 +312,10 @@ void run_evaluate(StageRun& run) {
   }
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
-  const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
-  const SurfaceView ref_view{measured, ref.mesh.triangles};
+  const SurfaceView ref_view = surface ? SurfaceView{fit ? std::span<const Vector3d>(ref_vertices) : std::span<const Vector3d>(ref.cloud().positions),
+                                                    ref.mesh.triangles}
+                                      : SurfaceView{measured, {}};
   // The context's kd-tree over the reference serves unless the points were moved.
   const KdTree* ref_tree = fit || ref.is_mesh ? nullptr : &run.context.tree(ref_tag);
   const std::vector<double> back =
@@ -328,18 +344,26 @@ void run_evaluate(StageRun& run) {
   rec.summary = fmt::format("evaluate: {:.1f}% out of tolerance +-{:.4g} ({:.1f}% above, {:.1f}% below) of {}{} against \"{}\" ({}); "
                             "|d| p95 {:.4g}, p99 {:.4g}; max +{:.4g} / {:.4g}, mean +{:.4g} / {:.4g}, rms {:.4g}; Hausdorff {:.4g}; mesh {}",
                             100.0 * stats.out_of_tolerance, stats.tolerance, 100.0 * stats.above_tolerance, 100.0 * stats.below_tolerance,
-                            plural(ref.cloud().size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
+                            surface ? plural(measured.size(), "surface sample") : plural(ref.cloud().size(), "point"), fit ? " (aligned: " + fit->describe() + ")" : std::string(), mesh_tag,
                             distance_sign_names().name(dist.sign_used), stats.abs_p95, stats.abs_p99, stats.max_positive, stats.max_negative,
                             stats.mean_positive, stats.mean_negative, stats.rms, std::max(forward_max, back_max), quality_line(q));
 
-  // The output: the measured points with their deviation.
-  run.context.copy(ref_tag, run.output);
+  // The output: the measured points with their deviation (a reference mesh's surface samples,
+  // where they lie).
+  if (surface) {
+    PointCloud samples;
+    samples.positions = measured;
+    samples.crs = ref.cloud().crs;
+    run.context.set_cloud(run.output, std::move(samples), ref_tag);
+  } else {
+    run.context.copy(ref_tag, run.output);
+  }
   DataItem& out = run.context.item(run.output);
   out.mesh.triangles.clear();
   out.is_mesh = false;
   out.cloud().fields.add("deviation", out.cloud().size()).values = dist.distances;
   out.measured = MeasuredField{"deviation", sp.tolerance};
-  if (fit) fit->apply(out.cloud());
+  if (fit && !surface) fit->apply(out.cloud());
 }
 
 // The parameter `name` of `params` (declared there).
@@ -358,8 +382,9 @@ StageSpec evaluate_stage() {
   s.shape = CommandShape::Compare;
   s.summary = "Signed deviation of a reference cloud from a mesh, with statistics, Chamfer, Hausdorff and mesh quality";
   s.description = "Every reference point gets its exact distance to the mesh's triangles, positive outside (where the normals point). "
-                  "In a pipeline the reference is the cloud as read, unless reference names another tag. The output is the reference "
-                  "with a field deviation. With align the reference is first moved onto the mesh by a best fit (point-to-plane ICP), "
+                  "A reference mesh is measured by its surface: samples points drawn area-uniformly on its triangles (seeded), not its "
+                  "vertices. In a pipeline the reference is the cloud as read, unless reference names another tag. The output is the "
+                  "reference (a reference mesh's surface samples) with a field deviation. With align the reference is first moved onto the mesh by a best fit (point-to-plane ICP), "
                   "measured and written where it was moved to, and the transform is reported under align/.";
   s.order = 130;
   s.consumes = {Slot{"mesh", DataKind::Mesh}, Slot{"reference", DataKind::Any}};

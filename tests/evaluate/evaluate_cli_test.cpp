@@ -197,5 +197,40 @@ TEST_F(EvaluateCli, InAPipelineTheReferenceIsTheCloudAsRead) {
   EXPECT_TRUE(test::contains(bad.err, "did you mean \"read1\"")) << bad.err;
 }
 
+// A reference mesh is measured by its surface, not its corners: a 2-triangle square 0.01
+// above a larger one gives `samples` points, all at +0.01, written out with their deviation.
+TEST_F(EvaluateCli, AReferenceMeshIsMeasuredByItsSurfaceSamples) {
+  const Vector3d at(7e5, 4e6, 30.0);
+  auto square = [&](double half, double z) {
+    TriangleMesh m;
+    for (const auto& [x, y] : {std::pair{-half, -half}, std::pair{half, -half}, std::pair{half, half}, std::pair{-half, half}})
+      m.vertices.positions.push_back(at + Vector3d(x, y, z));
+    m.triangles = {Triangle(0, 1, 2), Triangle(0, 2, 3)};  // counter-clockwise from +z
+    return m;
+  };
+  write_mesh(path("mesh.ply"), square(1.0, 0.0));
+  write_mesh(path("ref.ply"), square(0.5, 0.01));
+  const test::CliResult r = test::run_cli("evaluate " + path("mesh.ply") + " --reference " + path("ref.ply") + " --samples 5000 --out " +
+                                              path("dev.ply") + " --report " + path("r.json") + " --quiet",
+                                          dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json st = stage("r.json", "evaluate");
+  EXPECT_EQ(st["counts"]["reference_points"], 5000);  // not its 4 vertices
+  EXPECT_NEAR(st["metrics"]["deviation"]["max_positive"].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(st["metrics"]["deviation"]["abs_p95"].get<double>(), 0.01, 1e-9);
+  EXPECT_NEAR(st["metrics"]["deviation"]["max_negative"].get<double>(), 0.0, 1e-12);
+  const PointCloud out = read_point_cloud(path("dev.ply")).cloud;
+  ASSERT_EQ(out.size(), 5000u);
+  const ScalarField* d = out.fields.find("deviation");
+  ASSERT_NE(d, nullptr);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_NEAR(d->values[i], 0.01, 1e-9);
+    EXPECT_NEAR(out.positions[i].z() - at.z(), 0.01, 1e-9);
+    ASSERT_LE((out.positions[i] - at).head<2>().cwiseAbs().maxCoeff(), 0.5 + 1e-9);
+  }
+  // The way back is exact to the reference's triangles: the mesh's corners lie 0.5 beyond it.
+  EXPECT_NEAR(st["metrics"]["distance"]["mesh_to_reference_max"].get<double>(), std::sqrt(0.5 * 0.5 * 2 + 0.01 * 0.01), 0.02);
+}
+
 }  // namespace
 }  // namespace pointsurf
