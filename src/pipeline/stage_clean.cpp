@@ -99,8 +99,20 @@ void run_clean(StageRun& run) {
     } else if (name == "sor") {
       removal(remove_statistical_outliers(cloud, sor_params(a), &tree, progress));
     } else if (name == "radius") {
-      const OutlierResult r = remove_radius_outliers(cloud, radius_params(a), &tree, progress);
+      const RadiusOutlierParams rp = radius_params(a);
+      const OutlierResult r = remove_radius_outliers(cloud, rp, &tree, progress);
       rec.set_used("radius.radius_used", r.threshold);
+      if (r.removed == before) {
+        // A valid radius that finds no neighbourhood anywhere: the computation failed (exit 3),
+        // about --radius, rather than an empty cloud written with exit 0.
+        const double spacing = run.context.mean_spacing(run.output);
+        ComputeError e(fmt::format("radius: every one of the {} points has fewer than {} others within {:.4g} (mean spacing {:.4g}): all "
+                                   "would be removed; use a radius of a few mean spacings (--radius 4sp gives {:.4g}) or a lower "
+                                   "--min-neighbors",
+                                   before, rp.min_neighbours, r.threshold, spacing, 4.0 * spacing));
+        e.set_key("radius");
+        throw e;
+      }
       removal(r);
     } else if (name == "ransac") {
       const OutlierResult r = remove_ransac_outliers(cloud, ransac_params(a), &tree, progress);

@@ -198,6 +198,10 @@ TEST_F(Cli, TooFewNeighboursIsAWarningWithTheShareAndAllPointsAnError) {
   // A valid radius that finds no neighbourhood is a failure of the computation (exit 3).
   expect_failure("normals " + path("plane.ply") + " " + path("o.ply") + " --radius 0.001", dir_, 3,
                  "radius: every one of the 2020 points has fewer than 3 neighbours within 0.001");
+  // So is a radius outlier test that would remove every point (not an empty file and exit 0).
+  expect_failure("clean " + path("plane.ply") + " " + path("none.ply") + " --method radius --radius 1e-9", dir_, 3,
+                 "radius: every one of the 2020 points has fewer than 4 others within 1e-09");
+  EXPECT_FALSE(std::filesystem::exists(path("none.ply")));
 
   // Later stages refuse all-zero normals and say what they skip when only some are zero.
   cloud.normals.assign(cloud.size(), Vector3d::Zero());
