@@ -40,7 +40,7 @@ struct Mesh {
 double surface_area(const Mesh& m) {
   double total = 0.0;
   for (const Eigen::Vector3i& f : m.triangles)
-    total += 0.5 * (m.vertices.positions[f[1]] - m.vertices.positions[f[0]]).cross(m.vertices.positions[f[2]] - m.vertices.positions[f[0]]).norm();
+    total += 0.5 * (m.vertices[f[1]] - m.vertices[f[0]]).cross(m.vertices[f[2]] - m.vertices[f[0]]).norm();
   return total;
 }
 
@@ -56,7 +56,7 @@ OneSided distances_to(const std::vector<Vector3d>& samples, const Mesh& target) 
     out.mean = out.rms = out.max = out.p95 = INFINITY;
     return out;
   }
-  std::vector<double> d = pointsurf::nearest_surface_distances(samples, pointsurf::SurfaceView{target.vertices.positions, target.triangles});
+  std::vector<double> d = pointsurf::nearest_surface_distances(samples, pointsurf::SurfaceView{target.vertices, target.triangles});
   double sum = 0.0, sq = 0.0;
   for (double v : d) { sum += v; sq += v * v; out.max = std::max(out.max, v); }
   out.mean = sum / double(d.size());
@@ -76,7 +76,7 @@ nlohmann::json angle_figures(const Mesh& m) {
   for (const Eigen::Vector3i& f : m.triangles) {
     double smallest = 180.0;
     for (int c = 0; c < 3; ++c) {
-      const Vector3d u = m.vertices.positions[f[(c + 1) % 3]] - m.vertices.positions[f[c]], v = m.vertices.positions[f[(c + 2) % 3]] - m.vertices.positions[f[c]];
+      const Vector3d u = m.vertices[f[(c + 1) % 3]] - m.vertices[f[c]], v = m.vertices[f[(c + 2) % 3]] - m.vertices[f[c]];
       const double nu = u.norm(), nv = v.norm();
       if (nu == 0.0 || nv == 0.0) { smallest = 0.0; continue; }
       smallest = std::min(smallest, std::acos(std::clamp(u.dot(v) / (nu * nv), -1.0, 1.0)) * 180.0 / std::numbers::pi);
@@ -118,11 +118,11 @@ int main(int argc, char** argv) {
     const pointsurf::BoundingBox box = pointsurf::bounding_box(reference.mesh.vertices.positions);
     const Vector3d origin = box.center();
     Mesh a{result.mesh.vertices.positions, result.mesh.triangles}, b{reference.mesh.vertices.positions, reference.mesh.triangles};
-    for (Vector3d& v : a.vertices.positions) v -= origin;
-    for (Vector3d& v : b.vertices.positions) v -= origin;
+    for (Vector3d& v : a.vertices) v -= origin;
+    for (Vector3d& v : b.vertices) v -= origin;
     const double area_a = surface_area(a), area_b = surface_area(b);
-    const std::vector<Vector3d> sa = pointsurf::sample_mesh_surface(a.vertices.positions, a.triangles, samples, 11),
-                                sb = pointsurf::sample_mesh_surface(b.vertices.positions, b.triangles, samples, 12);
+    const std::vector<Vector3d> sa = pointsurf::sample_mesh_surface(a.vertices, a.triangles, samples, 11),
+                                sb = pointsurf::sample_mesh_surface(b.vertices, b.triangles, samples, 12);
     const OneSided ab = distances_to(sa, b), ba = distances_to(sb, a);
     const double diagonal = box.diagonal();
 

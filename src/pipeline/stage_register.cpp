@@ -4,6 +4,8 @@
 // pointsurf/register/multi.h).
 #include <Eigen/Core>
 
+#include <filesystem>
+
 #include "pipeline/detail/declare.h"
 #include "pipeline/detail/stage_util.h"
 #include "pointsurf/core/error.h"
@@ -174,8 +176,26 @@ void run_register_many(StageRun& run) {
   PointCloud merged = merge_scans(scans, r.poses);
   links.points = merged.size();
   rec.add_counts(merged_counts(), links);
-  rec.summary = fmt::format("register-many: {} in one frame ({} of them, {} links, {} pruned), {}", plural(scans.size(), "scan"),
-                            multi_mode_name(params.mode), r.links.size(), pruned, plural(merged.size(), "point"));
+  // One T.json per scan on request: its pose, mapping it into the first scan's frame, as
+  // `register --out` writes one and `transform --file` reads it.
+  if (const std::string& dir = run.args.text("poses"); !dir.empty()) {
+    std::filesystem::create_directories(dir);
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const std::string& source = run.context.item(run.inputs[i]).source;
+      const std::string stem = source.empty() ? run.inputs[i] : std::filesystem::path(source).stem().string();
+      TransformFile file;
+      file.transform = r.poses[i];
+      file.members = {{"scan", std::int64_t(i)}, {"input", source.empty() ? run.inputs[i] : source},
+                      {"frame", std::string("the first scan's: ") + (run.context.item(run.inputs[0]).source.empty() ? run.inputs[0]
+                                                                                                                   : run.context.item(run.inputs[0]).source)},
+                      {"refined", params.refine}};
+      const std::filesystem::path path = std::filesystem::path(dir) / fmt::format("scan_{}_{}.json", i, stem);
+      write_transform_file(path, file);
+    }
+  }
+  rec.summary = fmt::format("register-many: {} in one frame ({} of them, {} links, {} pruned), {}{}", plural(scans.size(), "scan"),
+                            multi_mode_name(params.mode), r.links.size(), pruned, plural(merged.size(), "point"),
+                            run.args.text("poses").empty() ? "" : "; poses written to " + run.args.text("poses"));
   run.context.set_cloud(run.output, std::move(merged), run.inputs.front());
 }
 
@@ -217,11 +237,13 @@ StageSpec register_many_stage() {
       "Registers each scan to the first (--mode first) or to the one before it (--mode chain) as `register` does, then registers "
       "every further pair that overlaps under those poses and refines all poses together on a pose graph (least squares, the first "
       "scan fixed; wrong loop closures dropped). The merged cloud holds a field \"scan\" (0 for the first input); the poses are in "
-      "the report.";
+      "the report, and with --poses DIR one T.json per scan (DIR/scan_<i>_<name>.json, readable by transform --file).";
   s.order = 76;
   s.consumes = {Slot{"clouds", DataKind::Any}};
   s.produces = Slot{"cloud", DataKind::Cloud};
   s.params = params_of(RegisterScansParams::fields());
+  s.params.push_back(
+      P::text("poses", "", "Write each scan's pose as a T.json file in this directory, scan_<i>_<name>.json (empty: none)").meta("DIR"));
   s.examples = {"pointsurf transform data/kitten.xyz moved.ply --matrix 0.8660254037844387,-0.5,0,0.05,0.5,0.8660254037844387,0,0.02,0,0,1,-0.03,0,0,0,1",
                 "pointsurf register-many data/kitten.xyz moved.ply --out merged.ply",
                 "pointsurf register-many data/kitten.xyz moved.ply merged_first.ply --mode first --icp point"};

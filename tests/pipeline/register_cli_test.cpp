@@ -163,9 +163,20 @@ TEST_F(RegisterCli, RegisterManyMergesWithAScanField) {
   EXPECT_EQ(m["pose_2"].size(), 16u);
   EXPECT_TRUE(m.contains("graph_cost"));
   // The positional form names the output last, as merge does.
-  r = test::run_cli("register-many" + inputs + " " + path("merged2.ply") + " --mode first --no-refine", dir_);
+  r = test::run_cli("register-many" + inputs + " " + path("merged2.ply") + " --mode first --no-refine --poses " + path("poses"), dir_);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::contains(r.err, "register-many: 3 scans in one frame (first of them")) << r.err;
+  // --poses: one T.json per scan, the pose that maps it into scan 0's frame; transform --file
+  // with it puts scan 2's points where the merge put them.
+  for (std::size_t i = 0; i < 3; ++i) {
+    const TransformFile f = read_transform_file(path(fmt::format("poses/scan_{}_s{}.json", i, i)));
+    if (i == 0) EXPECT_LT((f.transform.matrix() - Eigen::Matrix4d::Identity()).norm(), 1e-12);
+  }
+  r = test::run_cli("transform " + path("s2.ply") + " " + path("s2_moved.ply") + " --file " + path("poses/scan_2_s2.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud moved = read_point_cloud(path("s2_moved.ply")).cloud;
+  const PointCloud merged2 = read_point_cloud(path("merged2.ply")).cloud;
+  EXPECT_LT((moved.positions[0] - merged2.positions[first_of_2]).norm(), 1e-9);
 }
 
 TEST_F(RegisterCli, PipelineReadsTwoScansByTagRegistersAndMerges) {
