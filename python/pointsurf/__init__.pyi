@@ -403,7 +403,7 @@ class RegisterManyReport(TypedDict):
 class RegisterManyCloud(PointCloud):
     report: RegisterManyReport
 
-def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] = ..., refine: bool = ..., min_overlap: float = ..., descriptor: Literal['fpfh', 'pfh'] = ..., radius: float | str = ..., voxel: float | str = ..., ransac_distance: float | str = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., icp: Literal['point', 'plane'] = ..., icp_distance: float | str = ..., max_normal_angle_deg: float = ..., iterations: int = ..., normals_k: int = ..., min_fitness: float = ..., global_alignment: bool = ..., progress: Progress = None) -> RegisterManyCloud:
+def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] = ..., refine: bool = ..., min_overlap: float = ..., descriptor: Literal['fpfh', 'pfh'] = ..., radius: float | str = ..., voxel: float | str = ..., ransac_distance: float | str = ..., ransac_iterations: int = ..., confidence: float = ..., seed: int = ..., icp: Literal['point', 'plane'] = ..., icp_distance: float | str = ..., max_normal_angle_deg: float = ..., iterations: int = ..., normals_k: int = ..., min_fitness: float = ..., global_alignment: bool = ..., poses: str = ..., progress: Progress = None) -> RegisterManyCloud:
     """Register several scans into the first one's frame and merge them (field scan)
 
     mode = 'chain': Register each scan to the first, or to the one before it
@@ -423,6 +423,7 @@ def register_many(clouds: Sequence[Data], /, *, mode: Literal['first', 'chain'] 
     normals_k = 30: Neighbours for normals when the input has none (points, [3, inf))
     min_fitness = 0.1: Below this final fitness the clouds are taken as not overlapping (exit 3) ([0, 1])
     global_alignment = True: Global alignment from descriptors; false starts ICP from the clouds as they are (already roughly aligned)
+    poses = '': Write each scan's pose as a T.json file in this directory, scan_<i>_<name>.json (empty: none)
     """
 
 SegmentCounts = TypedDict('SegmentCounts', {'zero_normals': int, 'candidates': int, 'points': int, 'segments': int, 'unassigned': int}, total=False)
@@ -463,7 +464,7 @@ def segment(cloud: Data, /, *, method: Literal['region', 'euclidean', 'ransac', 
     normals_k = 30: Neighbours for normals when the input has none ([3, inf))
     """
 
-BoundaryCounts = TypedDict('BoundaryCounts', {'points': int, 'boundary': int, 'outlines': int, 'loops': int, 'holes': int, 'nonplanar_segments': int}, total=False)
+BoundaryCounts = TypedDict('BoundaryCounts', {'points': int, 'boundary': int, 'outlines': int, 'loops': int, 'holes': int, 'nonplanar_segments': int, 'small_segments': int}, total=False)
 BoundaryMetrics = TypedDict('BoundaryMetrics', {'outline_area': float, 'outline_length': float, 'outline_source': str}, total=False)  # and per item: outline_*: list[float]
 class BoundaryReport(TypedDict):
     type: str
