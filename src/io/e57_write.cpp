@@ -181,8 +181,8 @@ void E57Writer::group_scans() {
 }
 
 // E57 stores intensity as its value and declares the range it can take in intensityLimits
-// (ASTM E2807 8.4.17); readers such as CloudCompare and libE57Format's simple API show the
-// stored value. Integer fields (LAS's uint16) are stored as integers with their type's range as
+// (ASTM E2807), so a reader that takes the stored value and one that scales by the limits each
+// see what the writer meant. Integer fields (LAS's uint16) are stored as integers with their type's range as
 // the limits when they fit it; floats as floats, with [0, 1] as the limits when they lie there.
 void E57Writer::set_intensity_limits() {
   intensity = cloud.fields.find("intensity");

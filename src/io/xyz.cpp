@@ -159,8 +159,8 @@ struct TextLayout {
 
 constexpr TextLayout kTextLayouts[] = {
     {"x y z", "x y z"},
-    {"x y z intensity", "x y z and intensity"},
-    {"x y z nx ny nz", "normals (unit vectors)"},
+    {"x y z intensity", "intensity in column 4"},
+    {"x y z nx ny nz", "unit normals"},
     {"x y z r g b", "colours"},
     {"x y z intensity r g b", "PTS: intensity, then colours", true},
     {"x y z r g b field6", "CloudCompare: colours, then a scalar field"},
