@@ -394,10 +394,10 @@ RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options) 
     });
   } else {
     // A "//" line that is no header of this data is an ordinary comment; a plain line of words
-    // is most likely a title, worth a warning since the columns are then guessed by count.
+    // is most likely a title, worth a warning since the columns are then inferred from the values.
     if (header && !header_slashes)
       raw.warnings.push_back(fmt::format("{}: line {}: first line is not a header of x, y, z columns for the {} columns of the data; "
-                                         "ignored, columns taken by count (use a column spec to say what they are)",
+                                         "ignored, columns inferred from the values (use a column spec to say what they are)",
                                          name, header_line, columns));
     if (columns < 3)
       throw InputError(fmt::format("{}: line {}: expected at least 3 values (x y z), got {}", name, first_data_line, columns));
