@@ -25,11 +25,11 @@
 // Writing. .xyz/.txt/.asc are x y z [nx ny nz] [r g b as 0..255] [fields]; with more than x y z,
 // a first line "# x y z [nx ny nz] [r g b] name..." names the columns (a comment to other
 // readers), so the round trip keeps every attribute and field by name (fields as Float64: text
-// has no types) without inferring a layout; x y z alone, plain numbers. .pts has the PTS count line and no names: the layouts the column-count
-// defaults read back exactly are xyz, xyz+fields1 (read as "intensity"), xyz+normals, xyz+rgb,
-// xyz+field+rgb (written in the PTS order x y z i r g b), xyz+normals+rgb and
-// xyz+normals+rgb+1 field ("field9"). .csv writes a header line of names and keeps every field
-// with its name.
+// has no types) without inferring a layout; x y z alone, plain numbers. .pts has the PTS count
+// line and no names: the layouts read back by their values are xyz, xyz+field (read as
+// "intensity"), xyz+normals, xyz+rgb, xyz+field+rgb (written in the PTS order x y z i r g b),
+// xyz+normals+field ("field6"), xyz+normals+rgb and xyz+normals+rgb+field ("field9"). .csv
+// writes a header line of names and keeps every field with its name.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -190,8 +190,8 @@ int colour_evidence(const std::vector<std::vector<double>>& rows, std::size_t c)
     }
   // Integers that are all 0 or 1 say no more than numbers in [0, 1] do (an axis-aligned normal).
   bool binary = true;
-  for (const std::vector<double>& row : rows) binary = binary && (row[c] == 0.0 || row[c] == 1.0) && (row[c + 1] == 0.0 || row[c + 1] == 1.0) &&
-                                              (row[c + 2] == 0.0 || row[c + 2] == 1.0);
+  for (const std::vector<double>& row : rows)
+    for (std::size_t k = c; k < c + 3; ++k) binary = binary && (row[k] == 0.0 || row[k] == 1.0);
   return integers && !binary ? 2 : unit_range ? 1 : 0;
 }
 
