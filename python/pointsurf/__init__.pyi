@@ -675,7 +675,7 @@ def write(data: Data, /, filename: Path, *, format: Literal['', 'ply', 'xyz', 'p
     double = False: Write double PCD positions even where float32 keeps them (PCL and Open3D 0.16 read them as zeros)
     big_endian = False: Write binary big-endian PLY
     compressed = False: Write PCD as binary_compressed (LZF)
-    las_offset = []: LAS offset (default: near the data's minimum) (cloud units)
-    las_scale = 0.0: LAS scale, cloud units per count (default: 1e-4 or coarser for large extents) (cloud units, (0, inf))
+    las_offset = []: LAS offset (default: the input LAS or LAZ file's, else near the data's minimum) (cloud units)
+    las_scale = 0.0: LAS scale, cloud units per count (default: the input LAS or LAZ file's, else 1e-4 or coarser for large extents) (cloud units, (0, inf))
     e57_scale = 0.0: E57: scaled-integer coordinates with this step (default: float64) (cloud units, (0, inf))
     """

@@ -160,6 +160,7 @@ void PointCloud::validate() const {
 PointCloud PointCloud::select(std::span<const std::size_t> indices) const {
   PointCloud out;
   out.crs = crs;
+  out.grid = grid;
   out.positions.reserve(indices.size());
   for (std::size_t i : indices) out.positions.push_back(positions[i]);
   if (has_normals()) {
@@ -185,6 +186,8 @@ void PointCloud::append(const PointCloud& other) {
     return;
   }
   if (crs.empty()) crs = other.crs;
+  if (empty() && grid.empty()) grid = other.grid;
+  else if (grid != other.grid && !other.empty()) grid = {};
   const std::size_t n0 = size(), n1 = other.size();
   const bool normals_out = has_normals() || other.has_normals();
   const bool colors_out = has_colors() || other.has_colors();

@@ -7,8 +7,8 @@
 // applied (ReadOptions::apply_poses) and reported per scan; a `scan` field (0, 1, ...) when the
 // file has more than one scan; points flagged by cartesianInvalidState / sphericalInvalidState
 // (not 0) dropped and counted in a warning; colorRed/Green/Blue scaled to [0, 1] by colorLimits
-// (else the field's minimum and maximum); intensity scaled to [0, 1] by intensityLimits (else
-// the field's limits); surface normals of the libE57 extension (nor:normalX/Y/Z) as normals;
+// (else the field's minimum and maximum); intensity as stored, its value (intensityLimits only
+// give its range; values in [0, 1] outside them were written normalised and are scaled back); surface normals of the libE57 extension (nor:normalX/Y/Z) as normals;
 // every other field (rowIndex, timeStamp, ...) as a named field. Images (/images2D) are skipped
 // with a warning. Index packets are skipped.
 #include <algorithm>
@@ -53,7 +53,7 @@ struct Leaf {
     if (kind == Kind::Float) return count * (single ? 4 : 8);
     return (count * bits + 7) / 8;  // count * bits < 2^64: count is bounded by the file size first
   }
-  // Limits of the decoded values, for normalising colour and intensity.
+  // Limits of the decoded values, for normalising colour.
   double lower() const { return kind == Kind::Float ? float_minimum : kind == Kind::Integer ? double(minimum) : double(minimum) * scale + offset; }
   double upper() const { return kind == Kind::Float ? float_maximum : kind == Kind::Integer ? double(maximum) : double(maximum) * scale + offset; }
 };
@@ -336,6 +336,14 @@ bool normalise(std::vector<double>& v, double lo, double hi) {
   return true;
 }
 
+// Intensity is stored as its value, within intensityLimits [lo, hi] (ASTM E2807). Values all in
+// [0, 1] with some outside the limits were stored normalised against them.
+bool intensity_stored_normalised(const std::vector<double>& v, double lo, double hi) {
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo) || v.empty()) return false;
+  const auto [a, b] = std::minmax_element(v.begin(), v.end());
+  return *a >= 0.0 && *b <= 1.0 && (*a < lo || *b > hi);
+}
+
 // One scan's points as a cloud (before concatenation).
 struct ScanCloud {
   PointCloud cloud;
@@ -415,9 +423,13 @@ ScanCloud scan_cloud(const E57PagedReader& file, const Scan& scan, std::size_t i
     std::string field = std::string(key.rfind(kPointsurfPrefix, 0) == 0 ? key.substr(kPointsurfPrefix.size()) : key);
     ScalarType type = field_type(*leaf);
     std::vector<double>& v = *take(key);
-    if (key == "intensity") {
-      if (normalise(v, scan.intensity_min, scan.intensity_max) || normalise(v, leaf->lower(), leaf->upper())) type = ScalarType::Float32;
-      else warnings.push_back(fmt::format("scan {} ({}): intensity has no limits; kept as stored", index, scan.name));
+    if (key == "intensity" && intensity_stored_normalised(v, scan.intensity_min, scan.intensity_max)) {
+      // pointsurf before issue 28 stored (v - lo) / (hi - lo) under intensityLimits [lo, hi].
+      warnings.push_back(fmt::format("scan {} ({}): intensity lies in [0, 1], outside its intensityLimits [{}, {}]: read as stored "
+                                     "in [0, 1] against those limits (files of pointsurf before 2026-12)",
+                                     index, scan.name, scan.intensity_min, scan.intensity_max));
+      for (double& x : v) x = scan.intensity_min + x * (scan.intensity_max - scan.intensity_min);
+      type = ScalarType::Float64;
     }
     if (c.fields.contains(field)) continue;
     c.fields.add(field, 0, type).values = std::move(v);

@@ -3,7 +3,8 @@
 //
 // Writing: one scan, or one per value of the `scan` field, each with its pose from
 // WriteOptions::scan_poses (identity otherwise); coordinates float64, or scaled integers with
-// WriteOptions::e57_scale; colours as 8-bit integers, intensity as float64 with its limits,
+// WriteOptions::e57_scale; colours as 8- or 16-bit integers, intensity as its value (integer or
+// float) with its limits,
 // normals by the nor: extension (float32), other fields in a pointsurf: extension namespace
 // (E57's own point fields such as timeStamp or rowIndex under their names).
 #include <algorithm>
@@ -13,6 +14,8 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
+#include <utility>
 #include <random>
 #include <string>
 #include <string_view>
@@ -65,12 +68,14 @@ std::vector<unsigned char> pack_bits(const std::vector<std::uint64_t>& raw, unsi
   return out;
 }
 
-OutField integer_field(const std::string& name, const std::vector<std::int64_t>& values) {
-  std::int64_t lo = 0, hi = 0;
+// An Integer field; its minimum and maximum are the values' own, widened to `limits` when given.
+OutField integer_field(const std::string& name, const std::vector<std::int64_t>& values,
+                       std::optional<std::pair<std::int64_t, std::int64_t>> limits = std::nullopt) {
+  std::int64_t lo = limits ? limits->first : 0, hi = limits ? limits->second : 0;
   if (!values.empty()) {
     const auto [a, b] = std::minmax_element(values.begin(), values.end());
-    lo = *a;
-    hi = *b;
+    lo = limits ? std::min(lo, *a) : *a;
+    hi = limits ? std::max(hi, *b) : *b;
   }
   std::vector<std::uint64_t> raw(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) raw[i] = static_cast<std::uint64_t>(values[i]) - static_cast<std::uint64_t>(lo);
@@ -175,18 +180,40 @@ void E57Writer::group_scans() {
   if (groups.empty()) groups[0];
 }
 
+// E57 stores intensity as its value and declares the range it can take in intensityLimits
+// (ASTM E2807), so a reader that takes the stored value and one that scales by the limits each
+// see what the writer meant. Integer fields (LAS's uint16) are stored as integers with their type's range as
+// the limits when they fit it; floats as floats, with [0, 1] as the limits when they lie there.
 void E57Writer::set_intensity_limits() {
   intensity = cloud.fields.find("intensity");
   intensity_lo = 0.0;
   intensity_hi = 1.0;
-  if (intensity && !intensity->values.empty()) {
-    const auto [a, b] = std::minmax_element(intensity->values.begin(), intensity->values.end());
-    if (*a < 0.0 || *b > 1.0) {
-      intensity_lo = *a;
-      intensity_hi = *b > *a ? *b : *a + 1.0;
-      notes.push_back(fmt::format("intensity outside [0, 1]: written with intensityLimits [{}, {}], which E57 readers scale it by", intensity_lo, intensity_hi));
-    }
+  intensity_integer = false;
+  if (!intensity || intensity->values.empty()) return;
+  const auto [a, b] = std::minmax_element(intensity->values.begin(), intensity->values.end());
+  intensity_integer = !scalar_type_is_float(intensity->type);
+  if (intensity_integer && (intensity->type == ScalarType::UInt8 || intensity->type == ScalarType::UInt16)) {
+    intensity_hi = intensity->type == ScalarType::UInt8 ? 255.0 : 65535.0;
+    if (*a >= 0.0 && *b <= intensity_hi) return;
+  } else if (!intensity_integer && *a >= 0.0 && *b <= 1.0) {
+    return;
   }
+  intensity_lo = *a;
+  intensity_hi = *b > *a ? *b : *a + 1.0;
+}
+
+// 8-bit colour limits when every channel is a multiple of 1/255 (8-bit sources: PLY, PCD, text),
+// else 16-bit (LAS's colours), so that no colour is rounded to a coarser step than it came with.
+void E57Writer::set_color_limits() {
+  color_maximum = 255;
+  for (const Vector3f& c : cloud.colors)
+    for (int ch = 0; ch < 3; ++ch) {
+      const double v = std::clamp(double(c[ch]), 0.0, 1.0) * 255.0;
+      if (std::abs(v - std::round(v)) > 1e-3) {
+        color_maximum = 65535;
+        return;
+      }
+    }
 }
 
 void E57Writer::start_file() {
@@ -231,9 +258,11 @@ std::vector<OutField> E57Writer::color_fields(const std::vector<std::size_t>& in
   if (!cloud.has_colors()) return fields;
   for (int ch = 0; ch < 3; ++ch) {
     std::vector<std::int64_t> raw(n);
-    for (std::size_t i = 0; i < n; ++i) raw[i] = static_cast<std::int64_t>(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * 255.0 + 0.5);
-    fields.push_back({fmt::format("<color{} type=\"Integer\" minimum=\"0\" maximum=\"255\"/>", ch == 0 ? "Red" : ch == 1 ? "Green" : "Blue"),
-                      pack_bits(std::vector<std::uint64_t>(raw.begin(), raw.end()), 8)});
+    for (std::size_t i = 0; i < n; ++i)
+      raw[i] = static_cast<std::int64_t>(std::clamp(double(cloud.colors[indices[i]][ch]), 0.0, 1.0) * color_maximum + 0.5);
+    fields.push_back({fmt::format("<color{} type=\"Integer\" minimum=\"0\" maximum=\"{}\"/>", ch == 0 ? "Red" : ch == 1 ? "Green" : "Blue",
+                                  color_maximum),
+                      pack_bits(std::vector<std::uint64_t>(raw.begin(), raw.end()), color_maximum == 255 ? 8 : 16)});
   }
   return fields;
 }
@@ -259,8 +288,13 @@ std::vector<OutField> E57Writer::extra_fields(long long scan, const std::vector<
     if (&field == scan_field) continue;
     for (std::size_t i = 0; i < n; ++i) column[i] = field.values[indices[i]];
     if (&field == intensity) {
-      for (double& v : column) v = (v - intensity_lo) / (intensity_hi - intensity_lo);
-      fields.push_back(float_field<double>("intensity", column));
+      if (intensity_integer) {
+        std::vector<std::int64_t> raw(n);
+        for (std::size_t i = 0; i < n; ++i) raw[i] = to_stored<std::int64_t>(column[i]);
+        fields.push_back(integer_field("intensity", raw, std::pair(static_cast<std::int64_t>(intensity_lo), static_cast<std::int64_t>(intensity_hi))));
+      } else {
+        fields.push_back(field.type == ScalarType::Float32 ? float_field<float>("intensity", column) : float_field<double>("intensity", column));
+      }
       continue;
     }
     if (!is_xml_name(field.name)) {
@@ -321,7 +355,8 @@ std::string E57Writer::scan_structure(long long scan, std::size_t n, std::uint64
   if (cloud.has_colors()) {
     out += "      <colorLimits type=\"Structure\">";
     for (const char* c : {"Red", "Green", "Blue"})
-      out += fmt::format("<color{0}Minimum type=\"Integer\">0</color{0}Minimum><color{0}Maximum type=\"Integer\">255</color{0}Maximum>", c);
+      out += fmt::format("<color{0}Minimum type=\"Integer\">0</color{0}Minimum><color{0}Maximum type=\"Integer\">{1}</color{0}Maximum>", c,
+                         color_maximum);
     out += "</colorLimits>\n";
   }
   out += fmt::format(
@@ -387,6 +422,7 @@ void write_e57(const std::filesystem::path& path, const PointCloud& cloud, const
   E57Writer e57(path, cloud, options, notes);
   e57.group_scans();
   e57.set_intensity_limits();
+  e57.set_color_limits();
   e57.start_file();
   for (const auto& [scan, indices] : e57.groups) e57.write_scan(scan, indices);
   e57.note_skipped_fields();

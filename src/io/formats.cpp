@@ -82,12 +82,12 @@ void note_las_crs(const PointCloud& c, std::vector<std::string>& notes) {
 }
 void write_las(const Path& tmp, const Path&, const PointCloud& c, const std::vector<Triangle>&, const FieldSet&, const WriteOptions& o,
                std::vector<std::string>& notes) {
-  io::detail::write_las(tmp, c, o);
+  io::detail::write_las(tmp, c, o, notes);
   note_las_crs(c, notes);
 }
 void write_laz(const Path& tmp, const Path&, const PointCloud& c, const std::vector<Triangle>&, const FieldSet&, const WriteOptions& o,
                std::vector<std::string>& notes) {
-  io::detail::write_laz(tmp, c, o);
+  io::detail::write_laz(tmp, c, o, notes);
   note_las_crs(c, notes);
 }
 void write_off(const Path& tmp, const Path&, const PointCloud& c, const std::vector<Triangle>& t, const FieldSet&, const WriteOptions& o,

@@ -38,8 +38,8 @@ RawData read_las(const std::filesystem::path& path, const ReadOptions&) {
   return raw;
 }
 
-void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
-  const LasRecordWriter writer(cloud, options, display_name(path));
+void write_las(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes) {
+  const LasRecordWriter writer(cloud, options, display_name(path), notes);
   FileWriter out(path);
   out.write(writer.head("", 0, 0));
   std::vector<char> r(writer.record_length());

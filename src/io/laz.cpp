@@ -252,9 +252,9 @@ RawData read_laz(const std::filesystem::path& path, const ReadOptions& options) 
 
 // Written as the LAS writer writes (LAS 1.4, point format 6, or 7 with colours, extra bytes for
 // the other fields) with LASzip's layered chunked compressor, 50,000 points per chunk.
-void write_laz(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options) {
+void write_laz(const std::filesystem::path& path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes) {
   const std::string name = display_name(path);
-  const LasRecordWriter writer(cloud, options, name);
+  const LasRecordWriter writer(cloud, options, name, notes);
   laz::LaszipVlr lz;
   lz.compressor = 3;
   lz.items = laz::layered_items(writer.format(), writer.extra_bytes());

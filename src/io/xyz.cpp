@@ -9,23 +9,27 @@
 //     red green blue, i or intensity, anything else kept as a field of that name);
 //   - a PTS point count (a single integer), checked against the points found (a warning when
 //     they differ).
-// Without a header or ReadOptions::columns, the meaning follows the column count: 3 xyz,
-// 4 xyz intensity, 6 xyz + normals when the last three columns are unit vectors on the first
-// lines, else xyz rgb, 7 xyz intensity rgb (PTS), 9 xyz normals rgb, 10 xyz normals rgb + one
-// field, any other count xyz + fields "field3", "field4", ... (named by 0-based column).
+// Without a header or ReadOptions::columns, the layout is inferred from the values of the first
+// 1000 lines (infer_layout below): 3 columns x y z, 4 x y z intensity, 6 normals or colours, 7
+// PTS (x y z intensity r g b) or CloudCompare's orders (colours then a field, a field then
+// normals) or normals then a field, 9 normals and colours either way round, 10 pointsurf's
+// x y z normals colours field or CloudCompare's default export x y z r g b SF nx ny nz; any
+// other count, or no layout that fits, x y z and fields "field3", "field4", ... (named by
+// 0-based column). More than 3 columns inferred so are named in a warning; two layouts that fit
+// equally well are an InputError that asks for --columns.
 // Colours are [0,1] when every colour value is <= 1, else 0..255, else 0..65535.
 //
 // A first line "# x y z ..." naming the columns is a header too (pointsurf writes it; other
 // readers skip it as a comment).
 //
-// Writing. .xyz/.txt/.asc are x y z [nx ny nz] [r g b as 0..255] [fields]; with fields, a first
-// line "# x y z [nx ny nz] [r g b] name..." names the columns, so the round trip keeps every field
-// by name (as Float64: text has no types); without fields, plain numbers (what readers
-// everywhere expect). .pts has the PTS count line and no names: the layouts the column-count
-// defaults read back exactly are xyz, xyz+fields1 (read as "intensity"), xyz+normals, xyz+rgb,
-// xyz+field+rgb (written in the PTS order x y z i r g b), xyz+normals+rgb and
-// xyz+normals+rgb+1 field ("field9"). .csv writes a header line of names and keeps every field
-// with its name.
+// Writing. .xyz/.txt/.asc are x y z [nx ny nz] [r g b as 0..255] [fields]; with more than x y z,
+// a first line "# x y z [nx ny nz] [r g b] name..." names the columns (a comment to other
+// readers), so the round trip keeps every attribute and field by name (fields as Float64: text
+// has no types) without inferring a layout; x y z alone, plain numbers. .pts has the PTS count
+// line and no names: the layouts read back by their values are xyz, xyz+field (read as
+// "intensity"), xyz+normals, xyz+rgb, xyz+field+rgb (written in the PTS order x y z i r g b),
+// xyz+normals+field ("field6"), xyz+normals+rgb and xyz+normals+rgb+field ("field9"). .csv
+// writes a header line of names and keeps every field with its name.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -33,9 +37,11 @@
 #include <string>
 #include <string_view>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "io/detail/file_util.h"
 #include "io/detail/formats.h"
@@ -140,48 +146,135 @@ ColumnSpec spec_from_names(const std::vector<std::string>& names, bool from_opti
   return spec;
 }
 
-ColumnSpec default_spec(std::size_t columns, bool six_are_normals) {
-  ColumnSpec spec;
-  spec.add(Column::X);
-  spec.add(Column::Y);
-  spec.add(Column::Z);
-  auto normals = [&] { spec.add(Column::NX); spec.add(Column::NY); spec.add(Column::NZ); };
-  auto colours = [&] { spec.add(Column::R); spec.add(Column::G); spec.add(Column::B); };
-  switch (columns) {
-    case 3: break;
-    case 4: spec.add(Column::Field, "intensity"); break;
-    case 6: six_are_normals ? normals() : colours(); break;
-    case 7: spec.add(Column::Field, "intensity"); colours(); break;
-    case 9: normals(); colours(); break;
-    case 10: normals(); colours(); spec.add(Column::Field, "field9"); break;
-    default:
-      for (std::size_t c = 3; c < columns; ++c) spec.add(Column::Field, fmt::format("field{}", c));
-  }
-  return spec;
+// Headerless text: the layouts that tools write, recognised by their values. Colour triples
+// are integers 0..255 (or 0..65535), or numbers in [0, 1]; normal triples have unit length (or
+// are zero, undefined); other columns may hold anything. Tuned on the exports of CloudCompare
+// (ASCII cloud: X Y Z [R G B] [scalar fields] [Nx Ny Nz], no header by default), Open3D
+// (.xyzn, .xyzrgb), Leica PTS (x y z intensity r g b) and pointsurf's own .pts files.
+struct TextLayout {
+  const char* names;  // one name per column, as --columns takes them
+  const char* whose;  // who writes it, for the warning
+  bool pts = false;   // an order of .pts files (PTS, pointsurf's): preferred there when another fits as well
+};
+
+constexpr TextLayout kTextLayouts[] = {
+    {"x y z", "x y z"},
+    {"x y z intensity", "intensity in column 4"},
+    {"x y z nx ny nz", "unit normals"},
+    {"x y z r g b", "colours"},
+    {"x y z intensity r g b", "PTS: intensity, then colours", true},
+    {"x y z r g b field6", "CloudCompare: colours, then a scalar field"},
+    {"x y z field3 nx ny nz", "CloudCompare: a scalar field, then normals"},
+    {"x y z nx ny nz field6", "normals, then a field (pointsurf .pts)"},
+    {"x y z nx ny nz r g b", "normals, then colours (pointsurf .pts)", true},
+    {"x y z r g b nx ny nz", "CloudCompare: colours, then normals"},
+    {"x y z nx ny nz r g b field9", "normals, colours, then a field (pointsurf .pts)", true},
+    {"x y z r g b field6 nx ny nz", "CloudCompare's default ASCII export: colours, a scalar field, normals"},
+};
+
+std::vector<std::string> layout_names(const TextLayout& layout) {
+  std::vector<std::string_view> tokens;
+  split_tokens(layout.names, tokens);
+  return {tokens.begin(), tokens.end()};
 }
 
-// Six columns are x y z nx ny nz when columns 4-6 are unit (or zero, undefined) vectors on the
-// first lines, at least one of them unit; x y z r g b otherwise.
-bool six_columns_are_normals(TextCursor cursor, std::string_view first_line) {
-  std::vector<std::string_view> tokens;
+// How strongly the sampled rows say that columns c..c+2 are colours (2: integers in range, 1:
+// numbers in [0, 1], 0: not colours) or normals (2: unit vectors, 0: not).
+int colour_evidence(const std::vector<std::vector<double>>& rows, std::size_t c) {
+  bool integers = true, unit_range = true;
+  for (const std::vector<double>& row : rows)
+    for (std::size_t k = c; k < c + 3; ++k) {
+      const double v = row[k];
+      integers = integers && v >= 0.0 && v <= 65535.0 && v == std::floor(v);
+      unit_range = unit_range && v >= 0.0 && v <= 1.0;
+    }
+  // Integers that are all 0 or 1 say no more than numbers in [0, 1] do (an axis-aligned normal).
+  bool binary = true;
+  for (const std::vector<double>& row : rows)
+    for (std::size_t k = c; k < c + 3; ++k) binary = binary && (row[k] == 0.0 || row[k] == 1.0);
+  return integers && !binary ? 2 : unit_range ? 1 : 0;
+}
+
+int normal_evidence(const std::vector<std::vector<double>>& rows, std::size_t c) {
   bool any_unit = false;
+  for (const std::vector<double>& row : rows) {
+    const double len = std::sqrt(row[c] * row[c] + row[c + 1] * row[c + 1] + row[c + 2] * row[c + 2]);
+    if (std::abs(len - 1.0) <= 1e-2) any_unit = true;
+    else if (len != 0.0) return 0;
+  }
+  return any_unit ? 2 : 0;
+}
+
+// The layout's score on the sampled rows: the sum of its groups' evidence, -1 when a group does
+// not fit.
+int layout_score(const std::vector<std::string>& names, const std::vector<std::vector<double>>& rows) {
+  int score = 0;
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const int evidence = names[c] == "r" ? colour_evidence(rows, c) : names[c] == "nx" ? normal_evidence(rows, c) : 3;
+    if (evidence == 0) return -1;
+    if (evidence < 3) score += evidence;
+  }
+  return score;
+}
+
+// The first data lines (up to 1000) as numbers; stops at a line that is not `columns` numbers
+// (the main loop reports it).
+std::vector<std::vector<double>> sample_rows(TextCursor cursor, std::string_view first_line, std::size_t columns) {
+  std::vector<std::vector<double>> rows;
+  std::vector<std::string_view> tokens;
   std::string_view line = first_line;
-  for (int checked = 0; checked < 100;) {
+  while (rows.size() < 1000) {
     const std::string_view t = trim(line);
     if (!t.empty() && !is_comment(t)) {
       split_tokens(t, tokens, true);
-      if (tokens.size() != 6) break;  // the main loop reports it
-      double n[3];
-      for (int k = 0; k < 3; ++k)
-        if (!parse_number(tokens[3 + k], n[k])) return false;
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      if (std::abs(len - 1.0) <= 1e-2) any_unit = true;
-      else if (len != 0.0) return false;
-      ++checked;
+      if (tokens.size() != columns) break;
+      std::vector<double> row(columns);
+      for (std::size_t k = 0; k < columns; ++k)
+        if (!parse_number(tokens[k], row[k])) return rows;
+      rows.push_back(std::move(row));
     }
     if (!cursor.next_line(line)) break;
   }
-  return any_unit;
+  return rows;
+}
+
+struct InferredLayout {
+  std::vector<std::string> names;
+  std::string whose;  // empty for the generic x y z field3 ...
+};
+
+// The layout of headerless text by its values: the best-scoring of kTextLayouts with this many
+// columns (in a .pts file the PTS order breaks a tie); x y z field3 field4 ... when none fits.
+// Throws InputError naming --columns when two layouts fit equally well.
+InferredLayout infer_layout(const std::vector<std::vector<double>>& rows, std::size_t columns, bool pts_file, const std::string& name,
+                            std::size_t line) {
+  const TextLayout* best = nullptr;
+  const TextLayout* tied = nullptr;
+  std::pair<int, int> best_score{-1, 0};
+  for (const TextLayout& layout : kTextLayouts) {
+    const std::vector<std::string> names = layout_names(layout);
+    if (names.size() != columns) continue;
+    const std::pair<int, int> score{layout_score(names, rows), pts_file && layout.pts ? 1 : 0};
+    if (score.first < 0) continue;
+    if (score > best_score) {
+      best = &layout;
+      tied = nullptr;
+      best_score = score;
+    } else if (score == best_score) {
+      tied = &layout;
+    }
+  }
+  if (tied != nullptr) {
+    std::string spec = best->names;
+    std::replace(spec.begin(), spec.end(), ' ', ',');
+    throw InputError(fmt::format("{}: line {}: the {} columns without a header fit two layouts by their values: {} ({}) and {} ({}); "
+                                 "say which with --columns (e.g. --columns {})",
+                                 name, line, columns, best->names, best->whose, tied->names, tied->whose, spec));
+  }
+  if (best != nullptr) return {layout_names(*best), best->whose};
+  InferredLayout generic{{"x", "y", "z"}, {}};
+  for (std::size_t c = 3; c < columns; ++c) generic.names.push_back(fmt::format("field{}", c));
+  return generic;
 }
 
 bool is_separator(char c) { return c == ' ' || c == '\t' || c == ',' || c == ';' || c == '\v' || c == '\f'; }
@@ -301,14 +394,22 @@ RawData read_xyz(const std::filesystem::path& path, const ReadOptions& options) 
     });
   } else {
     // A "//" line that is no header of this data is an ordinary comment; a plain line of words
-    // is most likely a title, worth a warning since the columns are then guessed by count.
+    // is most likely a title, worth a warning since the columns are then inferred from the values.
     if (header && !header_slashes)
       raw.warnings.push_back(fmt::format("{}: line {}: first line is not a header of x, y, z columns for the {} columns of the data; "
-                                         "ignored, columns taken by count (use a column spec to say what they are)",
+                                         "ignored, columns inferred from the values (use a column spec to say what they are)",
                                          name, header_line, columns));
     if (columns < 3)
       throw InputError(fmt::format("{}: line {}: expected at least 3 values (x y z), got {}", name, first_data_line, columns));
-    spec = default_spec(columns, columns == 6 && six_columns_are_normals(cursor, first_data));
+    const bool pts_file = lower(path.extension().string()) == ".pts";
+    const std::vector<std::vector<double>> rows = sample_rows(cursor, first_data, columns);
+    const InferredLayout layout = infer_layout(rows, columns, pts_file, name, first_data_line);
+    spec = spec_from_names(layout.names, false, [](const std::string&) {});
+    if (columns > 3)
+      raw.warnings.push_back(fmt::format("{}: no header: columns taken as {} ({}), inferred from the values of the first {} lines; "
+                                         "give --columns to say otherwise",
+                                         name, fmt::join(layout.names, " "),
+                                         layout.whose.empty() ? "no known layout fits: fields by column" : layout.whose, rows.size()));
   }
 
   // One pass over the data lines, parsing each token in place.
@@ -418,9 +519,9 @@ void write_xyz(const std::filesystem::path& path, const PointCloud& cloud, const
         throw UsageError(fmt::format("{}: field '{}' cannot be a CSV column name (it would not read back as that field); rename it",
                                      display_name(path), f->name));
   }
-  // .xyz/.txt with fields: a "# x y z ... name" line, a comment to other readers, names the
+  // .xyz/.txt with more than x y z: a "# x y z ... name" line, a comment to other readers, names the
   // columns for ours (a name that could not read back leaves the file headerless, as before).
-  const bool comment_header = kind == "xyz" && !fields.empty() &&
+  const bool comment_header = kind == "xyz" && (!fields.empty() || normals || colours) &&
                               std::all_of(fields.begin(), fields.end(), [&](const ScalarField* f) { return header_name(f->name); });
 
   FileWriter out(path);

@@ -268,8 +268,8 @@ StageSpec write_stage() {
       P::boolean("double", w.double_precision, "Write double PCD positions even where float32 keeps them (PCL and Open3D 0.16 read them as zeros)"),
       P::boolean("big_endian", w.ply_encoding == PlyEncoding::BinaryBigEndian, "Write binary big-endian PLY"),
       P::boolean("compressed", w.pcd_compressed, "Write PCD as binary_compressed (LZF)"),
-      P::vector3("las_offset", {}, "LAS offset (default: near the data's minimum)").unit("cloud units"),
-      P::number("las_scale", 0.0, "LAS scale, cloud units per count (default: 1e-4 or coarser for large extents)")
+      P::vector3("las_offset", {}, "LAS offset (default: the input LAS or LAZ file's, else near the data's minimum)").unit("cloud units"),
+      P::number("las_scale", 0.0, "LAS scale, cloud units per count (default: the input LAS or LAZ file's, else 1e-4 or coarser for large extents)")
           .unit("cloud units")
           .positive()
           .meta("S"),

@@ -4,6 +4,7 @@
 // corrupted files give named InputErrors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -311,8 +312,8 @@ TEST(E57, HandBuiltSphericalScanWithInvalidPointsAndOddBitWidths) {
   for (int k = 0; k < 4; ++k) EXPECT_LT((r.cloud.positions[k] - expected(kept[k])).norm(), 1e-12) << k;
   const ScalarField* i = r.cloud.fields.find("intensity");
   ASSERT_NE(i, nullptr);
-  EXPECT_DOUBLE_EQ(i->values[1], 1.0);
-  EXPECT_DOUBLE_EQ(i->values[2], 3.0 / 7.0);
+  EXPECT_EQ(i->values, (std::vector<double>{0, 7, 3, 6}));  // the stored values: intensityLimits only give their range
+  EXPECT_EQ(i->type, ScalarType::UInt8);
   EXPECT_FALSE(r.cloud.fields.contains("sphericalInvalidState"));
   bool noted_invalid = false, noted_images = false;
   for (const std::string& w : r.warnings) {
@@ -444,6 +445,83 @@ TEST(E57, CliKeepsPosesApartThroughConvertAndInfoShowsThem) {
   const test::RunResult info = test::run_cli(fmt::format("info {}", (dir / "kept.e57").string()), dir);
   EXPECT_EQ(info.exit_code, 0) << info.err;
   EXPECT_TRUE(test::contains(info.out, "scan         south: 1800 points, pose rotation (w x y z) 0.825335615")) << info.out;
+}
+
+// Issue 28: LAS intensities 996..57345 came back from LAS -> E57 -> LAS as floats near -0.0177
+// (stored normalised under intensityLimits [996, 57345], then normalised again on reading).
+// E57 stores intensity as its value; a uint16 field is an Integer within intensityLimits 0..65535.
+TEST(E57, LasIntensityKeepsItsValuesThroughE57AndBackToLas) {
+  const auto dir = test::temp_dir("e57_las_intensity");
+  PointCloud c;
+  ScalarField& intensity = c.fields.add("intensity", 0, ScalarType::UInt16);
+  std::mt19937 rng(28);
+  std::uniform_int_distribution<int> value(996, 57345);
+  for (int i = 0; i < 500; ++i) {
+    c.positions.emplace_back(0.01 * i, 0.02 * (i % 7), 1.0);
+    intensity.values.push_back(i == 0 ? 996 : i == 1 ? 57345 : value(rng));
+  }
+  write_point_cloud(dir / "in.las", c);
+  const test::RunResult to_e57 = test::run_cli(fmt::format("convert {} {}", (dir / "in.las").string(), (dir / "mid.e57").string()), dir);
+  ASSERT_EQ(to_e57.exit_code, 0) << to_e57.err;
+  EXPECT_FALSE(test::contains(to_e57.err, "intensityLimits")) << to_e57.err;
+  const std::string xml = unpaged(test::read_bytes(dir / "mid.e57"));
+  EXPECT_TRUE(test::contains(xml, "<intensity type=\"Integer\" minimum=\"0\" maximum=\"65535\"/>"));
+  EXPECT_TRUE(test::contains(xml, "<intensityMinimum type=\"Float\">0</intensityMinimum><intensityMaximum type=\"Float\">65535</intensityMaximum>"));
+  const CloudReadResult mid = read_point_cloud(dir / "mid.e57");
+  ASSERT_NE(mid.cloud.fields.find("intensity"), nullptr);
+  EXPECT_EQ(mid.cloud.fields.find("intensity")->values, intensity.values);
+  EXPECT_EQ(mid.cloud.fields.find("intensity")->type, ScalarType::UInt16);
+  EXPECT_TRUE(mid.warnings.empty());
+  const test::RunResult to_las = test::run_cli(fmt::format("convert {} {}", (dir / "mid.e57").string(), (dir / "out.las").string()), dir);
+  ASSERT_EQ(to_las.exit_code, 0) << to_las.err;
+  const CloudReadResult out = read_point_cloud(dir / "out.las");
+  ASSERT_NE(out.cloud.fields.find("intensity"), nullptr);
+  EXPECT_EQ(out.cloud.fields.find("intensity")->values, intensity.values);
+  EXPECT_EQ(out.cloud.fields.find("intensity")->type, ScalarType::UInt16);  // in its LAS slot, not extra bytes
+  const auto [lo, hi] = std::minmax_element(out.cloud.fields.find("intensity")->values.begin(), out.cloud.fields.find("intensity")->values.end());
+  EXPECT_EQ(*lo, 996.0);
+  EXPECT_EQ(*hi, 57345.0);
+}
+
+// Float intensity outside [0, 1] is stored as it is, with its own range as the limits; a file
+// whose intensities all lie in [0, 1] but outside its declared limits (what pointsurf wrote
+// before issue 28) is read back against those limits, with a warning.
+TEST(E57, FloatIntensityIsStoredAsItsValueAndOldNormalisedFilesAreScaledBack) {
+  const auto dir = test::temp_dir("e57_float_intensity");
+  PointCloud c;
+  c.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)};
+  c.fields.add("intensity", 0, ScalarType::Float64).values = {-2.5, 0.75, 40.0};
+  write_point_cloud(dir / "f.e57", c);
+  const CloudReadResult f = read_point_cloud(dir / "f.e57");
+  EXPECT_EQ(f.cloud.fields.find("intensity")->values, c.fields.find("intensity")->values);
+  EXPECT_TRUE(f.warnings.empty());
+
+  HandScan scan;
+  scan.xml = scan_xml("old", 3,
+                      "<cartesianX type=\"Float\"/><cartesianY type=\"Float\"/><cartesianZ type=\"Float\"/><intensity type=\"Float\"/>",
+                      "<intensityLimits type=\"Structure\"><intensityMinimum type=\"Float\">996</intensityMinimum>"
+                      "<intensityMaximum type=\"Float\">57345</intensityMaximum></intensityLimits>");
+  scan.streams = {raw_floats<double>({0, 1, 2}), raw_floats<double>({0, 0, 0}), raw_floats<double>({0, 0, 0}),
+                  raw_floats<double>({0.0, 1.0, (20000.0 - 996.0) / (57345.0 - 996.0)})};
+  const CloudReadResult old = read_bytes_as_e57(dir, build_e57({scan}));
+  const std::vector<double>& v = old.cloud.fields.find("intensity")->values;
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_EQ(v[0], 996.0);
+  EXPECT_EQ(v[1], 57345.0);
+  EXPECT_NEAR(v[2], 20000.0, 1e-9);
+  ASSERT_EQ(old.warnings.size(), 1u);
+  EXPECT_TRUE(test::contains(old.warnings[0], "intensity lies in [0, 1], outside its intensityLimits [996, 57345]")) << old.warnings[0];
+}
+
+// Colours that are not 8-bit (LAS's 16-bit) are written with colorLimits 0..65535, so E57 keeps them.
+TEST(E57, SixteenBitColoursKeepTheirSixteenBits) {
+  const auto dir = test::temp_dir("e57_colour16");
+  PointCloud c;
+  c.positions = {Vector3d(0, 0, 0), Vector3d(1, 0, 0)};
+  c.colors = {Vector3f(1000 / 65535.0f, 65535 / 65535.0f, 0.0f), Vector3f(257 / 65535.0f, 12345 / 65535.0f, 3 / 65535.0f)};
+  write_point_cloud(dir / "c.e57", c);
+  EXPECT_TRUE(test::contains(unpaged(test::read_bytes(dir / "c.e57")), "<colorRed type=\"Integer\" minimum=\"0\" maximum=\"65535\"/>"));
+  EXPECT_EQ(read_point_cloud(dir / "c.e57").cloud.colors, c.colors);
 }
 
 // pointsurf's E57 read by another implementation: web-e57 1.2.0 from npm (the Rust e57 crate as

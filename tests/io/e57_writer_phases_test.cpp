@@ -86,22 +86,45 @@ TEST(E57WriterPhases, PointsAreGroupedByTheirScanNumber) {
   EXPECT_EQ(empty.groups, (std::map<long long, std::vector<std::size_t>>{{0, {}}}));
 }
 
-TEST(E57WriterPhases, IntensityLimitsAreTheUnitRangeOrTheFieldsRange) {
+TEST(E57WriterPhases, IntensityLimitsAreTheTypesRangeTheUnitRangeOrTheFieldsRange) {
   const WriteOptions options;
-  const auto limits = [&](std::vector<double> values, std::vector<std::string>& notes) {
+  std::vector<std::string> notes;
+  struct Limits {
+    double lo, hi;
+    bool integer;
+    bool operator==(const Limits&) const = default;
+  };
+  const auto limits = [&](std::vector<double> values, ScalarType type = ScalarType::Float64) {
     PointCloud cloud = points(std::vector<Vector3d>(values.size(), Vector3d::Zero()));
-    add_field(cloud, "intensity", std::move(values));
+    add_field(cloud, "intensity", std::move(values), type);
     E57Writer e57(kPath, cloud, options, notes);
     e57.set_intensity_limits();
-    return std::pair(e57.intensity_lo, e57.intensity_hi);
+    return Limits{e57.intensity_lo, e57.intensity_hi, e57.intensity_integer};
   };
+  EXPECT_EQ(limits({0.2, 0.8}), (Limits{0.0, 1.0, false}));
+  EXPECT_EQ(limits({3.0, -2.0, 1.0}), (Limits{-2.0, 3.0, false}));
+  EXPECT_EQ(limits({5.0, 5.0}), (Limits{5.0, 6.0, false}));  // a constant field gets a unit-wide range
+  EXPECT_EQ(limits({996, 57345}, ScalarType::UInt16), (Limits{0.0, 65535.0, true}));  // LAS's intensity
+  EXPECT_EQ(limits({7, 200}, ScalarType::UInt8), (Limits{0.0, 255.0, true}));
+  EXPECT_EQ(limits({-40, 9}, ScalarType::Int32), (Limits{-40.0, 9.0, true}));
+  EXPECT_TRUE(notes.empty());  // the values are stored as they are: nothing to say
+}
+
+TEST(E57WriterPhases, ColourLimitsAreEightBitUnlessAColourNeedsSixteen) {
+  PointCloud cloud = points({{0, 0, 0}, {1, 0, 0}});
+  cloud.colors = {Vector3f(0, 128 / 255.0f, 1), Vector3f(7 / 255.0f, 0, 0)};
+  const WriteOptions options;
   std::vector<std::string> notes;
-  EXPECT_EQ(limits({0.2, 0.8}, notes), std::pair(0.0, 1.0));
-  EXPECT_TRUE(notes.empty());
-  EXPECT_EQ(limits({3.0, -2.0, 1.0}, notes), std::pair(-2.0, 3.0));
-  ASSERT_EQ(notes.size(), 1u);
-  EXPECT_TRUE(contains(notes[0], "intensityLimits [-2, 3]")) << notes[0];
-  EXPECT_EQ(limits({5.0, 5.0}, notes), std::pair(5.0, 6.0));  // a constant field gets a unit-wide range
+  E57Writer e57(kPath, cloud, options, notes);
+  e57.set_color_limits();
+  EXPECT_EQ(e57.color_maximum, 255);
+  EXPECT_EQ(e57.color_fields({0, 1})[1].bytes, (std::vector<unsigned char>{128, 0}));
+  cloud.colors[1].x() = 1000 / 65535.0f;
+  e57.set_color_limits();
+  EXPECT_EQ(e57.color_maximum, 65535);
+  const std::vector<OutField> fields = e57.color_fields({0, 1});
+  EXPECT_EQ(fields[0].element, "<colorRed type=\"Integer\" minimum=\"0\" maximum=\"65535\"/>");
+  EXPECT_EQ(fields[0].bytes, bytes_of(std::vector<std::uint16_t>{0, 1000}));
 }
 
 TEST(E57WriterPhases, CoordinatesAsFloat64) {
@@ -189,7 +212,7 @@ TEST(E57WriterPhases, ExtraFieldsByKindAndName) {
   const std::vector<OutField> fields = e57.extra_fields(0, {0, 1});
   ASSERT_EQ(fields.size(), 3u);  // no scan (it is the grouping), no 1abc (not an XML name)
   EXPECT_EQ(fields[0].element, "<intensity type=\"Float\" precision=\"double\"/>");
-  EXPECT_EQ(fields[0].bytes, bytes_of(std::vector<double>{0.0, 1.0}));  // scaled by the limits [10, 30]
+  EXPECT_EQ(fields[0].bytes, bytes_of(std::vector<double>{10.0, 30.0}));  // the values, within the limits [10, 30]
   // An E57 point field keeps its name: 7 and 4, as 3 and 0 above the minimum in 2 bits: 0b0011.
   EXPECT_EQ(fields[1].element, "<rowIndex type=\"Integer\" minimum=\"4\" maximum=\"7\"/>");
   EXPECT_EQ(fields[1].bytes, (std::vector<unsigned char>{0b0011}));
@@ -201,8 +224,8 @@ TEST(E57WriterPhases, ExtraFieldsByKindAndName) {
   (void)e57.extra_fields(1, {1});
   EXPECT_EQ(e57.skipped, (std::vector<std::string>{"1abc"}));
   e57.note_skipped_fields();
-  ASSERT_EQ(notes.size(), 2u);  // the intensity's limits, then the field left out
-  EXPECT_EQ(notes[1], "field(s) 1abc not written: an E57 field name must be an XML name");
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "field(s) 1abc not written: an E57 field name must be an XML name");
 }
 
 TEST(E57WriterPhases, ScanIsOneSectionOfOnePacketAndItsStructure) {

@@ -303,6 +303,53 @@ TEST(Las, WriteHonoursScaleAndOffsetAndWidensTheDefaultScaleForHugeExtents) {
   EXPECT_DOUBLE_EQ(get<double>(read_bytes(dir / "near.las"), 131), 1e-4);
 }
 
+// Issue 28: a LAS round trip kept 0.001 as 0.0001. A cloud read from LAS or LAZ keeps the
+// file's scale and offset on the next LAS or LAZ write, unless the options say otherwise or the
+// points no longer fit that grid in 32 bits.
+TEST(Las, RoundTripKeepsTheInputsScaleAndOffset) {
+  const auto dir = test::temp_dir("las_keep_scale");
+  PointCloud tile;
+  for (int i = 0; i < 50; ++i) tile.positions.emplace_back(431'000.0 + 0.001 * (37 * i), 5'200'000.0 + 0.001 * (11 * i), 100.0 + 0.001 * i);
+  WriteOptions millimetres;
+  millimetres.las_scale = 0.001;
+  millimetres.las_offset = Vector3d(431'000, 5'200'000, 0);
+  write_point_cloud(dir / "in.las", tile, millimetres);
+  const CloudReadResult in = read_point_cloud(dir / "in.las");
+  EXPECT_EQ(in.cloud.grid.scale, Vector3d::Constant(0.001));
+  EXPECT_EQ(in.cloud.grid.offset, Vector3d(431'000, 5'200'000, 0));
+  const std::string source = read_bytes(dir / "in.las");
+  for (const char* out : {"out.las", "out.laz"}) {
+    SCOPED_TRACE(out);
+    const WriteResult w = write_point_cloud(dir / out, in.cloud);
+    EXPECT_TRUE(w.notes.empty());
+    const CloudReadResult back = read_point_cloud(dir / out);
+    EXPECT_EQ(back.cloud.grid, in.cloud.grid);
+    const std::string bytes = read_bytes(dir / out);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(get<double>(bytes, 131 + 8 * a), 0.001);
+      EXPECT_EQ(get<double>(bytes, 155 + 8 * a), get<double>(source, 155 + 8 * a));
+    }
+    ASSERT_EQ(back.cloud.positions, in.cloud.positions);  // the same integers, so the same doubles
+  }
+  // Asked otherwise: the options win, each for its own part.
+  WriteOptions finer;
+  finer.las_scale = 1e-4;
+  write_point_cloud(dir / "finer.las", in.cloud, finer);
+  EXPECT_EQ(read_point_cloud(dir / "finer.las").cloud.grid, (CoordinateGrid{Vector3d::Constant(1e-4), Vector3d(431'000, 5'200'000, 0)}));
+  // Moved far from the offset: the grid cannot hold the points, the default is used and a note says so.
+  PointCloud moved = in.cloud;
+  for (Vector3d& p : moved.positions) p.x() += 3'000'000.0;
+  const WriteResult w = write_point_cloud(dir / "moved.las", moved);
+  ASSERT_EQ(w.notes.size(), 1u);
+  EXPECT_TRUE(test::contains(w.notes[0], "no longer fit the input's LAS grid (scale 0.001 0.001 0.001, offset 431000 5200000 0)")) << w.notes[0];
+  EXPECT_EQ(read_point_cloud(dir / "moved.las").cloud.grid.scale, Vector3d::Constant(1e-4));
+  // A grid from elsewhere (PLY, text) is none: the default 1e-4 as before.
+  PointCloud plain = in.cloud;
+  plain.grid = {};
+  write_point_cloud(dir / "plain.las", plain);
+  EXPECT_EQ(get<double>(read_bytes(dir / "plain.las"), 131), 1e-4);
+}
+
 TEST(Las, EmptyCloudRoundTrips) {
   const auto dir = test::temp_dir("las_empty");
   write_point_cloud(dir / "empty.las", PointCloud{});

@@ -8,9 +8,13 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <random>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "pointsurf/core/error.h"
+#include "support/cli_run.h"
 #include "support/files.h"
 #include "support/shapes.h"
 
@@ -98,13 +102,14 @@ TEST(Xyz, PtsCountLine) {
   const std::string body = "1 2 3 -100 255 0 0\n4 5 6 200 0 255 0\n7 8 9 300 0 0 255\n";
   const CloudReadResult r = read_text_cloud(dir, "a.pts", "3\n" + body);
   ASSERT_EQ(r.cloud.size(), 3u);
-  EXPECT_TRUE(r.warnings.empty());
+  ASSERT_EQ(r.warnings.size(), 1u);  // the layout taken
+  EXPECT_TRUE(contains(r.warnings[0], "columns taken as x y z intensity r g b (PTS")) << r.warnings[0];
   EXPECT_EQ(r.cloud.positions[2], Vector3d(7, 8, 9));
 
   const CloudReadResult bad = read_text_cloud(dir, "b.pts", "5\n" + body);
   ASSERT_EQ(bad.cloud.size(), 3u);
-  ASSERT_EQ(bad.warnings.size(), 1u);
-  EXPECT_TRUE(contains(bad.warnings[0], "line 1: point count 5 differs from the 3 points in the file")) << bad.warnings[0];
+  ASSERT_EQ(bad.warnings.size(), 2u);
+  EXPECT_TRUE(contains(bad.warnings[1], "line 1: point count 5 differs from the 3 points in the file")) << bad.warnings[1];
 }
 
 TEST(Xyz, DefaultSevenColumnsArePtsIntensityThenColour) {
@@ -209,6 +214,100 @@ TEST(Xyz, OtherColumnCountsDefaults) {
   EXPECT_EQ(ten.cloud.fields.find("field9")->values, std::vector<double>{42});
 }
 
+// Issue 28: CloudCompare's default ASCII export (X Y Z R G B SF Nx Ny Nz, no header) was read
+// with the colours as normals and the normals clamped into colours, exit 0, no warning. Layouts
+// of headerless text are now told apart by their values: colours are integers 0..255, normals
+// unit vectors.
+std::string cloudcompare_export(std::size_t n, bool scalar_field) {
+  std::mt19937 rng(28);
+  std::uniform_int_distribution<int> channel(0, 255);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::string text;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vector3d normal = Vector3d(u(rng), u(rng), u(rng) + 2.0).normalized();
+    text += fmt::format("{:.6f} {:.6f} {:.6f} {} {} {}", u(rng), u(rng), u(rng), channel(rng), channel(rng), channel(rng));
+    if (scalar_field) text += fmt::format(" {:.6f}", u(rng) * 100.0);
+    text += fmt::format(" {:.6f} {:.6f} {:.6f}\n", normal.x(), normal.y(), normal.z());
+  }
+  return text;
+}
+
+TEST(Xyz, CloudCompareDefaultExportIsReadAsColoursScalarFieldAndNormals) {
+  const fs::path dir = test::temp_dir("xyz_cloudcompare");
+  const std::string text = cloudcompare_export(200, true);
+  const CloudReadResult r = read_text_cloud(dir, "cc.txt", text);
+  ASSERT_EQ(r.cloud.size(), 200u);
+  ASSERT_TRUE(r.cloud.has_colors());
+  ASSERT_TRUE(r.cloud.has_normals());
+  ASSERT_EQ(r.cloud.fields.size(), 1u);
+  EXPECT_EQ(r.cloud.fields[0].name, "field6");
+  // Line 1, by construction: the colours are its columns 4-6 over 255, the normal its last three.
+  const std::string first = text.substr(0, text.find('\n'));
+  std::vector<double> v;
+  for (std::size_t at = 0, end; at < first.size(); at = end + 1) {
+    end = std::min(first.find(' ', at), first.size());
+    v.push_back(std::stod(first.substr(at, end - at)));
+  }
+  EXPECT_TRUE(r.cloud.colors[0].isApprox(Vector3f(float(v[3]), float(v[4]), float(v[5])) / 255.0f, 1e-6f)) << r.cloud.colors[0].transpose();
+  EXPECT_EQ(r.cloud.fields[0].values[0], v[6]);
+  EXPECT_EQ(r.cloud.normals[0], Vector3d(v[7], v[8], v[9]));
+  for (const Vector3d& n : r.cloud.normals) EXPECT_NEAR(n.norm(), 1.0, 1e-5);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_TRUE(contains(r.warnings[0], "no header: columns taken as x y z r g b field6 nx ny nz (CloudCompare's default ASCII export"))
+      << r.warnings[0];
+  EXPECT_TRUE(contains(r.warnings[0], "give --columns")) << r.warnings[0];
+
+  // Without the scalar field (9 columns), colours then normals: not pointsurf's normals then colours.
+  const CloudReadResult nine = read_text_cloud(dir, "cc9.txt", cloudcompare_export(50, false));
+  ASSERT_TRUE(nine.cloud.has_colors());
+  for (const Vector3d& n : nine.cloud.normals) EXPECT_NEAR(n.norm(), 1.0, 1e-5);
+  EXPECT_TRUE(contains(nine.warnings.at(0), "x y z r g b nx ny nz (CloudCompare: colours, then normals)")) << nine.warnings.at(0);
+
+  // Through the command line: exit 0, the layout named on stderr, the colours and normals in the output.
+  const test::RunResult run = test::run_cli(fmt::format("convert {} {}", (dir / "cc.txt").string(), (dir / "cc.ply").string()), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(contains(run.err, "columns taken as x y z r g b field6 nx ny nz")) << run.err;
+  const PointCloud ply = read_point_cloud(dir / "cc.ply").cloud;
+  EXPECT_TRUE(ply.colors[0].isApprox(r.cloud.colors[0], 1e-6f));
+  EXPECT_EQ(ply.normals[0], r.cloud.normals[0]);
+}
+
+TEST(Xyz, TwoLayoutsThatFitEquallyAreRefusedNamingColumns) {
+  const fs::path dir = test::temp_dir("xyz_ambiguous");
+  // x y z i r g b (PTS) or x y z r g b SF (CloudCompare)? With intensities 0..255 both fit.
+  const std::string text = "0 0 0 10 20 30 40\n1 0 0 200 0 255 7\n0 1 0 55 66 77 88\n";
+  const std::string message = error_of<InputError>([&] { read_text_cloud(dir, "a.txt", text); });
+  EXPECT_TRUE(contains(message, "a.txt: line 1: the 7 columns without a header fit two layouts by their values: x y z intensity r g b")) << message;
+  EXPECT_TRUE(contains(message, "x y z r g b field6")) << message;
+  EXPECT_TRUE(contains(message, "say which with --columns (e.g. --columns x,y,z,intensity,r,g,b)")) << message;
+  const test::RunResult run = test::run_cli(fmt::format("convert {} {}", (dir / "a.txt").string(), (dir / "a.ply").string()), dir);
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_TRUE(contains(run.err, "--columns")) << run.err;
+  EXPECT_FALSE(fs::exists(dir / "a.ply"));
+  // Said with --columns, or in a .pts file (whose format is x y z i r g b), it is read.
+  EXPECT_EQ(read_text_cloud(dir, "a.txt", text, "x,y,z,r,g,b,sf").cloud.fields.find("sf")->values, (std::vector<double>{40, 7, 88}));
+  const CloudReadResult pts = read_text_cloud(dir, "a.pts", text);
+  EXPECT_EQ(pts.cloud.fields.find("intensity")->values, (std::vector<double>{10, 200, 55}));
+  // An intensity that no colour can be (negative, or above 255 with 8-bit colours) decides it.
+  EXPECT_TRUE(read_text_cloud(dir, "b.txt", "0 0 0 -10 20 30 40\n").cloud.fields.contains("intensity"));
+}
+
+TEST(Xyz, ColumnsThatFitNoLayoutAreFieldsNotClampedColours) {
+  const fs::path dir = test::temp_dir("xyz_no_layout");
+  // Six columns, neither unit vectors nor colours: before, read as colours clamped to [0, 1].
+  const CloudReadResult r = read_text_cloud(dir, "a.xyz", "0 0 0 300.5 -2 7\n1 0 0 12 0.5 9\n");
+  EXPECT_FALSE(r.cloud.has_colors());
+  EXPECT_FALSE(r.cloud.has_normals());
+  ASSERT_EQ(r.cloud.fields.size(), 3u);
+  EXPECT_EQ(r.cloud.fields[0].name, "field3");
+  EXPECT_EQ(r.cloud.fields[0].values, (std::vector<double>{300.5, 12}));
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_TRUE(contains(r.warnings[0], "columns taken as x y z field3 field4 field5 (no known layout fits")) << r.warnings[0];
+  // Axis-aligned unit normals are integers 0 and 1 too: unit vectors win over colours that dark.
+  const CloudReadResult n = read_text_cloud(dir, "n.xyz", "0 0 0 0 0 1\n1 0 0 0 1 0\n");
+  EXPECT_TRUE(n.cloud.has_normals());
+}
+
 TEST(Xyz, ErrorsNameLineAndColumn) {
   const fs::path dir = test::temp_dir("xyz_errors");
   write_bytes(dir / "scan.xyz", "1 2 3 0 0 1\n# comment\n4 5 6 0 0 1\n7 8 9 0\n");
@@ -260,7 +359,9 @@ TEST(Xyz, RoundTripKeepsPositionsNormalsColours) {
     ASSERT_EQ(r.cloud.size(), cloud.size()) << file;
     ASSERT_TRUE(r.cloud.has_normals()) << file;
     ASSERT_TRUE(r.cloud.has_colors()) << file;
-    EXPECT_TRUE(r.warnings.empty()) << file;
+    // .xyz, .txt and .csv name their columns; .pts cannot (its first line is the count), so its
+    // layout is inferred from the values and named in a warning.
+    EXPECT_EQ(r.warnings.size(), std::string(file) == "a.pts" ? 1u : 0u) << file;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       ASSERT_EQ(r.cloud.positions[i], cloud.positions[i]) << file << " point " << i;  // shortest round-trip text is exact
       ASSERT_EQ(r.cloud.normals[i], cloud.normals[i]) << file;
@@ -269,7 +370,7 @@ TEST(Xyz, RoundTripKeepsPositionsNormalsColours) {
   }
   EXPECT_EQ(read_bytes(dir / "a.pts").substr(0, 4), "500\n");
   EXPECT_EQ(read_bytes(dir / "a.csv").substr(0, 18), "x,y,z,nx,ny,nz,r,g");
-  EXPECT_NE(read_bytes(dir / "a.xyz").front(), 'x');  // plain numbers, no header
+  EXPECT_EQ(read_bytes(dir / "a.xyz").substr(0, 23), "# x y z nx ny nz r g b\n");  // a comment to other readers
 }
 
 TEST(Xyz, CsvRoundTripKeepsNamedFields) {

@@ -34,6 +34,17 @@ struct CoordinateSystem {
   int epsg() const;
 };
 
+/// The grid a file stored coordinates on: p = offset + scale * (integer), per axis (LAS and LAZ
+/// files). Kept with the cloud so that a LAS or LAZ written from it uses the same scale and
+/// offset unless asked otherwise; empty when the source stored floating-point coordinates.
+struct CoordinateGrid {
+  Vector3d scale = Vector3d::Zero();   // cloud units per count; all zero: no grid
+  Vector3d offset = Vector3d::Zero();  // cloud units
+
+  bool empty() const noexcept { return scale == Vector3d::Zero(); }
+  bool operator==(const CoordinateGrid&) const = default;
+};
+
 /// An unorganized point cloud. Positions are double precision so that georeferenced
 /// coordinates (1e6..1e7 m) keep sub-millimetre precision. Every optional attribute is either
 /// empty or holds exactly one entry per point; `validate()` checks that.
@@ -43,6 +54,7 @@ struct PointCloud {
   std::vector<Vector3f> colors;     // 0 or N, RGB in [0, 1]
   FieldSet fields;                  // each field holds N values
   CoordinateSystem crs;             // empty when unknown
+  CoordinateGrid grid;              // empty unless read from a file with integer coordinates
 
   std::size_t size() const noexcept { return positions.size(); }
   bool empty() const noexcept { return positions.empty(); }
@@ -53,7 +65,8 @@ struct PointCloud {
   void validate() const;
   /// The points at `indices`, in that order, with every attribute and field.
   PointCloud select(std::span<const std::size_t> indices) const;
-  /// Appends `other`; attributes present in only one cloud are filled with zeros.
+  /// Appends `other`; attributes present in only one cloud are filled with zeros. The grid stays
+  /// when both share it (or this cloud is empty), else it is cleared.
   void append(const PointCloud& other);
 };
 

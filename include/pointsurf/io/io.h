@@ -69,8 +69,9 @@ struct ReadOptions {
   bool apply_poses = true;  // E57: move each scan by its pose; false keeps scan coordinates (poses in the result's scans)
   std::string format;       // force a format ("ply", "xyz", ...); empty: detect from content
   // Column meaning for XYZ-family text, comma separated: x,y,z,nx,ny,nz,r,g,b,i (intensity)
-  // or any other name (kept as a field), "_" to skip a column. Empty: x y z [nx ny nz] [r g b]
-  // chosen from the column count, or taken from a header line of names.
+  // or any other name (kept as a field), "_" to skip a column. Empty: taken from a header line
+  // of names, else recognised by the values (colours 0..255 integers, unit normals) among the
+  // layouts tools write, with a warning naming it; two layouts that fit equally: InputError.
   std::string columns;
   // COPC (LAZ with an octree hierarchy): read the octree levels 0..copc_level only; -1: all.
   int copc_level = -1;
@@ -122,8 +123,9 @@ struct WriteOptions {
                                           // double PCD positions as zeros)
   bool double_precision = false;          // PCD: double positions even where float32 would do
   bool pcd_compressed = false;            // PCD binary_compressed (LZF) instead of binary
-  std::optional<Vector3d> las_offset;     // LAS offset; default near the data's minimum
-  std::optional<double> las_scale;        // LAS scale (cloud units per count); default <= 1e-4
+  std::optional<Vector3d> las_offset;     // LAS offset; default: the cloud's grid, else near the data's minimum
+  std::optional<double> las_scale;        // LAS scale (cloud units per count); default: the cloud's
+                                          // grid (read from LAS/LAZ), else <= 1e-4
   std::vector<ScanPose> scan_poses;       // E57: pose of the scan whose "scan" field is i (identity when absent)
   std::optional<double> e57_scale;        // E57: scaled-integer coordinates with this step; default float64
   int precision = 17;                     // significant digits of text coordinates (XYZ, OBJ, ...)

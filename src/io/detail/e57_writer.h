@@ -32,19 +32,22 @@ public:
   /// Reads the `scan` field; produces groups (point indices by scan number, one scan 0 without
   /// it); throws UsageError for a value that is not a scan number.
   void group_scans();
-  /// Reads the `intensity` field; produces intensity_lo/hi ([0, 1], or the field's range with a note).
+  /// Reads the `intensity` field; produces intensity_integer and intensity_lo/hi: the range of
+  /// its type (uint8, uint16), [0, 1] for floats there, else the field's own range.
   void set_intensity_limits();
+  /// Reads the colours; produces color_maximum: 255 when every channel is a multiple of 1/255, else 65535.
+  void set_color_limits();
   /// Produces rng (GUIDs) and the logical writer with room for the file header.
   void start_file();
   /// Reads one group; appends its compressed vector section to writer and its structure to scans_xml.
   void write_scan(long long scan, const std::vector<std::size_t>& indices);
   /// cartesianX/Y/Z: float64, or ScaledInteger with e57_scale (UsageError past 64 bits).
   std::vector<OutField> coordinate_fields(const std::vector<std::size_t>& indices) const;
-  /// colorRed/Green/Blue as 8-bit integers (none without colours).
+  /// colorRed/Green/Blue as integers 0..color_maximum (none without colours).
   std::vector<OutField> color_fields(const std::vector<std::size_t>& indices) const;
   /// nor:normalX/Y/Z as float32 (none without normals); sets any_normals.
   std::vector<OutField> normal_fields(const std::vector<std::size_t>& indices);
-  /// The other fields: intensity scaled by its limits, E57 point fields by name, the rest as
+  /// The other fields: intensity as its value (Integer within its limits, or Float), E57 point fields by name, the rest as
   /// pointsurf: extensions (sets any_extension); names that are not XML names are left out (skipped).
   std::vector<OutField> extra_fields(long long scan, const std::vector<std::size_t>& indices);
   /// Reads skipped; adds a note naming the fields left out.
@@ -65,6 +68,8 @@ public:
   const ScalarField* scan_field = nullptr;
   const ScalarField* intensity = nullptr;                // set_intensity_limits
   double intensity_lo = 0.0, intensity_hi = 1.0;
+  bool intensity_integer = false;
+  int color_maximum = 255;                               // set_color_limits
   std::mt19937_64 rng;                                   // start_file
   E57LogicalWriter writer;
   std::string scans_xml;                                 // write_scan

@@ -47,8 +47,8 @@ void write_ply(const std::filesystem::path& tmp_path, const PointCloud& cloud, c
 void write_xyz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
 // `notes` gets what the user should know about a choice the writer made (PCD: double positions).
 void write_pcd(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
-void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
-void write_laz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options);
+void write_las(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
+void write_laz(const std::filesystem::path& tmp_path, const PointCloud& cloud, const WriteOptions& options, std::vector<std::string>& notes);
 void write_off(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_obj(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);
 void write_stl(const std::filesystem::path& tmp_path, const PointCloud& cloud, const std::vector<Triangle>& triangles, const WriteOptions& options);

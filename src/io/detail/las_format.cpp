@@ -400,6 +400,7 @@ LasRecordReader::LasRecordReader(const LasHeader& header, std::string_view head_
   s.layout = point_layout(header.format);
   s.scale = header.scale;
   s.offset = header.offset;
+  raw.cloud.grid = {Vector3d(header.scale[0], header.scale[1], header.scale[2]), Vector3d(header.offset[0], header.offset[1], header.offset[2])};
   raw.cloud.positions.resize(n);
   for (auto* v : {&s.intensity, &s.return_number, &s.number_of_returns, &s.classification, &s.scan_angle, &s.user_data, &s.point_source_id})
     v->resize(n);
@@ -542,7 +543,7 @@ struct LasRecordWriter::State {
 // fit, follow as LAS 1.4 extra bytes under their own name (at most 32 characters) and type, so
 // the round trip keeps every field by name. Points without a return_number field are written
 // as return 1 of 1.
-LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name)
+LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name, std::vector<std::string>& notes)
     : s_(std::make_unique<State>()) {
   State& s = *s_;
   s.cloud = &cloud;
@@ -582,7 +583,21 @@ LasRecordWriter::LasRecordWriter(const PointCloud& cloud, const WriteOptions& op
   std::array<double, 3>& scale = s.scale;
   std::array<double, 3>& offset = s.offset;
   constexpr double kIntMax = std::numeric_limits<std::int32_t>::max();
-  for (int a = 0; a < 3; ++a) {
+  // The source file's grid (a cloud read from LAS or LAZ), for what the options leave open, while
+  // every point still fits it in 32 bits.
+  const CoordinateGrid& grid = cloud.grid;
+  bool keep_grid = !grid.empty() && !(options.las_scale && options.las_offset);
+  for (int a = 0; a < 3 && keep_grid; ++a) {
+    offset[a] = options.las_offset ? (*options.las_offset)[a] : grid.offset[a];
+    scale[a] = options.las_scale ? *options.las_scale : grid.scale[a];
+    const double reach = std::max(std::abs(hi[a] - offset[a]), std::abs(lo[a] - offset[a]));
+    keep_grid = std::isfinite(offset[a]) && std::isfinite(scale[a]) && scale[a] > 0.0 && reach / scale[a] <= kIntMax - 1;
+  }
+  if (!grid.empty() && !keep_grid && !(options.las_scale && options.las_offset))
+    notes.push_back(fmt::format("the points no longer fit the input's LAS grid (scale {} {} {}, offset {} {} {}) in 32 bits: written "
+                                "with the default scale and offset",
+                                grid.scale.x(), grid.scale.y(), grid.scale.z(), grid.offset.x(), grid.offset.y(), grid.offset.z()));
+  for (int a = 0; a < 3 && !keep_grid; ++a) {
     // A round offset keeps the stored integers easy to read (truncated towards zero, so data
     // near the origin keeps offset 0); 1e-4 keeps 0.05 mm quantisation.
     offset[a] = options.las_offset ? (*options.las_offset)[a] : std::trunc(lo[a] / 1000.0) * 1000.0;

@@ -74,7 +74,10 @@ private:
 /// under its name.
 class LasRecordWriter {
 public:
-  LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name);
+  /// Scale and offset: WriteOptions::las_scale/las_offset, else the cloud's grid (the source
+  /// file's) while every point fits it in 32 bits, else the default; `notes` gets a line when
+  /// the cloud's grid could not be kept.
+  LasRecordWriter(const PointCloud& cloud, const WriteOptions& options, const std::string& name, std::vector<std::string>& notes);
   ~LasRecordWriter();
   int format() const;
   std::size_t record_length() const;
