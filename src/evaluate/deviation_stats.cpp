@@ -6,6 +6,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
 
@@ -41,7 +42,7 @@ double percentile_of_sorted(std::span<const double> sorted, double percent) {
 ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo, double hi) {
   ValueDistribution d;
   if (values.empty() || bins == 0) return d;
-  std::sort(values.begin(), values.end());
+  tbb::parallel_sort(values.begin(), values.end());
   d.min = values.front();
   d.max = values.back();
   double sum = 0.0;
@@ -126,7 +127,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
   s.mean_negative = s.negative > 0 ? sum_neg / static_cast<double>(s.negative) : 0.0;
   s.within_tolerance = params.tolerance > 0.0 ? static_cast<double>(within) / n : 0.0;
 
-  std::sort(values.begin(), values.end());
+  tbb::parallel_sort(values.begin(), values.end());
   for (double p : params.percentiles) s.percentile_values.push_back(percentile_of_sorted(values, p));
   double lo = params.histogram_min, hi = params.histogram_max;
   if (!(hi > lo)) {
