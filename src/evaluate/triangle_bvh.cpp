@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <numbers>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_reduce.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -20,9 +22,13 @@ namespace {
 
 constexpr int kLeafSize = 4;
 
-// Nodes of the subtree over n triangles: the median split fixes the shape, so every subtree's
-// place in the node array is known before it is built and the halves build in parallel.
-int subtree_nodes(int n) { return n <= kLeafSize ? 1 : 1 + subtree_nodes(n / 2) + subtree_nodes(n - n / 2); }
+// The split: the left part a multiple of 4, so every node but those of the last slots begins at
+// a multiple of 4 and every leaf but the last holds 4 triangles, one block of float lanes.
+int left_size(int n) { return (n / 2 + 3) / 4 * 4; }
+
+// Nodes of the subtree over n triangles: the split fixes the shape, so every subtree's place in
+// the node array is known before it is built and the halves build in parallel.
+int subtree_nodes(int n) { return n <= kLeafSize ? 1 : n % 4 == 0 ? n / 2 - 1 : 1 + subtree_nodes(left_size(n)) + subtree_nodes(n - left_size(n)); }
 
 ClosestPoint on_segment(const Vector3d& p, const Vector3d& a, const Vector3d& b, int edge) {
   const Vector3d ab = b - a;
@@ -53,8 +59,14 @@ ClosestPoint on_segment(const Vector3d& p, const Vector3d& a, const Vector3d& b,
 // below 1e15 keep the squares finite.
 class BoxLanes {
 public:
-  explicit BoxLanes(const Vector3d& p) {
+  BoxLanes(const Vector3d& p, double corner_extent) {
+    // How far rounding the query and the corners to float can move a distance (each coordinate
+    // by half an ulp, 2^-24 relative, at most), doubled.
+    shift_ = static_cast<float>(4.0 * 0x1p-24 * std::sqrt(3.0) * (p.cwiseAbs().maxCoeff() + corner_extent) * 1.001);
     for (int a = 0; a < 3; ++a) {
+#if defined(__SSE2__)
+      near_[a] = _mm_set1_ps(static_cast<float>(p[a]));
+#endif
       float down = static_cast<float>(p[a]), up = down;
       if (static_cast<double>(down) > p[a]) down = std::nextafter(down, -std::numeric_limits<float>::infinity());
       if (static_cast<double>(up) < p[a]) up = std::nextafter(up, std::numeric_limits<float>::infinity());
@@ -92,12 +104,68 @@ public:
     for (int k = 0; k < 4; ++k) d2[k] = static_cast<double>(s[k]) * (1.0 - 1e-6);
   }
 
+  // Lower bounds of the squared distances from the query to the 4 triangles of a leaf, none
+  // above the exact distance to the double triangle. In float lanes: the distance to the plane
+  // when the query's projection lies inside the float triangle or within the rounding of its
+  // barycentric coordinates (the plane is never farther than the triangle), else the nearest of
+  // the 3 edges (the exact distance when outside). Less an allowance of 2^-15 of the squared
+  // lengths involved (float arithmetic errs by a few 2^-24 of them), the root less the shift
+  // of rounding the query and the corners to float. Without SSE2: 0, the exact test decides.
+  template <class Lanes>
+  void triangle_bounds(const Lanes& l, float* lb2) const {
+#if defined(__SSE2__)
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const __m128 tol = _mm_set1_ps(16.0f * 0x1p-24f), allowance = _mm_set1_ps(0x1p-15f);
+    __m128 ap[3], bp[3], bc[3];
+    for (int i = 0; i < 3; ++i) {
+      ap[i] = _mm_sub_ps(near_[i], _mm_load_ps(l.a[i]));
+      bp[i] = _mm_sub_ps(ap[i], _mm_load_ps(l.ab[i]));
+      bc[i] = _mm_sub_ps(_mm_load_ps(l.ac[i]), _mm_load_ps(l.ab[i]));
+    }
+    auto dot = [](const __m128* x, const float (*y)[4]) {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x[0], _mm_load_ps(y[0])), _mm_mul_ps(x[1], _mm_load_ps(y[1]))), _mm_mul_ps(x[2], _mm_load_ps(y[2])));
+    };
+    auto dot3 = [](const __m128* x, const __m128* y) {
+      return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x[0], y[0]), _mm_mul_ps(x[1], y[1])), _mm_mul_ps(x[2], y[2]));
+    };
+    // Squared distance from point x (about the edge's start) to the edge e with 1/|e|^2.
+    auto edge = [&](const __m128* x, const __m128* e, __m128 inv) {
+      const __m128 t = _mm_min_ps(_mm_max_ps(_mm_mul_ps(dot3(x, e), inv), zero), one);
+      __m128 v[3];
+      for (int i = 0; i < 3; ++i) v[i] = _mm_sub_ps(x[i], _mm_mul_ps(t, e[i]));
+      return dot3(v, v);
+    };
+    __m128 ab[3], ac[3];
+    for (int i = 0; i < 3; ++i) {
+      ab[i] = _mm_load_ps(l.ab[i]);
+      ac[i] = _mm_load_ps(l.ac[i]);
+    }
+    const __m128 ap2 = dot3(ap, ap), ap_len = _mm_sqrt_ps(ap2);
+    const __m128 plane = dot(ap, l.n), bary_b = dot(ap, l.gb), bary_c = dot(ap, l.gc);
+    const __m128 tb = _mm_mul_ps(tol, _mm_mul_ps(_mm_load_ps(l.gb_norm), ap_len));
+    const __m128 tc = _mm_mul_ps(tol, _mm_mul_ps(_mm_load_ps(l.gc_norm), ap_len));
+    const __m128 inside = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(bary_b, _mm_sub_ps(zero, tb)), _mm_cmpge_ps(bary_c, _mm_sub_ps(zero, tc))),
+                                     _mm_cmpge_ps(_mm_sub_ps(_mm_sub_ps(one, bary_b), bary_c), _mm_sub_ps(zero, _mm_add_ps(_mm_add_ps(tb, tc), tol))));
+    const __m128 edges = _mm_min_ps(_mm_min_ps(edge(ap, ab, _mm_load_ps(l.inv_ab2)), edge(ap, ac, _mm_load_ps(l.inv_ac2))),
+                                    edge(bp, bc, _mm_load_ps(l.inv_bc2)));
+    const __m128 d2 = _mm_or_ps(_mm_and_ps(inside, _mm_mul_ps(plane, plane)), _mm_andnot_ps(inside, edges));
+    const __m128 slack = _mm_mul_ps(allowance, _mm_add_ps(ap2, _mm_load_ps(l.edges2)));
+    const __m128 root = _mm_sub_ps(_mm_sqrt_ps(_mm_max_ps(_mm_sub_ps(d2, slack), zero)), _mm_set1_ps(shift_));
+    const __m128 lb = _mm_max_ps(root, zero);
+    _mm_storeu_ps(lb2, _mm_mul_ps(_mm_mul_ps(lb, lb), _mm_set1_ps(1.0f - 1e-6f)));
+#else
+    (void)l;
+    for (int k = 0; k < 4; ++k) lb2[k] = 0.0f;
+#endif
+  }
+
 private:
 #if defined(__SSE2__)
-  __m128 down_[3], up_[3];
+  __m128 down_[3], up_[3], near_[3];
 #else
   float down_[3], up_[3];
 #endif
+  float shift_ = 0.0f;
 };
 
 }  // namespace
@@ -193,6 +261,53 @@ TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Tri
   });
   wide_.reserve(nodes_.size() / 2 + 1);
   collapse(0);
+  make_lanes();
+}
+
+void TriangleBvh::make_lanes() {
+  const std::size_t f = corners_.size();
+  lanes_.resize((f + 3) / 4);
+  corner_extent_ = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, lanes_.size()), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double extent) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b) {
+          LeafLanes& l = lanes_[b];
+          std::memset(static_cast<void*>(&l), 0, sizeof(LeafLanes));
+          for (std::size_t k = 0; k < 4 && 4 * b + k < f; ++k) {
+            const Corners& t = corners_[4 * b + k];
+            for (int c = 0; c < 3; ++c) extent = std::max(extent, t[static_cast<std::size_t>(c)].cwiseAbs().maxCoeff());
+            // The float triangle: corners rounded to float; its edges from those.
+            Eigen::Vector3f a = t[0].cast<float>(), b2 = t[1].cast<float>(), c2 = t[2].cast<float>();
+            const Eigen::Vector3f ab = b2 - a, ac = c2 - a, bc = ac - ab;
+            const Vector3d e1 = ab.cast<double>(), e2 = ac.cast<double>(), e3 = bc.cast<double>();
+            for (int i = 0; i < 3; ++i) {
+              l.a[i][k] = a[i];
+              l.ab[i][k] = ab[i];
+              l.ac[i][k] = ac[i];
+            }
+            const double l1 = e1.squaredNorm(), l2 = e2.squaredNorm(), l3 = e3.squaredNorm();
+            l.inv_ab2[k] = l1 > 0.0 ? static_cast<float>(1.0 / l1) : 0.0f;
+            l.inv_ac2[k] = l2 > 0.0 ? static_cast<float>(1.0 / l2) : 0.0f;
+            l.inv_bc2[k] = l3 > 0.0 ? static_cast<float>(1.0 / l3) : 0.0f;
+            l.edges2[k] = static_cast<float>(l1 + l2 + l3);
+            const Vector3d cross = e1.cross(e2);
+            const double det = cross.squaredNorm();
+            if (!(det > 1e-12 * l1 * l2) || !std::isfinite(det)) continue;  // nearly degenerate: bound 0, the exact test decides
+            const Vector3d n = cross / std::sqrt(det);
+            const double d12 = e1.dot(e2);
+            const Vector3d gb = (l2 * e1 - d12 * e2) / det, gc = (l1 * e2 - d12 * e1) / det;
+            for (int i = 0; i < 3; ++i) {
+              l.n[i][k] = static_cast<float>(n[i]);
+              l.gb[i][k] = static_cast<float>(gb[i]);
+              l.gc[i][k] = static_cast<float>(gc[i]);
+            }
+            l.gb_norm[k] = static_cast<float>(gb.norm());
+            l.gc_norm[k] = static_cast<float>(gc.norm());
+          }
+        }
+        return extent;
+      },
+      [](double x, double y) { return std::max(x, y); });
 }
 
 void TriangleBvh::build(int index, int begin, int end, std::vector<BuildItem>& items, const BuildInput& in, int depth) {
@@ -221,7 +336,7 @@ void TriangleBvh::build(int index, int begin, int end, std::vector<BuildItem>& i
   }
   int axis = 0;
   (chi - clo).maxCoeff(&axis);
-  const int mid = begin + n / 2;
+  const int mid = begin + left_size(n);
   std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
                    [axis](const BuildItem& x, const BuildItem& y) { return x.centroid[axis] < y.centroid[axis]; });
   const int left = index + 1, right = index + 1 + subtree_nodes(mid - begin);
@@ -366,7 +481,7 @@ ClosestPoint TriangleBvh::closest_near(const Vector3d& query, int hint, double m
   };
   // The 4 box distances in float lanes where the query is within float range of the origin.
   std::optional<BoxLanes> lanes;
-  if (p.cwiseAbs().maxCoeff() < 1e15) lanes.emplace(p);
+  if (p.cwiseAbs().maxCoeff() < 1e15 && corner_extent_ < 1e15) lanes.emplace(p, corner_extent_);
   Entry stack[256];
   int top = 0;
   stack[top++] = {0, 0, 0.0};
@@ -374,7 +489,10 @@ ClosestPoint TriangleBvh::closest_near(const Vector3d& query, int hint, double m
     const Entry e = stack[--top];
     if (e.d2 > best2 * kPruneSlack) continue;
     if (e.count > 0) {
+      float lb2[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+      if (lanes) lanes->triangle_bounds(lanes_[static_cast<std::size_t>(e.ref / 4)], lb2);
       for (int i = e.ref; i < e.ref + e.count; ++i) {
+        if (static_cast<double>(lb2[i - e.ref]) > best2 * kPruneSlack) continue;
         const std::size_t slot = static_cast<std::size_t>(i);
         const Corners& t = corners_[slot];
         ClosestPoint c = closest_point_on_triangle(p, t[0], t[1], t[2]);
@@ -476,6 +594,16 @@ double TriangleBvh::winding_number(const Vector3d& query, double accuracy) const
 void TriangleBvh::overlapping(const Vector3d& lo_abs, const Vector3d& hi_abs, const std::function<void(int)>& visit) const {
   if (wide_.empty()) return;
   const Vector3d lo = lo_abs - origin_, hi = hi_abs - origin_;
+#if defined(__SSE2__)
+  __m128 qlo[3], qhi[3];
+  for (int a = 0; a < 3; ++a) {
+    float down = static_cast<float>(lo[a]), up = static_cast<float>(hi[a]);
+    if (static_cast<double>(down) > lo[a]) down = std::nextafter(down, -std::numeric_limits<float>::infinity());
+    if (static_cast<double>(up) < hi[a]) up = std::nextafter(up, std::numeric_limits<float>::infinity());
+    qlo[a] = _mm_set1_ps(down);
+    qhi[a] = _mm_set1_ps(up);
+  }
+#endif
   struct Entry {
     int ref, count;
   };
@@ -493,13 +621,24 @@ void TriangleBvh::overlapping(const Vector3d& lo_abs, const Vector3d& hi_abs, co
       }
       continue;
     }
-    // Float boxes rounded outward: a box that misses [lo, hi] misses it in double too.
+    // Float boxes rounded outward against [lo, hi] rounded outward: a box apart from it in
+    // float is apart in double too.
     const WideNode& w = wide_[static_cast<std::size_t>(e.ref)];
+#if defined(__SSE2__)
+    __m128 apart = _mm_setzero_ps();
+    for (int a = 0; a < 3; ++a)
+      apart = _mm_or_ps(apart, _mm_or_ps(_mm_cmpgt_ps(_mm_load_ps(w.lo[a]), qhi[a]), _mm_cmplt_ps(_mm_load_ps(w.hi[a]), qlo[a])));
+    const int apart_mask = _mm_movemask_ps(apart);
+#endif
     for (int k = 3; k >= 0; --k) {
       if (w.count[k] < 0) continue;
+#if defined(__SSE2__)
+      if (!(apart_mask & (1 << k))) stack[top++] = {w.child[k], w.count[k]};
+#else
       bool apart = false;
       for (int a = 0; a < 3; ++a) apart |= static_cast<double>(w.lo[a][k]) > hi[a] || static_cast<double>(w.hi[a][k]) < lo[a];
       if (!apart) stack[top++] = {w.child[k], w.count[k]};
+#endif
     }
   }
 }

@@ -103,10 +103,19 @@ private:
     Corners() {}  // NOLINT(modernize-use-equals-default): = default would zero them in a vector
     const Vector3d& operator[](std::size_t i) const noexcept { return c[i]; }
   };
+  // Four triangles (one leaf) in float lanes for a lower bound of their distance: corner a,
+  // edges ab and ac, unit normal, the in-plane dual vectors giving the barycentric coordinates
+  // of b and c (with their lengths), the inverse squared lengths of ab, ac and bc, and the sum
+  // of the squared edge lengths. A degenerate triangle has zero normal and duals: bound 0.
+  struct alignas(64) LeafLanes {
+    float a[3][4], ab[3][4], ac[3][4], n[3][4], gb[3][4], gc[3][4];
+    float gb_norm[4], gc_norm[4], inv_ab2[4], inv_ac2[4], inv_bc2[4], edges2[4];
+  };
   struct BuildItem;
   struct BuildInput;
   void build(int node, int begin, int end, std::vector<BuildItem>& items, const BuildInput& in, int depth);
   int collapse(int node);
+  void make_lanes();
   void make_dipoles(int node, int depth) const;
   const Vector3d& slot_corner(std::size_t slot, int c) const noexcept { return corners_[slot][static_cast<std::size_t>(c)]; }
   Vector3d origin_ = Vector3d::Zero();
@@ -115,6 +124,8 @@ private:
   std::vector<int> slot_;            // the mesh's triangle index -> leaf-order slot
   std::vector<Node> nodes_;
   std::vector<WideNode> wide_;       // root first
+  std::vector<LeafLanes> lanes_;     // per 4 leaf-order slots (a leaf's)
+  double corner_extent_ = 0.0;       // largest |coordinate| of a corner about the origin
   mutable std::vector<Dipole> dipoles_;  // one per node
   mutable std::once_flag dipoles_once_;
 };
