@@ -73,6 +73,10 @@ public:
   /// coordinates).
   void overlapping(const Vector3d& lo, const Vector3d& hi, const std::function<void(int)>& visit) const;
 
+  /// The mesh's triangle indices in the order of the hierarchy's leaves: neighbours in space lie
+  /// side by side, so queries made in this order walk the same nodes one after the other.
+  std::span<const int> leaf_order() const noexcept { return order_; }
+
   /// Corner `c` (0..2) of triangle `t` (the mesh's index), relative to origin().
   const Vector3d& corner(std::size_t t, int c) const noexcept { return corners_[static_cast<std::size_t>(slot_[t])][static_cast<std::size_t>(c)]; }
 
