@@ -6,6 +6,7 @@
 #include <map>
 
 #include <fmt/format.h>
+#include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
 
@@ -43,7 +44,7 @@ double percentile_of_sorted(std::span<const double> sorted, double percent) {
 ValueDistribution distribution_of(std::vector<double> values, std::size_t bins, double lo, double hi) {
   ValueDistribution d;
   if (values.empty() || bins == 0) return d;
-  std::sort(values.begin(), values.end());
+  tbb::parallel_sort(values.begin(), values.end());
   d.min = values.front();
   d.max = values.back();
   double sum = 0.0;
@@ -145,7 +146,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
     s.abs_p99 = percentile_of_sorted(magnitudes, 99.0);
   }
 
-  std::sort(values.begin(), values.end());
+  tbb::parallel_sort(values.begin(), values.end());
   for (double p : params.percentiles) s.percentile_values.push_back(percentile_of_sorted(values, p));
   double lo = params.histogram_min, hi = params.histogram_max;
   if (!(hi > lo)) {

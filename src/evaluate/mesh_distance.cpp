@@ -153,12 +153,12 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
   const std::vector<std::uint32_t> order = n > 10000 ? morton_order(points) : std::vector<std::uint32_t>{};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
     if (cancelled.load(std::memory_order_relaxed)) return;
-    // Each query starts from the previous one's closest point (Morton order: a near one).
-    std::optional<Vector3d> previous;
+    // Each query starts from the previous one's closest triangle (Morton order: a near one).
+    int previous = -1;
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
       const std::size_t i = order.empty() ? k : order[k];
       const ClosestPoint c = bvh->closest_near(points[i], previous, limit);
-      if (c.found()) previous = c.point;
+      if (c.found()) previous = c.triangle;
       if (!c.found()) {
         result.distances[i] = std::numeric_limits<double>::infinity();
         continue;

@@ -61,11 +61,11 @@ std::vector<double> nearest_surface_distances(std::span<const Vector3d> points, 
     std::optional<TriangleBvh> own;
     if (bvh == nullptr) bvh = &own.emplace(to.points, to.triangles);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-      std::optional<Vector3d> previous;
+      int previous = -1;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
         const std::size_t i = order.empty() ? k : order[k];
         const ClosestPoint c = bvh->closest_near(points[i], previous);
-        previous = c.point;
+        previous = c.triangle;
         out[i] = std::sqrt(c.squared_distance);
       }
     });

@@ -39,6 +39,63 @@ TEST(TriangleBvh, ClosestPointAgreesWithBruteForceOnRandomSoups) {
   }
 }
 
+// The oracle: every triangle through the same exact test, about the hierarchy's origin, the
+// smallest squared distance and among equal ones the smallest index.
+ClosestPoint brute_force_closest(const TriangleBvh& bvh, const Vector3d& query) {
+  ClosestPoint best;
+  const Vector3d p = query - bvh.origin();
+  for (std::size_t t = 0; t < bvh.triangle_count(); ++t) {
+    ClosestPoint c = closest_point_on_triangle(p, bvh.corner(t, 0), bvh.corner(t, 1), bvh.corner(t, 2));
+    if (!best.found() || c.squared_distance < best.squared_distance) {
+      c.triangle = static_cast<int>(t);
+      best = c;
+    }
+  }
+  return best;
+}
+
+// Float boxes, float lower bounds of the triangles and the previous query's triangle as a hint
+// change nothing: the same squared distance to the last bit and the same triangle, on meshes
+// with ties (grids: queries over shared vertices and edges), thin and degenerate triangles, and
+// 1e6 offsets; queries near the surface, far from it and on it.
+TEST(TriangleBvh, ClosestIsExactlyTheBruteForceAnswerWithTiesToTheSmallestIndex) {
+  std::vector<TriangleMesh> meshes = {test::grid_mesh(12), test::grid_cube(6), test::random_soup(2000, 41), test::icosphere_mesh(3)};
+  TriangleMesh slivers = test::random_soup(400, 43);
+  for (std::size_t t = 0; t < slivers.triangles.size(); t += 3) {  // collinear, repeated and nearly collinear corners
+    const std::size_t v = 3 * t;
+    slivers.vertices.positions[v + 2] = slivers.vertices.positions[v] + (t % 2 == 0 ? 2.0 : 1e-9) * (slivers.vertices.positions[v + 1] - slivers.vertices.positions[v]);
+    if (t % 6 == 0) slivers.vertices.positions[v + 1] = slivers.vertices.positions[v];
+  }
+  meshes.push_back(slivers);
+  TriangleMesh far = test::grid_cube(5, 3.0);
+  for (Vector3d& v : far.vertices.positions) v += Vector3d(1e6, -2e6, 5e5);
+  meshes.push_back(far);
+  std::mt19937_64 rng(29);
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const TriangleBvh bvh(meshes[m]);
+    const BoundingBox box = bounding_box(meshes[m].vertices.positions);
+    const Vector3d centre = box.center(), half = 0.5 * (box.max - box.min) + Vector3d::Constant(1e-3);
+    std::uniform_real_distribution<double> u(-1.6, 1.6);
+    std::uniform_int_distribution<std::size_t> pick(0, meshes[m].vertices.positions.size() - 1);
+    int hint = -1;
+    for (int q = 0; q < 400; ++q) {
+      Vector3d p;
+      if (q % 4 == 0) p = meshes[m].vertices.positions[pick(rng)];  // on a vertex: ties among its triangles
+      else if (q % 4 == 1) p = meshes[m].vertices.positions[pick(rng)] + 1e-3 * Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(half);
+      else p = centre + Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(half);
+      if (m == 0 && q % 8 == 2) p.z() = 0.0;  // in the grid's plane
+      const ClosestPoint expected = brute_force_closest(bvh, p);
+      for (const ClosestPoint& c : {bvh.closest(p), bvh.closest_near(p, hint), bvh.closest_near(p, static_cast<int>(pick(rng) % bvh.triangle_count()))}) {
+        ASSERT_TRUE(c.found());
+        EXPECT_EQ(c.squared_distance, expected.squared_distance) << "mesh " << m << ", query " << q;
+        EXPECT_EQ(c.triangle, expected.triangle) << "mesh " << m << ", query " << q;
+        EXPECT_EQ(c.feature, expected.feature) << "mesh " << m << ", query " << q;
+      }
+      hint = expected.triangle;
+    }
+  }
+}
+
 TEST(TriangleBvh, MaxDistanceLimitsTheSearch) {
   const TriangleMesh cube = test::cube_mesh();
   const TriangleBvh bvh(cube);

@@ -4,6 +4,7 @@
 // precision about a local origin, so 1e6 m coordinates lose nothing), the generalized winding
 // number (Barill, Dickson, Schmidt, Levin, Jacobson 2018, "Fast winding numbers for soups and
 // clouds") and box-overlap queries for the self-intersection pass.
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <limits>
@@ -34,6 +35,9 @@ struct ClosestPoint {
 
 /// The hierarchy. Built once (parallel, O(F log F)); every query is const and thread-safe.
 /// The triangles' corners are held relative to the centre of the mesh's bounding box.
+/// Closest points walk a 4-wide hierarchy with float boxes rounded outward (the binary one
+/// collapsed), so a box never excludes a triangle that its corners put inside it.
+/// Among triangles at the same distance the one of smallest index answers, whatever the walk.
 /// Triangles with a vertex index out of range throw InputError at construction; degenerate
 /// triangles (repeated or collinear corners) are kept and answered as segments.
 class TriangleBvh {
@@ -41,7 +45,7 @@ public:
   TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
   explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices.positions, mesh.triangles) {}
 
-  std::size_t triangle_count() const noexcept { return faces_.size(); }
+  std::size_t triangle_count() const noexcept { return corners_.size(); }
   const Vector3d& origin() const noexcept { return origin_; }
 
   /// The closest point of the mesh to `query`, among points closer than `max_distance`
@@ -54,6 +58,11 @@ public:
   ClosestPoint closest_near(const Vector3d& query, const std::optional<Vector3d>& on_mesh,
                             double max_distance = std::numeric_limits<double>::infinity()) const;
 
+  /// The same answer as closest(query, max_distance), found faster when `hint` (the mesh's
+  /// index) is a triangle near the query: the previous query's, in spatial order. Its distance
+  /// bounds the walk from the start; -1 or an index out of range: no hint.
+  ClosestPoint closest_near(const Vector3d& query, int hint, double max_distance = std::numeric_limits<double>::infinity()) const;
+
   /// Generalized winding number of the mesh at `query`: 1 inside and 0 outside a closed,
   /// outward-oriented surface, a smooth value in between near cracks and holes, and a sum over
   /// pieces where they overlap. Far clusters are replaced by their dipole (first-order)
@@ -64,13 +73,15 @@ public:
   /// coordinates).
   void overlapping(const Vector3d& lo, const Vector3d& hi, const std::function<void(int)>& visit) const;
 
+  /// The mesh's triangle indices in the order of the hierarchy's leaves: neighbours in space lie
+  /// side by side, so queries made in this order walk the same nodes one after the other.
+  std::span<const int> leaf_order() const noexcept { return order_; }
+
   /// Corner `c` (0..2) of triangle `t` (the mesh's index), relative to origin().
-  const Vector3d& corner(std::size_t t, int c) const noexcept {
-    return vertices_[static_cast<std::size_t>(faces_[static_cast<std::size_t>(slot_[t])][c])];
-  }
+  const Vector3d& corner(std::size_t t, int c) const noexcept { return corners_[static_cast<std::size_t>(slot_[t])][static_cast<std::size_t>(c)]; }
 
 private:
-  // What the closest-point walk reads, one cache line per node.
+  // The binary hierarchy: what the winding number walks (with its dipoles).
   struct Node {
     Vector3d lo, hi;                 // box, relative to origin
     int first = 0, count = 0;        // leaf: range of leaf-order slots; inner: count == 0
@@ -83,17 +94,42 @@ private:
     double area = 0.0;
     double radius = 0.0;             // farthest box corner from area_centroid
   };
-  void build(int node, int begin, int end, std::vector<Vector3d>& centroids, int depth);
+  // What the closest-point and overlap walks read: the boxes of up to 4 children side by side
+  // (float, rounded outward), two cache lines. count[k] > 0: a leaf of that many slots from
+  // child[k]; 0: wide node child[k]; -1: no child (its box empty).
+  struct alignas(64) WideNode {
+    float lo[3][4], hi[3][4];
+    int child[4], count[4];
+  };
+  // A triangle's corners, left uninitialized by construction (a vector of them is filled at once).
+  struct Corners {
+    Vector3d c[3];
+    Corners() {}  // NOLINT(modernize-use-equals-default): = default would zero them in a vector
+    const Vector3d& operator[](std::size_t i) const noexcept { return c[i]; }
+  };
+  // Four triangles (one leaf) in float lanes for a lower bound of their distance: corner a,
+  // edges ab and ac, unit normal, the in-plane dual vectors giving the barycentric coordinates
+  // of b and c (with their lengths), the inverse squared lengths of ab, ac and bc, and the sum
+  // of the squared edge lengths. A degenerate triangle has zero normal and duals: bound 0.
+  struct alignas(64) LeafLanes {
+    float a[3][4], ab[3][4], ac[3][4], n[3][4], gb[3][4], gc[3][4];
+    float gb_norm[4], gc_norm[4], inv_ab2[4], inv_ac2[4], inv_bc2[4], edges2[4];
+  };
+  struct BuildItem;
+  struct BuildInput;
+  void build(int node, int begin, int end, std::vector<BuildItem>& items, const BuildInput& in, int depth);
+  int collapse(int node);
+  void make_lanes();
   void make_dipoles(int node, int depth) const;
-  const Vector3d& slot_corner(std::size_t slot, int c) const noexcept {
-    return vertices_[static_cast<std::size_t>(faces_[slot][c])];
-  }
+  const Vector3d& slot_corner(std::size_t slot, int c) const noexcept { return corners_[slot][static_cast<std::size_t>(c)]; }
   Vector3d origin_ = Vector3d::Zero();
-  std::vector<Vector3d> vertices_;   // relative to origin, in order of first use by the leaves
-  std::vector<Triangle> faces_;      // per leaf-order slot: indices into vertices_
+  std::vector<Corners> corners_;     // per leaf-order slot, relative to origin
   std::vector<int> order_;           // leaf-order slot -> the mesh's triangle index
   std::vector<int> slot_;            // the mesh's triangle index -> leaf-order slot
   std::vector<Node> nodes_;
+  std::vector<WideNode> wide_;       // root first
+  std::vector<LeafLanes> lanes_;     // per 4 leaf-order slots (a leaf's)
+  double corner_extent_ = 0.0;       // largest |coordinate| of a corner about the origin
   mutable std::vector<Dipole> dipoles_;  // one per node
   mutable std::once_flag dipoles_once_;
 };
