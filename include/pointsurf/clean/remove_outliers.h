@@ -75,6 +75,11 @@ struct LocalOutlierParams {
   double far_ratio = 12.0;   // also dropped: a point whose mean neighbour distance is above this
                              // many times the median over the cloud (groups of far outliers that
                              // are each other's neighbours), > 1
+  double surface_sigmas = 4.0;  // also dropped: a point farther than this many local noise
+                                // scales from the plane of its k neighbours (see below), >= 0;
+                                // 0 turns the surface test off
+  double surface_floor = 0.1;   // the noise scale is at least this many times the neighbourhood's
+                                // mean neighbour distance (clean, exact surfaces), > 0
   /// Key, unit, range and doc of each field (core/fields.h).
   static const FieldTable<LocalOutlierParams>& fields();
   /// Throws UsageError naming the first value out of range: the one place the values are
