@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <span>
@@ -37,11 +35,20 @@ double median_of(std::span<double> values) {
 // (an outlier among the neighbours, the far side of a thin part).
 constexpr double kRefitSigmas = 2.5;
 
-// The noise scale is the RMS of the plane distances pooled from the neighbours' neighbourhoods
-// that lie within this many robust standard deviations (their median's) of zero.
+// A point's noise variance is the mean square of the plane distances of it and its neighbours
+// that lie within this many robust standard deviations (from their median) of zero...
 constexpr double kPoolTrim = 3.5;
-
+// ... averaged over the point and its neighbours this many times (one neighbourhood's estimate
+// varies by about 30 %, which would remove the tail of the noise).
 constexpr int kScaleSmoothing = 3;
+// The surface test applies where the neighbourhoods' flatness (smallest over middle eigenvalue of
+// the plane fits, smoothed as the noise) is at most this: a surface resolved by k neighbours
+// (about 0.1-0.2 with noise of half a spacing). Above it (noise wider than the neighbourhoods,
+// as on CGAL's sphere_20k.xyz, about 0.5) the planes say nothing about the surface.
+constexpr double kMaxFlatness = 0.35;
+// An off-surface point with more off-surface neighbours than this, at about the surface's
+// density, belongs to a structure (vegetation, a wall of an aerial scan) and is kept.
+constexpr std::size_t kMaxOffNeighbours = 1;
 
 // Per-thread buffers of the plane fits (no allocation per point).
 struct PlaneScratch {
@@ -49,13 +56,19 @@ struct PlaneScratch {
   std::vector<double> residuals;
 };
 
-// Distance from the origin to the least-squares plane of `s.offsets` (a neighbourhood seen from
-// the point it judges), refitted once without the offsets farther than kRefitSigmas robust
-// standard deviations from the first plane. 0 when the offsets span no plane.
-double distance_to_local_plane(PlaneScratch& s) {
+// The least-squares plane of `s.offsets` (a neighbourhood seen from the point it judges, the
+// point excluded), refitted once without the offsets farther than kRefitSigmas robust standard
+// deviations from the first plane: its unit normal, a point on it (offsets' frame) and its
+// flatness (smallest over middle eigenvalue). A zero normal and flatness 1 when the offsets span
+// no plane.
+struct LocalPlane {
+  Vector3d normal = Vector3d::Zero(), centre = Vector3d::Zero();
+  double flatness = 1.0;
+};
+LocalPlane fit_local_plane(PlaneScratch& s) {
   const std::vector<Vector3d>& q = s.offsets;
   const detail::LocalPca first = detail::local_pca([&](std::size_t j) { return q[j]; }, q.size());
-  if (!first.valid) return 0.0;
+  if (!first.valid) return {};
   const Vector3d normal = first.normal();
   s.residuals.resize(q.size());
   for (std::size_t j = 0; j < q.size(); ++j) s.residuals[j] = std::abs(normal.dot(q[j] - first.mean));
@@ -63,9 +76,9 @@ double distance_to_local_plane(PlaneScratch& s) {
   s.kept.clear();
   for (const Vector3d& x : q)
     if (std::abs(normal.dot(x - first.mean)) <= band) s.kept.push_back(x);
-  if (s.kept.size() == q.size()) return std::abs(normal.dot(first.mean));
+  if (s.kept.size() == q.size()) return {normal, first.mean, first.eigenvalues[0] / first.eigenvalues[1]};
   const detail::LocalPca refit = detail::local_pca([&](std::size_t j) { return s.kept[j]; }, s.kept.size());
-  return refit.valid ? std::abs(refit.normal().dot(refit.mean)) : std::abs(normal.dot(first.mean));
+  return refit.valid ? LocalPlane{refit.normal(), refit.mean, refit.eigenvalues[0] / refit.eigenvalues[1]} : LocalPlane{normal, first.mean, 1.0};
 }
 
 }  // namespace
@@ -120,85 +133,98 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
     mean_distance[i] = sum / double(std::max<std::size_t>(used, 1));
   });
 
-  // 2. Ratio to the neighbourhood's median mean distance.
-  std::vector<double> ratio(n), reference(n);
-  tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  // Median over the neighbours of values[j], one per point, into out[i].
-  auto neighbour_median = [&](const std::vector<double>& values, std::vector<double>& out) {
+  // 2. Ratio to the neighbourhood's median mean distance. The passes below run in parallel in
+  // the tree's spatial order (neighbours close in memory).
+  const std::span<const std::uint32_t> order = t.spatial_order();
+  auto for_points = [&](auto&& body) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
       if (reporter.cancelled()) return;
-      std::vector<double>& local = scratch.local();
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        local.resize(k);
-        for (std::size_t u = 0; u < k; ++u) local[u] = values[neighbour_of[i * k + u]];
-        out[i] = median_of(local);
-      }
+      for (std::size_t pos = r.begin(); pos != r.end(); ++pos) body(std::size_t(order[pos]));
     });
     reporter.throw_if_cancelled();
   };
-  neighbour_median(mean_distance, reference);
-  for (std::size_t i = 0; i < n; ++i)
+  auto neighbours = [&](std::size_t i) { return std::span<const std::uint32_t>(neighbour_of.data() + i * k, k); };
+  std::vector<double> ratio(n), reference(n);
+  tbb::enumerable_thread_specific<std::vector<double>> scratch;
+  for_points([&](std::size_t i) {
+    std::vector<double>& local = scratch.local();
+    local.clear();
+    for (std::uint32_t j : neighbours(i)) local.push_back(mean_distance[j]);
+    reference[i] = median_of(local);
     ratio[i] = reference[i] > 0.0 ? mean_distance[i] / reference[i] : (mean_distance[i] > 0.0 ? std::numeric_limits<double>::infinity() : 1.0);
+  });
   reporter.advance(n / 2);
 
-  // 3. Distance to the plane of the neighbours, in units of the local noise: the noise scale is
-  // 1.4826 x the median of the neighbours' own plane distances, pooled once more as the median
-  // of those scales over the neighbours (one median of k values varies by about 30 %).
-  std::vector<double> plane_distance, noise_scale;
+  // 3. Distance to the surface in units of the local noise. Each point's plane is fitted to its
+  // neighbours (itself excluded); its distance to that plane, over the point and its neighbours,
+  // gives the noise: the RMS of those within kPoolTrim robust standard deviations, smoothed
+  // (the variance's mean over the point and its neighbours, kScaleSmoothing times: one
+  // neighbourhood's estimate varies by about 30 %), at least surface_floor x the neighbours'
+  // mean distance. The point's distance to the surface is the median of its distances to its
+  // neighbours' planes (between two sheets its own plane runs between them; theirs are the
+  // sheets).
+  std::vector<double> noise_scale, surface_distance;
+  std::vector<std::uint8_t> off_surface;  // empty without the surface test
   if (params.surface_sigmas > 0.0) {
-    plane_distance.resize(n);
+    std::vector<double> plane_distance(n);
+    std::vector<LocalPlane> plane(n);
     tbb::enumerable_thread_specific<PlaneScratch> planes;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-      if (reporter.cancelled()) return;
+    for_points([&](std::size_t i) {
       PlaneScratch& s = planes.local();
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        s.offsets.resize(k);
-        for (std::size_t u = 0; u < k; ++u) s.offsets[u] = positions[neighbour_of[i * k + u]] - positions[i];
-        plane_distance[i] = distance_to_local_plane(s);
-      }
+      s.offsets.clear();
+      for (std::uint32_t j : neighbours(i)) s.offsets.push_back(positions[j] - positions[i]);
+      plane[i] = fit_local_plane(s);
+      plane_distance[i] = std::abs(plane[i].normal.dot(plane[i].centre));
+      plane[i].centre += positions[i];
     });
-    reporter.throw_if_cancelled();
     noise_scale.resize(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-      if (reporter.cancelled()) return;
+    for_points([&](std::size_t i) {
       std::vector<double>& pool = scratch.local();
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        pool.clear();
-        for (std::size_t u = 0; u <= k; ++u) {
-          const std::size_t j = u == k ? i : neighbour_of[i * k + u];
-          for (std::size_t v = 0; v < k; ++v) pool.push_back(plane_distance[neighbour_of[j * k + v]]);
-        }
-        const double cut = kPoolTrim * kMadToSigma * median_of(pool);
-        double sum = 0.0;
-        std::size_t count = 0;
-        for (double d : pool)
-          if (d <= cut) sum += d * d, ++count;
-        noise_scale[i] = count > 0 ? sum / double(count) : 0.0;  // a variance until smoothed
-      }
+      pool.assign(1, plane_distance[i]);
+      for (std::uint32_t j : neighbours(i)) pool.push_back(plane_distance[j]);
+      const double cut = kPoolTrim * kMadToSigma * median_of(pool);
+      double sum = 0.0;
+      std::size_t count = 0;
+      for (std::uint32_t j : neighbours(i))
+        if (plane_distance[j] <= cut) sum += plane_distance[j] * plane_distance[j], ++count;
+      if (plane_distance[i] <= cut) sum += plane_distance[i] * plane_distance[i], ++count;
+      noise_scale[i] = count > 0 ? sum / double(count) : 0.0;  // a variance until smoothed
     });
-    reporter.throw_if_cancelled();
-    // Smoothed over the neighbourhoods (the variance's mean over the point and its neighbours,
-    // kScaleSmoothing times): one pool still varies by about 15 %.
-    std::vector<double> smoothed(n);
-    for (int pass = 0; pass < kScaleSmoothing; ++pass) {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-          double sum = noise_scale[i];
-          for (std::size_t u = 0; u < k; ++u) sum += noise_scale[neighbour_of[i * k + u]];
+    std::vector<double> flatness(n), smoothed(n);
+    for (std::size_t i = 0; i < n; ++i) flatness[i] = plane[i].flatness;
+    auto smooth = [&](std::vector<double>& values) {
+      for (int pass = 0; pass < kScaleSmoothing; ++pass) {
+        for_points([&](std::size_t i) {
+          double sum = values[i];
+          for (std::uint32_t j : neighbours(i)) sum += values[j];
           smoothed[i] = sum / double(k + 1);
-        }
-      });
-      noise_scale.swap(smoothed);
-    }
-    for (std::size_t i = 0; i < n; ++i) noise_scale[i] = std::max(std::sqrt(noise_scale[i]), params.surface_floor * reference[i]);
+        });
+        values.swap(smoothed);
+      }
+    };
+    smooth(noise_scale);
+    smooth(flatness);
+    surface_distance.resize(n);
+    for_points([&](std::size_t i) {
+      noise_scale[i] = std::max(std::sqrt(noise_scale[i]), params.surface_floor * reference[i]);
+      std::vector<double>& local = scratch.local();
+      local.clear();
+      for (std::uint32_t j : neighbours(i)) local.push_back(std::abs(plane[j].normal.dot(positions[i] - plane[j].centre)));
+      surface_distance[i] = flatness[i] <= kMaxFlatness ? median_of(local) : 0.0;
+    });
+    std::vector<std::uint8_t> off(n);
+    for (std::size_t i = 0; i < n; ++i) off[i] = surface_distance[i] > params.surface_sigmas * noise_scale[i];
+    std::vector<double> sorted_distance = mean_distance;
+    const double dense = params.min_ratio * median_of(sorted_distance);
+    off_surface.assign(n, 0);
+    for_points([&](std::size_t i) {
+      if (!off[i]) return;
+      std::size_t others = 0;
+      for (std::uint32_t j : neighbours(i)) others += off[j];
+      off_surface[i] = others <= kMaxOffNeighbours || mean_distance[i] > dense;
+    });
   }
   reporter.advance(n - n / 2);
-  if (const char* dbg = std::getenv("PS_DEBUG_LOCAL"); dbg && !noise_scale.empty()) {  // DEBUG-REMOVE
-    static int round_no = 0;
-    FILE* f = std::fopen(fmt::format("{}.{}", dbg, round_no++).c_str(), "w");
-    for (std::size_t i = 0; i < n; ++i) std::fprintf(f, "%.17g %.17g %.17g %.9g %.9g %.9g\n", positions[i].x(), positions[i].y(), positions[i].z(), plane_distance[i], noise_scale[i], ratio[i]);
-    std::fclose(f);
-  }
   std::vector<std::uint32_t>().swap(neighbour_of);
 
   // 4. Robust cut over all ratios.
@@ -213,8 +239,8 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
   result.threshold = threshold;
   result.kept.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const bool off_surface = !noise_scale.empty() && plane_distance[i] > params.surface_sigmas * noise_scale[i];
-    if (!(ratio[i] > threshold) && !(mean_distance[i] > far) && !off_surface) result.kept.push_back(static_cast<std::uint32_t>(i));
+    if (!(ratio[i] > threshold) && !(mean_distance[i] > far) && !(!off_surface.empty() && off_surface[i]))
+      result.kept.push_back(static_cast<std::uint32_t>(i));
   }
   result.removed = n - result.kept.size();
   return result;
