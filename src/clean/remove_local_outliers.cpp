@@ -210,12 +210,16 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
       std::vector<double>& local = scratch.local();
       local.clear();
       for (std::uint32_t j : neighbours(i)) local.push_back(std::abs(plane[j].normal.dot(positions[i] - plane[j].centre)));
-      surface_distance[i] = flatness[i] <= kMaxFlatness ? median_of(local) : 0.0;
+      surface_distance[i] = median_of(local);
     });
-    std::vector<std::uint8_t> off(n);
-    for (std::size_t i = 0; i < n; ++i) off[i] = surface_distance[i] > params.surface_sigmas * noise_scale[i];
     std::vector<double> sorted_distance = mean_distance;
     const double dense = params.min_ratio * median_of(sorted_distance);
+    std::vector<std::uint8_t> off(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool sparse = mean_distance[i] > dense;
+      const bool far_from_planes = surface_distance[i] > params.surface_sigmas * noise_scale[i];
+      off[i] = sparse ? far_from_planes || plane[i].flatness > kMaxFlatness : flatness[i] <= kMaxFlatness && far_from_planes;
+    }
     off_surface.assign(n, 0);
     for_points([&](std::size_t i) {
       if (!off[i]) return;

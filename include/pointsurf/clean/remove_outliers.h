@@ -75,7 +75,7 @@ struct LocalOutlierParams {
   double far_ratio = 12.0;   // also dropped: a point whose mean neighbour distance is above this
                              // many times the median over the cloud (groups of far outliers that
                              // are each other's neighbours), > 1
-  double surface_sigmas = 4.5;  // also dropped: a point farther than this many local noise
+  double surface_sigmas = 4.25;  // also dropped: a point farther than this many local noise
                                 // scales from the plane of its k neighbours (see below), >= 0;
                                 // 0 turns the surface test off
   double surface_floor = 0.1;   // the noise scale is at least this many times the neighbourhood's
