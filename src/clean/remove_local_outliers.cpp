@@ -212,6 +212,10 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
       for (std::uint32_t j : neighbours(i)) local.push_back(std::abs(plane[j].normal.dot(positions[i] - plane[j].centre)));
       surface_distance[i] = median_of(local);
     });
+    // Off the surface: far from the neighbours' planes where the neighbourhoods are surfaces;
+    // a sparse point also when its own neighbours form no surface (outliers inside a closed
+    // part, each other's neighbours). Kept anyway: a point at about the surface's density with
+    // more than kMaxOffNeighbours off-surface neighbours (a structure).
     std::vector<double> sorted_distance = mean_distance;
     const double dense = params.min_ratio * median_of(sorted_distance);
     std::vector<std::uint8_t> off(n);
