@@ -10,6 +10,14 @@
 //                                                     near creases (<= 2 spacings), flat (> 5)
 // SHAPE: sphere, cube, part, or a mesh file (sampled area-uniformly; creases: edges turning by
 // at least 30 degrees).
+//   clean_runner outliers SHAPE N SEED OUT            issue 28's outlier scan: N area-uniform
+//                                                     samples, Gaussian noise along the normal of
+//                                                     sigma 0.001 x diagonal, N/100 outliers
+//                                                     uniform in the bounding box grown by 10 %;
+//                                                     fields outlier (0/1), truth_distance, edge_distance, index
+//   clean_runner outlier_score FILE SIGMA NEAR        what is left of such a scan: outliers
+//                                                     beyond 5 sigma of the surface, surface samples
+//                                                     (all, and within NEAR of a crease)
 //   clean_runner spacing IN                           mean spacing of a file
 //   clean_runner quality                              outlier precision/recall, RMS, edges
 #include <sys/resource.h>
@@ -235,6 +243,62 @@ PointCloud synth(const Truth& t, std::size_t n, double noise_in_spacings, std::u
   return cloud;
 }
 
+// Issue 28's outlier scan (see the top): surface samples then outliers, with their truth.
+nlohmann::json outlier_scan(const Truth& t, std::size_t n, std::uint64_t seed, const std::string& out) {
+  if (!t.mesh) throw UsageError("outliers: SHAPE must be a mesh file");
+  test::FeatureShape shape = test::sample_mesh_features(t.mesh->mesh, n, 30.0, seed);
+  PointCloud& cloud = shape.cloud;
+  const BoundingBox box = bounding_box(t.mesh->mesh.vertices.positions);
+  const double diagonal = box.diagonal(), sigma = 0.001 * diagonal;
+  std::mt19937_64 rng(seed * 7919 + 1);
+  std::normal_distribution<double> g(0.0, sigma);
+  for (std::size_t i = 0; i < n; ++i) cloud.positions[i] += g(rng) * cloud.normals[i];
+  const Vector3d grow = 0.05 * box.extent();
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const std::size_t outliers = n / 100;
+  for (std::size_t i = 0; i < outliers; ++i) {
+    const Vector3d r(u(rng), u(rng), u(rng));
+    cloud.positions.push_back(box.min - grow + r.cwiseProduct(box.extent() + 2.0 * grow));
+  }
+  cloud.normals.clear();
+  std::vector<double>& is_outlier = cloud.fields.add("outlier", cloud.size(), ScalarType::UInt8).values;
+  std::vector<double>& truth = cloud.fields.add("truth_distance", cloud.size()).values;
+  std::vector<double>& edge = cloud.fields.add("edge_distance", cloud.size()).values;
+  std::vector<double>& index = cloud.fields.add("index", cloud.size(), ScalarType::UInt32).values;
+  std::size_t far = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    is_outlier[i] = i >= n ? 1.0 : 0.0;
+    index[i] = double(i);
+    truth[i] = t.surface(cloud.positions[i]);
+    edge[i] = i < n ? shape.edge_distance[i] : t.edge(cloud.positions[i]);
+    if (i >= n && truth[i] > 5.0 * sigma) ++far;
+  }
+  write_point_cloud(out, cloud);
+  return {{"stage", "outliers"}, {"shape", t.name}, {"points", cloud.size()}, {"surface", n}, {"outliers", outliers},
+          {"far_outliers", far}, {"sigma", sigma}, {"diagonal", diagonal}, {"spacing", mean_spacing(cloud.positions)}};
+}
+
+// What a cleaning left of an outlier scan: outliers beyond 5 sigma, surface samples (and those
+// within 2 spacings of a crease, given in cloud units).
+nlohmann::json outlier_score(const PointCloud& cloud, double sigma, double near_edge) {
+  const ScalarField* is_outlier = cloud.fields.find("outlier");
+  const ScalarField* truth = cloud.fields.find("truth_distance");
+  const ScalarField* edge = cloud.fields.find("edge_distance");
+  if (!is_outlier || !truth || !edge) throw UsageError("outlier_score: the file lacks the outlier scan's fields");
+  std::size_t far = 0, outliers = 0, surface = 0, surface_near_edge = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (is_outlier->values[i] != 0.0) {
+      ++outliers;
+      if (truth->values[i] > 5.0 * sigma) ++far;
+    } else {
+      ++surface;
+      if (edge->values[i] <= near_edge) ++surface_near_edge;
+    }
+  }
+  return {{"stage", "outlier_score"}, {"far_outliers_left", far}, {"outliers_left", outliers}, {"surface_left", surface},
+          {"surface_near_edge_left", surface_near_edge}};
+}
+
 void write_indices(const std::string& path, const std::vector<std::uint32_t>& kept) {
   std::ofstream out(path);
   for (std::uint32_t i : kept) out << i << '\n';
@@ -354,6 +418,10 @@ int main(int argc, char** argv) {
       j["stage"] = "score";
       j["file"] = a[2];
       fmt::print("{}\n", j.dump());
+    } else if (a.size() == 5 && a[0] == "outliers") {
+      fmt::print("{}\n", outlier_scan(truth(a[1]), std::stoul(a[2]), std::stoul(a[3]), a[4]).dump());
+    } else if (a.size() == 4 && a[0] == "outlier_score") {
+      fmt::print("{}\n", outlier_score(read_point_cloud(a[1]).cloud, std::stod(a[2]), std::stod(a[3])).dump());
     } else if (a.size() == 2 && a[0] == "spacing") {
       const PointCloud cloud = read_point_cloud(a[1]).cloud;
       fmt::print("{}\n", nlohmann::json{{"stage", "spacing"}, {"points", cloud.size()}, {"spacing", mean_spacing(cloud.positions)}}.dump());

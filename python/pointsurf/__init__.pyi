@@ -192,7 +192,7 @@ class CleanReport(TypedDict):
 class CleanCloud(PointCloud):
     report: CleanReport
 
-def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., std_ratio: float = ..., min_neighbors: int = ..., radius: float | str = ..., distance: float | str = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., primitives: bool = ..., primitive_band: float = ..., exact: bool = ..., max_neighbors: int = ..., height_sigma: float | str = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> CleanCloud:
+def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac', 'duplicates', 'bilateral', 'trilateral'] = ..., k: int = ..., min_ratio: float = ..., mad_sigmas: float = ..., far_ratio: float = ..., surface_sigmas: float = ..., surface_floor: float = ..., std_ratio: float = ..., min_neighbors: int = ..., radius: float | str = ..., distance: float | str = ..., iterations: int = ..., min_support: float = ..., min_relative_support: float = ..., seed: int = ..., primitives: bool = ..., primitive_band: float = ..., exact: bool = ..., max_neighbors: int = ..., height_sigma: float | str = ..., sharpness_angle_deg: float = ..., normal_iterations: int = ..., height_sigma_scale: float = ..., use_feature_field: bool = ..., normals_k: int = ..., progress: Progress = None) -> CleanCloud:
     """Remove outliers and duplicates, denoise (local, sor, radius, ransac, duplicates, bilateral, trilateral)
 
     method = 'local': one of local, sor, radius, ransac, duplicates, bilateral, trilateral
@@ -200,6 +200,8 @@ def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac',
     min_ratio = 3.0: Drop only points whose mean neighbour distance is above this many times their neighbours' ((1, inf))
     mad_sigmas = 10.0: ... and above the median ratio by this many robust standard deviations ((0, inf))
     far_ratio = 12.0: Also drop points whose mean neighbour distance is above this many times the cloud's median ((1, inf))
+    surface_sigmas = 4.25: Also drop points farther than this many local noise scales from their neighbours' plane (0: off) ([0, inf))
+    surface_floor = 0.1: The noise scale is at least this many times the neighbourhood's mean neighbour distance ((0, inf))
     std_ratio = 2.0: Drop points whose mean kNN distance >= mean + std_ratio x std ((0, inf))
     min_neighbors = 4: Keep points with at least this many others within the radius (points, [1, inf))
     radius = '4sp': Search radius ((0, inf))
