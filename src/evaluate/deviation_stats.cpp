@@ -141,7 +141,7 @@ DeviationStats summarize_deviation(std::span<const double> deviations, const Dev
   {
     std::vector<double> magnitudes(values.size());
     std::transform(values.begin(), values.end(), magnitudes.begin(), [](double d) { return std::abs(d); });
-    std::sort(magnitudes.begin(), magnitudes.end());
+    tbb::parallel_sort(magnitudes.begin(), magnitudes.end());
     s.abs_p95 = percentile_of_sorted(magnitudes, 95.0);
     s.abs_p99 = percentile_of_sorted(magnitudes, 99.0);
   }
