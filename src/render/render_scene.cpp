@@ -353,7 +353,11 @@ int legend_font(int height) { return std::max(10, height / 48); }
 void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const std::string& field, detail::TextPainter& text) {
   const int font = legend_font(img.height);
   const int bar_w = std::max(10, img.width / 60);
-  const int top = lay.plot_y0 + img.height / 8, bottom = lay.plot_y0 + lay.plot_h - img.height / 8;
+  // Room above the bar for the title (and the over-range box), below it for the under-range box
+  // and the band's text, even on a small picture.
+  const int boxes = scale.out_of_range ? font + font / 2 : 0;
+  const int top = std::max(lay.plot_y0 + img.height / 8, lay.plot_y0 + 2 * font + boxes + 2);
+  const int bottom = std::max(top + 2 * font, std::min(lay.plot_y0 + lay.plot_h - img.height / 8, img.height - 3 * font - boxes - 2));
   const int x = lay.legend_x + font;
   const double lo = scale.low(), hi = scale.high();
   auto row_of = [&](double v) { return int(std::lround(bottom - (v - lo) / (hi - lo) * double(bottom - top))); };
