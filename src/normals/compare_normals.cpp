@@ -46,6 +46,30 @@ OrientResult orient_to_reference(PointCloud& cloud, std::span<const Eigen::Vecto
   return result;
 }
 
+OrientResult orient_to_scanners(PointCloud& cloud, std::span<const Eigen::Vector3d> scanners, std::span<const double> scan_of_point) {
+  if (!cloud.has_normals()) throw UsageError("orient_to_scanners: the cloud has no normals (estimate them first)");
+  if (scanners.empty()) throw UsageError("orient_to_scanners: no scanner position");
+  if (cloud.normals.size() != cloud.size() || (!scan_of_point.empty() && scan_of_point.size() != cloud.size()))
+    throw UsageError(fmt::format("orient_to_scanners: {} normals and {} scan indices for {} points", cloud.normals.size(), scan_of_point.size(),
+                                 cloud.size()));
+  OrientResult result;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    std::size_t scan = 0;
+    if (!scan_of_point.empty()) {
+      const double s = scan_of_point[i];
+      if (!(s >= 0.0 && s < double(scanners.size()) && s == std::floor(s)))
+        throw InputError(fmt::format("orient_to_scanners: point {} has scan index {}, but there are {} scanner positions", i, s, scanners.size()));
+      scan = static_cast<std::size_t>(s);
+    }
+    // About the point: the difference of two absolute positions is exact to their rounding.
+    const Eigen::Vector3d towards = scanners[scan] - cloud.positions[i];
+    if (!usable(cloud.normals[i]) || cloud.normals[i].dot(towards) >= 0.0) continue;
+    cloud.normals[i] = -cloud.normals[i];
+    ++result.flipped;
+  }
+  return result;
+}
+
 const ResultTable<NormalAgreement>& NormalAgreement::results() {
   static const ResultTable<NormalAgreement> table = [] {
     ResultTable<NormalAgreement> t;

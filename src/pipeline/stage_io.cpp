@@ -133,7 +133,10 @@ void run_read(StageRun& run) {
     FileSummary scans;
     scans.scans = r.scans.size();
     if (r.scans.size() > 1 || !options.apply_poses) rec.add_counts(scan_counts(), scans);
-    if (!options.apply_poses) item.scans = std::move(r.scans);
+    if (options.apply_poses)
+      for (const ScanPose& pose : r.scans) item.scanners.push_back(pose.translation);  // where each sensor stood, in the cloud's frame
+    else
+      item.scans = std::move(r.scans);
   }
   for (std::string& w : warnings) rec.warnings.push_back(w.rfind(file, 0) == 0 ? w : file + ": " + w);
   if (dropped > 0)

@@ -186,6 +186,14 @@ void run_normals(StageRun& run) {
     const OrientResult r = orient_to_reference(cloud, input_normals);
     rec.add(OrientResult::results(Orientation::None), r);
     oriented_text = fmt::format("oriented to the input's normals ({} flipped)", r.flipped);
+  } else if (orientation == "mst" && !a.given("orient") && !item.scanners.empty() &&
+             (item.scanners.size() == 1 || cloud.fields.contains("scan"))) {
+    // Scans whose sensor positions are known (E57 poses): each normal faces its own scanner.
+    const ScalarField* scan = cloud.fields.find("scan");
+    const OrientResult r = orient_to_scanners(cloud, item.scanners, scan ? std::span<const double>(scan->values) : std::span<const double>());
+    rec.add(OrientResult::results(Orientation::Viewpoint), r);
+    rec.set_used("orient", std::string("scanners"));
+    oriented_text = fmt::format("oriented towards the {} ({} flipped)", plural(item.scanners.size(), "scanner position"), r.flipped);
   } else if (orient.method != Orientation::None) {
     const OrientResult r = orient_normals(cloud, orient, &tree, sub_progress(run.progress, 0.5, 1.0));
     rec.add(OrientResult::results(orient.method), r);

@@ -2,9 +2,11 @@
 // End-to-end tests of the pointsurf command line: exit codes, messages, reports, outputs.
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -287,6 +289,55 @@ TEST_F(Cli, ThreadsOptionAndDirectionOrientation) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const PointCloud out = read_point_cloud(path("plane.ply")).cloud;
   for (const Vector3d& n : out.normals) EXPECT_LT(n.z(), -0.99);
+}
+
+// Two scans of a room from inside, written as E57 with their poses, 1e6 m from the origin. By
+// default the normals face the scanner that recorded each point (inwards); MST's outward vote,
+// asked for, turns the closed room's walls outwards: away from both scanners.
+TEST_F(Cli, NormalsOfE57ScansFaceTheirScanners) {
+  const Vector3d corner(1e6, 2e6, 100.0);  // the room is [0,10] x [0,8] x [0,3] from here
+  std::vector<ScanPose> poses(2);
+  poses[0].translation = corner + Vector3d(2.5, 4.0, 1.5);
+  poses[0].rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Vector3d::UnitZ()));
+  poses[1].translation = corner + Vector3d(7.5, 4.0, 1.5);
+  poses[1].rotation = Eigen::Quaterniond(Eigen::AngleAxisd(-2.0, Vector3d::UnitZ()));
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud scans;  // in each scan's own frame, as a scanner records them
+  std::vector<double>& scan = scans.fields.add("scan", 0).values;
+  std::vector<Vector3d> world;
+  const Vector3d size(10, 8, 3);
+  while (world.size() < 30000) {
+    Vector3d p(u(rng) * size.x(), u(rng) * size.y(), u(rng) * size.z());
+    const int axis = static_cast<int>(u(rng) * 3.0) % 3;  // a point on one of the six walls
+    p[axis] = u(rng) < 0.5 ? 0.0 : size[axis];
+    const int s = p.x() < 5.0 ? 0 : 1;
+    world.push_back(corner + p);
+    scans.positions.push_back(poses[std::size_t(s)].rotation.conjugate() * (corner + p - poses[std::size_t(s)].translation));
+    scan.push_back(s);
+  }
+  WriteOptions options;
+  options.scan_poses = poses;
+  write_point_cloud(path("room.e57"), scans, options);
+
+  const auto facing = [&](const std::string& file) {
+    const PointCloud got = read_point_cloud(path(file)).cloud;
+    std::size_t towards = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      const std::size_t s = got.positions[i].x() - corner.x() < 5.0 ? 0 : 1;
+      towards += got.normals[i].dot(poses[s].translation - got.positions[i]) > 0.0 ? 1 : 0;
+    }
+    return double(towards) / double(got.size());
+  };
+  RunResult r = run("normals " + path("room.e57") + " " + path("n.ply") + " --report " + path("n.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "oriented towards the 2 scanner positions")) << r.err;
+  EXPECT_GT(facing("n.ply"), 0.999);
+  const nlohmann::json report = nlohmann::json::parse(test::read_bytes(path("n.json")));
+  EXPECT_EQ(report["stages"][1]["parameters"]["orient"], "scanners");
+  r = run("normals " + path("room.e57") + " " + path("mst.ply") + " --orient mst", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_LT(facing("mst.ply"), 0.01);
 }
 
 }  // namespace

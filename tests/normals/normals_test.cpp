@@ -515,6 +515,26 @@ TEST(OrientToReference, ZeroNormalsAreLeftOutAndSizesChecked) {
   expect_usage_error([&] { orient_to_reference(s.cloud, s.exact); }, "orient_to_reference: the cloud has no normals (estimate them first)");
 }
 
+// A sphere seen from two scanners inside it, one per half: every normal faces its own scanner
+// (inwards), whatever side PCA gave it; indices out of range are refused.
+TEST(OrientToScanners, EachNormalFacesTheScannerOfItsPoint) {
+  const Vector3d centre(3e6, -1e6, 50.0);
+  Shape s = make(test::sample_sphere(2000, 1.0, centre));
+  s.cloud.normals = s.exact;  // outward
+  for (std::size_t i = 0; i < 2000; i += 3) s.cloud.normals[i] = -s.cloud.normals[i];
+  const std::vector<Vector3d> scanners = {centre + Vector3d(-0.3, 0, 0), centre + Vector3d(0.3, 0, 0)};
+  std::vector<double> scan(2000);
+  for (std::size_t i = 0; i < 2000; ++i) scan[i] = s.cloud.positions[i].x() < centre.x() ? 0.0 : 1.0;
+  orient_to_scanners(s.cloud, scanners, scan);
+  for (std::size_t i = 0; i < 2000; ++i) EXPECT_GT(s.cloud.normals[i].dot(scanners[std::size_t(scan[i])] - s.cloud.positions[i]), 0.0) << i;
+  for (std::size_t i = 0; i < 2000; ++i) EXPECT_LT((s.cloud.normals[i] + s.exact[i]).norm(), 1e-12) << i;  // inwards
+  scan[7] = 2.0;
+  EXPECT_THROW(orient_to_scanners(s.cloud, scanners, scan), InputError);
+  scan.pop_back();
+  EXPECT_THROW(orient_to_scanners(s.cloud, scanners, scan), UsageError);
+  EXPECT_THROW(orient_to_scanners(s.cloud, {}), UsageError);
+}
+
 TEST(OrientNormals, ProgressCanCancel) {
   Shape s = make(test::sample_sphere(20000));
   s.cloud.normals = s.exact;

@@ -138,4 +138,13 @@ NormalAgreement compare_normals(std::span<const Eigen::Vector3d> reference, std:
 /// normal per point; throws UsageError otherwise or when the cloud has no normals. O(N).
 OrientResult orient_to_reference(PointCloud& cloud, std::span<const Eigen::Vector3d> reference);
 
+/// Flips each normal of `cloud.normals` to face the scanner that recorded its point: scanner
+/// `scan_of_point[i]` of `scanners` (positions, cloud units; an E57 scan's pose translation), or
+/// scanners[0] for every point when `scan_of_point` is empty. A scan's points face their own
+/// sensor, the one orientation that is right for interiors, overhangs and thin walls alike.
+/// Zero normals and points at a scanner's position are left as they are. Throws UsageError when
+/// the cloud has no normals, there is no scanner or a size differs; InputError naming the point
+/// whose scan index is not one of the scanners. O(N).
+OrientResult orient_to_scanners(PointCloud& cloud, std::span<const Eigen::Vector3d> scanners, std::span<const double> scan_of_point = {});
+
 }  // namespace pointsurf

@@ -33,6 +33,8 @@ struct DataItem {
   std::vector<ScanPose> scans;  // E57 scans read with keep_poses: the pose of each value of field "scan"
   std::optional<MeasuredField> measured;  // set by evaluate
   std::vector<SegmentPlane> segment_planes;  // set by segment (ransac): the planes of field "segment"
+  std::vector<Vector3d> scanners;  // E57 read with its poses applied: each scan's sensor position
+                                   // (its value of field "scan"); normals face them by default
 
   /// The points: a cloud's, or a mesh's vertices with their attributes.
   PointCloud& cloud() noexcept { return mesh.vertices; }
