@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <unordered_map>
 #include <utility>
@@ -89,15 +90,16 @@ class Extraction {
   /// Processes every brick with pending cells once (their corner values, the crossed cells made
   /// active, the cells around their crossed edges queued, other bricks' through the outboxes);
   /// returns false when no brick had pending cells.
-  bool follow_round();
+  /// `brick_done`, when given, is called (from any worker) after each brick processed.
+  bool follow_round(const std::function<void()>& brick_done = {});
   /// Sorts the bricks by key and re-indexes them.
   void index_bricks();
   /// Reads the active cells; produces each brick's sorted owned crossed edges and first vertex.
   void collect_crossed_edges();
   /// Reads the owned edges; produces one vertex and unit normal per edge, in brick order.
-  void place_vertices();
+  void place_vertices(const std::function<void()>& brick_done = {});
   /// Reads the active cells and the vertices; produces each brick's triangles and centres.
-  void triangulate_cells();
+  void triangulate_cells(const std::function<void()>& brick_done = {});
   /// The surface: edge vertices, then the centres and triangles of the bricks in key order.
   IsoSurface result() &&;
 
