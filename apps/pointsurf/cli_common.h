@@ -89,6 +89,7 @@ private:
   std::size_t index_;
   std::string stage_;
   ProgressTrace* trace_;
+  double last_traced_s_ = -1.0;  // update() runs on one thread at a time (the ProgressCallback contract)
   std::chrono::steady_clock::time_point start_;
   std::mutex stop_mutex_;
   std::condition_variable stop_cv_;

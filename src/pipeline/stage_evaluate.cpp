@@ -228,12 +228,13 @@ void run_evaluate(StageRun& run) {
   const auto share = [s0 = fit ? 0.3 : 0.0](double f) { return s0 + (1.0 - s0) * f; };  // progress: the shares after the fit
   report_progress(run.progress, share(0.0), "BVH build");
   const TriangleBvh bvh(mesh);
-  report_progress(run.progress, share(0.15), "quality");
+  report_progress(run.progress, share(0.12), "quality");
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
   MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
-  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, share(0.58), share(0.64), "distances"));
-  report_progress(run.progress, share(0.64), "statistics");
+  report_progress(run.progress, share(0.45), "distances");  // its set-up (signs) reports nothing: its first call comes at 0.6
+  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, share(0.6), share(0.7)));
+  report_progress(run.progress, share(0.7), "statistics");
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
   DeviationParams sp = read_params<DeviationParams>(a);
@@ -264,6 +265,7 @@ void run_evaluate(StageRun& run) {
   std::vector<double> unused;
   std::vector<Neighbor> nn;
   for (std::size_t i = 0; i < ref.cloud().size(); ++i) {
+    if (i % 65536 == 0) report_progress(run.progress, share(0.72 + 0.18 * double(i) / double(ref.cloud().size())));
     vertex_tree.knn(ref.cloud().positions[i], 1, nn);
     if (nn.empty() || nn.front().squared_distance > 0.0) unused.push_back(dist.distances[i]);
   }
@@ -286,7 +288,7 @@ void run_evaluate(StageRun& run) {
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
   const SurfaceDistanceParams sd = read_params<SurfaceDistanceParams>(a);
-  report_progress(run.progress, share(0.75), "mesh samples");
+  report_progress(run.progress, share(0.92), "mesh samples");
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
   const SurfaceView ref_view{measured, ref.mesh.triangles};
   const std::vector<double> back = on_mesh.empty() ? std::vector<double>{} : nearest_surface_distances(on_mesh, ref_view);

@@ -217,7 +217,7 @@ Eigen::Vector3d Extraction::position(Key corner) const {
 }
 
 // Values at finest-lattice corners, evaluated in batches.
-void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& out) const {
+void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& out, ProgressReporter* reporter) const {
   out.resize(corners.size());
   const std::size_t chunks = (corners.size() + kChunk - 1) / kChunk;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
@@ -228,6 +228,7 @@ void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& 
       std::copy(p.begin(), p.end(), triples.begin() + 3 * (i - begin));
     }
     f_.corner_values(depth_, triples.data(), end - begin, out.data() + begin);
+    if (reporter) reporter->advance(end - begin);
   });
 }
 
@@ -317,7 +318,7 @@ void Extraction::seeds_of_leaf(int level, Key cell, const std::vector<Key>& corn
 }
 
 // 2. Coarse leaves whose edges change sign seed the finest cells at the change.
-void Extraction::seed_coarse_crossings() {
+void Extraction::seed_coarse_crossings(const ProgressCallback& progress, double begin, double end) {
   if (!coarse_leaves_.empty()) {
     std::vector<Key> corners;
     corners.reserve(8 * coarse_leaves_.size());
@@ -329,11 +330,16 @@ void Extraction::seed_coarse_crossings() {
     }
     sort_unique(corners);
     std::vector<double> corner_values;
-    evaluate(corners, corner_values);
+    // progress: a corner evaluated and a leaf searched count the same
+    ProgressReporter reporter(progress, begin, end, corners.size() + coarse_leaves_.size());
+    evaluate(corners, corner_values, &reporter);
+    reporter.throw_if_cancelled();
     tbb::enumerable_thread_specific<std::vector<Key>> found;
     tbb::parallel_for(std::size_t(0), coarse_leaves_.size(), [&](std::size_t i) {
       seeds_of_leaf(coarse_leaves_[i].first, coarse_leaves_[i].second, corners, corner_values, found.local());
+      reporter.advance(1);
     });
+    reporter.throw_if_cancelled();
     std::vector<Key> more = gather(found);
     seeds_.insert(seeds_.end(), more.begin(), more.end());
   }
@@ -660,15 +666,15 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
   iso::Extraction x(f, lattice, params);
   report_phase(progress, "extraction: leaves");
   x.find_leaves();
-  report(0.05);
-  x.seed_coarse_crossings();
-  report(0.15);
+  report(0.02);
+  x.seed_coarse_crossings(progress, 0.02, 0.5);
+  report(0.5);
   // Following the surface takes rounds of unknown number: round r ends at share
-  // 0.15 + 0.45 (1 - 1 / (1 + r / 8)), and within a round the bricks done move it on. The
+  // 0.5 + 0.35 (1 - 1 / (1 + r / 8)), and within a round the bricks done move it on. The
   // shares follow the phases' time at 200k and 1M samples (bench/notes/progress.md).
   report_phase(progress, "extraction: surface cells");
   x.queue_seeds();
-  const auto round_end = [](double r) { return 0.15 + 0.45 * (1.0 - 1.0 / (1.0 + r / 8.0)); };
+  const auto round_end = [](double r) { return 0.5 + 0.35 * (1.0 - 1.0 / (1.0 + r / 8.0)); };
   for (std::size_t round = 0;; ++round) {
     std::size_t pending = 0;
     for (const auto& b : x.bricks()) pending += b->pending.empty() ? 0 : 1;
@@ -677,22 +683,22 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
     reporter.throw_if_cancelled();
   }
   x.index_bricks();
-  report(0.6);
+  report(0.85);
   report_phase(progress, "extraction: vertices");
   x.collect_crossed_edges();
   {
-    ProgressReporter reporter(progress, 0.62, 0.85, x.bricks().size());
+    ProgressReporter reporter(progress, 0.86, 0.96, x.bricks().size());
     x.place_vertices([&] { reporter.advance(1); });
     reporter.throw_if_cancelled();
   }
-  report(0.85);
+  report(0.96);
   report_phase(progress, "extraction: triangles");
   {
-    ProgressReporter reporter(progress, 0.85, 0.97, x.bricks().size());
+    ProgressReporter reporter(progress, 0.96, 0.995, x.bricks().size());
     x.triangulate_cells([&] { reporter.advance(1); });
     reporter.throw_if_cancelled();
   }
-  report(0.97);
+  report(0.995);
   IsoSurface out = std::move(x).result();
   report(1.0);
   return out;

@@ -33,7 +33,7 @@ constexpr int kMinAutoDepth = 6, kMaxAutoDepth = 10;
 
 // The shares of reconstruct_poisson's time (bench/notes/progress.md): the octree and the solve,
 // the extraction, then the density, the colours and fields, the trim and the topology.
-constexpr double kSolveEnd = 0.5, kExtractionEnd = 0.88;
+constexpr double kSolveEnd = 0.4, kExtractionEnd = 0.85;
 
 // Removes the pieces (vertex-connected components) whose sample support per area lies more than
 // `gap` depth units (factors of 4) below the largest piece's, and the vertices they leave unused.
@@ -261,7 +261,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
       nearest[v] = hit.empty() ? 0 : hit.front().index;
     }
   });
-  if (progress && !progress(kExtractionEnd + 0.5 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
+  if (progress && !progress(kExtractionEnd + 0.4 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
   if (cloud.has_colors()) {
     mesh.vertices.colors.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) mesh.vertices.colors[v] = cloud.colors[nearest[v]];
@@ -292,7 +292,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
 
   detail::TrimResult trim;
   report_phase(progress, "trim and topology");
-  if (progress && !progress(kExtractionEnd + 0.75 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
+  if (progress && !progress(kExtractionEnd + 0.8 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
   if (params.trim_depth > 0.0) {
     trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
     result.trimmed_triangles = trim.removed_triangles;
