@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -124,35 +125,79 @@ void check_common_options(const CommonOptions& common) {
   }
 }
 
-ProgressBar::ProgressBar(std::string label, bool enabled)
-    : label_(std::move(label)), enabled_(enabled && ::isatty(STDERR_FILENO)), start_(std::chrono::steady_clock::now()), last_(start_) {}
+ProgressTrace::ProgressTrace(const std::string& path) : out_(path) {
+  if (!out_) throw UsageError(fmt::format("POINTSURF_PROGRESS_TRACE: cannot write {}", path));
+  out_ << "# pointsurf progress trace: seconds\tindex\tstage\tevent\tvalue\n";
+}
+
+void ProgressTrace::record(double seconds, std::size_t index, const std::string& stage, std::string_view event, std::string_view value) {
+  std::lock_guard lock(mutex_);
+  out_ << fmt::format("{:.6f}\t{}\t{}\t{}\t{}\n", seconds, index, stage, event, value);
+  if (event != "fraction") out_.flush();
+}
+
+ProgressBar::ProgressBar(std::string label, bool enabled, std::size_t index, std::string stage, ProgressTrace* trace)
+    : display_(std::move(label)),
+      enabled_(enabled && ::isatty(STDERR_FILENO)),
+      index_(index),
+      stage_(std::move(stage)),
+      trace_(trace),
+      start_(std::chrono::steady_clock::now()) {
+  if (trace_) trace_->record(0.0, index_, stage_, "start", "");
+  if (enabled_) ticker_ = std::thread([this] { tick(); });
+}
 
 ProgressBar::~ProgressBar() { finish(); }
 
-void ProgressBar::finish() {
+double ProgressBar::now() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+// The ticker: the only thread that draws, so a stage's workers never wait on the terminal.
+void ProgressBar::tick() {
+  std::unique_lock lock(stop_mutex_);
+  while (!stop_cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_; })) {
+    if (const std::optional<std::string> line = display_.due(now())) {
+      fmt::print(stderr, "\r{}\033[K", *line);
+      std::fflush(stderr);
+      shown_ = true;
+    }
+  }
+}
+
+void ProgressBar::finish(double seconds) {
+  if (ticker_.joinable()) {
+    {
+      std::lock_guard lock(stop_mutex_);
+      stop_ = true;
+    }
+    stop_cv_.notify_all();
+    ticker_.join();
+  }
   if (shown_) {
-    if (last_fraction_ < 1.0) update(1.0);
     std::fputs("\r\033[K", stderr);  // the summary line takes its place
+    std::fflush(stderr);
     shown_ = false;
   }
   enabled_ = false;
+  if (trace_ && seconds >= 0.0) {
+    trace_->record(now(), index_, stage_, "end", fmt::format("{:.6f}", seconds));
+    trace_ = nullptr;
+  }
 }
 
 void ProgressBar::update(double fraction) {
-  if (!enabled_) return;
-  const auto now = std::chrono::steady_clock::now();
-  const double elapsed = std::chrono::duration<double>(now - start_).count();
-  if (elapsed < 1.0 && fraction < 1.0) return;
-  if (shown_ && fraction < 1.0 && now - last_ < std::chrono::milliseconds(100)) return;
-  last_ = now;
-  shown_ = true;
-  fraction = std::clamp(fraction, last_fraction_, 1.0);  // never backwards
-  last_fraction_ = fraction;
-  constexpr int width = 30;
-  const int filled = static_cast<int>(fraction * width);
-  fmt::print(stderr, "\r{:<18} [{}{}] {:3.0f}%  {:.1f} s", label_, std::string(filled, '#'), std::string(width - filled, '.'),
-             100.0 * fraction, elapsed);
-  std::fflush(stderr);
+  const double t = now();
+  // A trace line per millisecond at most (a parallel loop may report a million times): the
+  // gaps it shows are then at most 1 ms longer than the true ones.
+  if (trace_ && (t - last_traced_s_ >= 0.001 || fraction >= 1.0)) {
+    last_traced_s_ = t;
+    trace_->record(t, index_, stage_, "fraction", fmt::format("{:.6f}", fraction));
+  }
+  if (enabled_) display_.set_fraction(fraction, t);
+}
+
+void ProgressBar::phase(std::string_view name) {
+  if (trace_) trace_->record(now(), index_, stage_, "phase", name);
+  if (enabled_) display_.set_phase(name);
 }
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& text) { write_file_atomically(path, text); }
@@ -209,17 +254,24 @@ void run_with_report(const Pipeline& pipeline, const CommonOptions& common, cons
   RunOptions options;
   options.no_clobber = common.no_clobber;
   std::unique_ptr<ProgressBar> bar;
+  std::unique_ptr<ProgressTrace> trace;
+  if (const char* path = std::getenv("POINTSURF_PROGRESS_TRACE"); path != nullptr && *path != '\0')
+    trace = std::make_unique<ProgressTrace>(path);
   const std::size_t n = pipeline.steps.size();
   options.progress = [&](const StageRecord& r) -> ProgressCallback {
-    bar = std::make_unique<ProgressBar>(fmt::format("[{}/{}] {}", r.index, n, r.type), !common.quiet);
+    bar.reset();  // the previous stage's ticker stops before the next one starts
+    bar = std::make_unique<ProgressBar>(fmt::format("[{}/{}] {}", r.index, n, r.type), !common.quiet, r.index, r.type, trace.get());
     ProgressBar* b = bar.get();
-    return [b](double f) {
+    PhasedProgress progress;
+    progress.on_fraction = [b](double f) {
       b->update(f);
       return !interrupt_requested();  // false: the stage stops (CancelledError)
     };
+    progress.on_phase = [b](std::string_view name) { b->phase(name); };
+    return progress;
   };
   options.stage_done = [&](const StageRecord& r) {
-    if (bar) bar->finish();
+    if (bar) bar->finish(r.seconds);
     if (common.quiet) return;
     fmt::print(stderr, "[{}/{}] {} ({:.2f} s)\n", r.index, n, r.summary, r.seconds);
     for (const std::string& w : r.warnings) fmt::print(stderr, "warning: {}\n", w);

@@ -3,13 +3,20 @@
 // What every pointsurf command shares: the argument scanner (options in the tool's own words,
 // with "did you mean"), the common options, the progress bar, and writing the run report.
 #include <chrono>
+#include <condition_variable>
+#include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <fstream>
 #include <map>
+#include <mutex>
 #include <string>
+#include <string_view>
+#include <thread>
 #include <vector>
 
 #include "pointsurf/core/progress.h"
+#include "progress_display.h"
 #include "pointsurf/pipeline/pipeline.h"
 #include "pointsurf/report/html_report.h"
 
@@ -44,23 +51,50 @@ std::string common_options_help();
 /// Checks --threads and --report before any work (UsageError).
 void check_common_options(const CommonOptions& common);
 
+/// The progress trace asked for by the environment variable POINTSURF_PROGRESS_TRACE=FILE: one
+/// tab-separated line per event, "seconds index stage event value", where seconds count from
+/// the stage's start and event is "start", "fraction" (value in [0, 1]), "phase" (its name) or
+/// "end" (the stage's seconds). For benchmarks and tests; written with or without a terminal.
+class ProgressTrace {
+public:
+  explicit ProgressTrace(const std::string& path);
+  void record(double seconds, std::size_t index, const std::string& stage, std::string_view event, std::string_view value);
+
+private:
+  std::mutex mutex_;
+  std::ofstream out_;
+};
+
 /// A one-line progress bar on stderr, shown only on a terminal, without --quiet, and once the
-/// work has lasted about a second; it moves at least every 100 ms while called.
+/// work has lasted about a second (ProgressDisplay): the stage, the fraction, the running clock,
+/// the time left and the phase. A ticker thread redraws it while the stage reports nothing.
 class ProgressBar {
 public:
-  ProgressBar(std::string label, bool enabled);
+  ProgressBar(std::string label, bool enabled, std::size_t index = 0, std::string stage = {}, ProgressTrace* trace = nullptr);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
   void update(double fraction);
-  void finish();
+  void phase(std::string_view name);
+  /// Stops the ticker and clears the line; `seconds` >= 0 ends the trace's stage.
+  void finish(double seconds = -1.0);
 
 private:
-  std::string label_;
+  double now() const;
+  void tick();
+
+  ProgressDisplay display_;
   bool enabled_;
   bool shown_ = false;
-  double last_fraction_ = 0.0;
-  std::chrono::steady_clock::time_point start_, last_;
+  std::size_t index_;
+  std::string stage_;
+  ProgressTrace* trace_;
+  double last_traced_s_ = -1.0;  // update() runs on one thread at a time (the ProgressCallback contract)
+  std::chrono::steady_clock::time_point start_;
+  std::mutex stop_mutex_;
+  std::condition_variable stop_cv_;
+  bool stop_ = false;
+  std::thread ticker_;
 };
 
 /// Ctrl-C: the first SIGINT asks the running stage to stop at its next progress report (it then

@@ -481,6 +481,7 @@ void run_pipeline(const Pipeline& pipeline, Context& context, RunReport& report,
         report.stages.push_back(record);
         throw;
       }
+      if (progress) (void)progress(1.0);  // every stage's progress ends at 1, whatever its last report
       record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stage_start).count();
       record.peak_rss_mb = peak_rss_mb();
       record.rss_rise_mb = record.peak_rss_mb - rss_before;

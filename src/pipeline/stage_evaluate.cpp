@@ -206,7 +206,7 @@ RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const st
   p.seed = sd.seed;
   p.max_distance = Length::cloud(p.max_distance.resolve(p.max_distance.in_spacings() ? run.context.mean_spacing(ref_tag) : 0.0));
   rec.set_used("align_max_distance_used", p.max_distance.value);
-  const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud().positions, mesh, p, sub_progress(run.progress, 0.0, 0.3));
+  const RegistrationResult r = align_to_mesh(run.context.item(ref_tag).cloud().positions, mesh, p, sub_progress(run.progress, 0.0, 0.3, "align"));
   rec.add(mesh_alignment_results(), r, "align/");
   if (!r.converged) rec.warnings.push_back("align: " + r.message + "; measured as aligned so far");
   return r.transform;
@@ -262,11 +262,16 @@ void run_evaluate(StageRun& run) {
   }
   const std::vector<Vector3d>& measured = surface || fit ? moved : ref.cloud().positions;
 
+  const auto share = [s0 = fit ? 0.3 : 0.0](double f) { return s0 + (1.0 - s0) * f; };  // progress: the shares after the fit
+  report_progress(run.progress, share(0.0), "BVH build");
   const TriangleBvh bvh(mesh);
+  report_progress(run.progress, share(0.12), "quality");
   const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
   MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
-  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, fit ? 0.3 : 0.0, 0.7));
+  report_progress(run.progress, share(0.45), "distances");  // its set-up (signs) reports nothing: its first call comes at 0.6
+  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, share(0.6), share(0.7)));
+  report_progress(run.progress, share(0.7), "statistics");
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
   DeviationParams sp = read_params<DeviationParams>(a);
@@ -287,6 +292,7 @@ void run_evaluate(StageRun& run) {
   // simplification, or left out by the reconstruction): their deviation on its own.
   std::vector<double> unused;
   {
+    report_progress(run.progress, share(0.75), "points at vertices");
     const std::vector<char> is_vertex = at_used_vertex(mesh, surface ? std::span<const Vector3d>(measured) : ref.cloud().positions);
     for (std::size_t i = 0; i < is_vertex.size(); ++i)
       if (!is_vertex[i]) unused.push_back(dist.distances[i]);
@@ -312,6 +318,7 @@ void run_evaluate(StageRun& run) {
   }
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
+  report_progress(run.progress, share(0.85), "mesh samples");
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
   const SurfaceView ref_view = surface ? SurfaceView{fit ? std::span<const Vector3d>(ref_vertices) : std::span<const Vector3d>(ref.cloud().positions),
                                                     ref.mesh.triangles}

@@ -183,7 +183,7 @@ void run_reconstruct(StageRun& run) {
   if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.2));
   const PointCloud& cloud = item.cloud();
   const KdTree& tree = run.context.tree(run.output);
-  const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 1.0);
+  const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 0.9);  // the rest: labels, loops
   const NoiseEstimate noise = estimate_noise(cloud, tree);
   MeshSummary m;
   m.noise_in_spacings = noise.median_in_spacings;
@@ -218,6 +218,7 @@ void run_reconstruct(StageRun& run) {
     rec.set_used("radii", radii);
   }
   rec.add(ReconstructionStats::results(method), result.stats);
+  report_progress(run.progress, 0.9, "labels and loops");
   clean_and_label_faces(result, a, rec);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;

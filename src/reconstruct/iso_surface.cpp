@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -39,6 +40,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/iso_extraction.h"
 
 namespace pointsurf::detail {
@@ -215,7 +217,7 @@ Eigen::Vector3d Extraction::position(Key corner) const {
 }
 
 // Values at finest-lattice corners, evaluated in batches.
-void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& out) const {
+void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& out, ProgressReporter* reporter) const {
   out.resize(corners.size());
   const std::size_t chunks = (corners.size() + kChunk - 1) / kChunk;
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
@@ -226,6 +228,7 @@ void Extraction::evaluate(const std::vector<Key>& corners, std::vector<double>& 
       std::copy(p.begin(), p.end(), triples.begin() + 3 * (i - begin));
     }
     f_.corner_values(depth_, triples.data(), end - begin, out.data() + begin);
+    if (reporter) reporter->advance(end - begin);
   });
 }
 
@@ -315,7 +318,7 @@ void Extraction::seeds_of_leaf(int level, Key cell, const std::vector<Key>& corn
 }
 
 // 2. Coarse leaves whose edges change sign seed the finest cells at the change.
-void Extraction::seed_coarse_crossings() {
+void Extraction::seed_coarse_crossings(const ProgressCallback& progress, double begin, double end) {
   if (!coarse_leaves_.empty()) {
     std::vector<Key> corners;
     corners.reserve(8 * coarse_leaves_.size());
@@ -327,11 +330,16 @@ void Extraction::seed_coarse_crossings() {
     }
     sort_unique(corners);
     std::vector<double> corner_values;
-    evaluate(corners, corner_values);
+    // progress: a corner evaluated and a leaf searched count the same
+    ProgressReporter reporter(progress, begin, end, corners.size() + coarse_leaves_.size());
+    evaluate(corners, corner_values, &reporter);
+    reporter.throw_if_cancelled();
     tbb::enumerable_thread_specific<std::vector<Key>> found;
     tbb::parallel_for(std::size_t(0), coarse_leaves_.size(), [&](std::size_t i) {
       seeds_of_leaf(coarse_leaves_[i].first, coarse_leaves_[i].second, corners, corner_values, found.local());
+      reporter.advance(1);
     });
+    reporter.throw_if_cancelled();
     std::vector<Key> more = gather(found);
     seeds_.insert(seeds_.end(), more.begin(), more.end());
   }
@@ -434,12 +442,15 @@ void Extraction::process(Brick& b) const {
   }
 }
 
-bool Extraction::follow_round() {
+bool Extraction::follow_round(const std::function<void()>& brick_done) {
   std::vector<Brick*> busy;
   for (const auto& b : bricks_)
     if (!b->pending.empty()) busy.push_back(b.get());
   if (busy.empty()) return false;
-  tbb::parallel_for(std::size_t(0), busy.size(), [&](std::size_t i) { process(*busy[i]); });
+  tbb::parallel_for(std::size_t(0), busy.size(), [&](std::size_t i) {
+    process(*busy[i]);
+    if (brick_done) brick_done();
+  });
   for (Brick* b : busy) {
     std::vector<Key> outbox = std::move(b->outbox);
     b->outbox.clear();
@@ -537,13 +548,14 @@ void Extraction::place_vertex(const Brick& b, std::size_t j) {
   out_.normals[b.first_vertex + j] = unit_normal(p, outward);
 }
 
-void Extraction::place_vertices() {
+void Extraction::place_vertices(const std::function<void()>& brick_done) {
   const std::size_t edge_count = bricks_.empty() ? 0 : bricks_.back()->first_vertex + bricks_.back()->edges.size();
   out_.vertices.resize(edge_count);
   out_.normals.resize(edge_count);
   tbb::parallel_for(std::size_t(0), bricks_.size(), [&](std::size_t i) {
     const Brick& b = *bricks_[i];
     for (std::size_t j = 0; j < b.edges.size(); ++j) place_vertex(b, j);
+    if (brick_done) brick_done();
   });
 }
 
@@ -631,9 +643,12 @@ void Extraction::triangulate_brick(const Brick& b, ChunkOutput& o) const {
   }
 }
 
-void Extraction::triangulate_cells() {
+void Extraction::triangulate_cells(const std::function<void()>& brick_done) {
   chunks_.resize(bricks_.size());
-  tbb::parallel_for(std::size_t(0), bricks_.size(), [&](std::size_t bi) { triangulate_brick(*bricks_[bi], chunks_[bi]); });
+  tbb::parallel_for(std::size_t(0), bricks_.size(), [&](std::size_t bi) {
+    triangulate_brick(*bricks_[bi], chunks_[bi]);
+    if (brick_done) brick_done();
+  });
 }
 
 IsoSurface Extraction::result() && {
@@ -649,20 +664,41 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
     if (progress && !progress(fraction)) throw CancelledError();
   };
   iso::Extraction x(f, lattice, params);
+  report_phase(progress, "extraction: leaves");
   x.find_leaves();
-  report(0.05);
-  x.seed_coarse_crossings();
-  report(0.1);
-  x.queue_seeds();
-  for (std::size_t round = 0; x.follow_round(); ++round)
-    if (round % 16 == 15) report(0.1 + 0.4 * (1.0 - 1.0 / (1.0 + round / 64.0)));
-  x.index_bricks();
+  report(0.02);
+  x.seed_coarse_crossings(progress, 0.02, 0.5);
   report(0.5);
+  // Following the surface takes rounds of unknown number: round r ends at share
+  // 0.5 + 0.35 (1 - 1 / (1 + r / 8)), and within a round the bricks done move it on. The
+  // shares follow the phases' time at 200k and 1M samples (bench/notes/progress.md).
+  report_phase(progress, "extraction: surface cells");
+  x.queue_seeds();
+  const auto round_end = [](double r) { return 0.5 + 0.35 * (1.0 - 1.0 / (1.0 + r / 8.0)); };
+  for (std::size_t round = 0;; ++round) {
+    std::size_t pending = 0;
+    for (const auto& b : x.bricks()) pending += b->pending.empty() ? 0 : 1;
+    ProgressReporter reporter(progress, round_end(double(round)), round_end(double(round + 1)), pending);
+    if (!x.follow_round([&] { reporter.advance(1); })) break;
+    reporter.throw_if_cancelled();
+  }
+  x.index_bricks();
+  report(0.85);
+  report_phase(progress, "extraction: vertices");
   x.collect_crossed_edges();
-  x.place_vertices();
-  report(0.75);
-  x.triangulate_cells();
-  report(0.95);
+  {
+    ProgressReporter reporter(progress, 0.86, 0.96, x.bricks().size());
+    x.place_vertices([&] { reporter.advance(1); });
+    reporter.throw_if_cancelled();
+  }
+  report(0.96);
+  report_phase(progress, "extraction: triangles");
+  {
+    ProgressReporter reporter(progress, 0.96, 0.995, x.bricks().size());
+    x.triangulate_cells([&] { reporter.advance(1); });
+    reporter.throw_if_cancelled();
+  }
+  report(0.995);
   IsoSurface out = std::move(x).result();
   report(1.0);
   return out;

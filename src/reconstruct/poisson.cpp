@@ -31,10 +31,9 @@ namespace {
 constexpr int kMaxDepth = 16;
 constexpr int kMinAutoDepth = 6, kMaxAutoDepth = 10;
 
-ProgressCallback part(const ProgressCallback& progress, double from, double to) {
-  if (!progress) return {};
-  return [progress, from, to](double f) { return progress(from + (to - from) * f); };
-}
+// The shares of reconstruct_poisson's time (bench/notes/progress.md): the octree and the solve,
+// the extraction, then the density, the colours and fields, the trim and the topology.
+constexpr double kSolveEnd = 0.4, kExtractionEnd = 0.85;
 
 // Removes the pieces (vertex-connected components) whose sample support per area lies more than
 // `gap` depth units (factors of 4) below the largest piece's, and the vertices they leave unused.
@@ -222,7 +221,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   sys.dirichlet = params.boundary == PoissonBoundary::Dirichlet;
   sys.max_iterations = params.max_iterations;
   sys.tolerance = params.tolerance;
-  const detail::PoissonFunction function(std::move(samples), sys, lattice, part(progress, 0.0, 0.7));
+  const detail::PoissonFunction function(std::move(samples), sys, lattice, sub_progress(progress, 0.0, kSolveEnd));
   result.iso_value = function.iso_value();
   result.peak_bytes = function.peak_bytes();
   result.nodes_per_level.assign(std::size_t(depth + 1), 0);
@@ -241,7 +240,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   // Meshed at the finest level the samples reached, as PoissonRecon meshes its leaves: a depth
   // beyond what the sampling supports adds no detail, only triangles.
   lattice.depth = function.finest_level();
-  detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, part(progress, 0.7, 0.95));
+  detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, sub_progress(progress, kSolveEnd, kExtractionEnd, "extraction"));
 
   TriangleMesh& mesh = result.mesh;
   mesh.vertices.positions = std::move(surface.vertices);
@@ -250,6 +249,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) mesh.triangles[t][k] = static_cast<int>(surface.triangles[t][std::size_t(k)]);
   const std::size_t nv = mesh.vertices.positions.size();
+  report_phase(progress, "density");
   ScalarField& density = mesh.vertices.fields.add("density", nv, ScalarType::Float32);
   std::vector<std::uint32_t> nearest(nv);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -261,6 +261,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
       nearest[v] = hit.empty() ? 0 : hit.front().index;
     }
   });
+  if (progress && !progress(kExtractionEnd + 0.4 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
   if (cloud.has_colors()) {
     mesh.vertices.colors.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) mesh.vertices.colors[v] = cloud.colors[nearest[v]];
@@ -290,6 +291,8 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   }
 
   detail::TrimResult trim;
+  report_phase(progress, "trim and topology");
+  if (progress && !progress(kExtractionEnd + 0.8 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
   if (params.trim_depth > 0.0) {
     trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
     result.trimmed_triangles = trim.removed_triangles;

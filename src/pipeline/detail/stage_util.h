@@ -3,9 +3,12 @@
 // Small helpers the stage run functions share.
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 #include <fmt/format.h>
 
+#include "pointsurf/core/error.h"
+#include "pointsurf/core/progress.h"
 #include "pointsurf/pipeline/context.h"
 #include "pointsurf/pipeline/stage.h"
 
@@ -33,10 +36,18 @@ inline std::int64_t as_count(std::size_t n) { return static_cast<std::int64_t>(n
 
 namespace pointsurf::detail {
 
-/// A callback for one part [begin, end] of a stage's progress (empty when `whole` is).
-inline ProgressCallback sub_progress(const ProgressCallback& whole, double begin, double end) {
-  if (!whole) return {};
-  return [whole, begin, end](double f) { return whole(begin + (end - begin) * f); };
+/// A callback for one part [begin, end] of a stage's progress (empty when `whole` is); phase
+/// names pass through (pointsurf::sub_progress).
+inline ProgressCallback sub_progress(const ProgressCallback& whole, double begin, double end, std::string_view phase = {}) {
+  return pointsurf::sub_progress(whole, begin, end, phase);
+}
+
+/// Reports entering `phase` (when given) and the fraction `f` of the stage to `progress`; throws
+/// CancelledError when it asks to stop.
+inline void report_progress(const ProgressCallback& progress, double f, std::string_view phase = {}) {
+  if (!progress) return;
+  if (!phase.empty()) report_phase(progress, phase);
+  if (!progress(f)) throw CancelledError();
 }
 
 /// Name of a neighbourhood kind as the parameter "neighborhood" spells it.

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <unordered_map>
 #include <utility>
@@ -13,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include "core/detail/progress_reporter.h"
 #include "reconstruct/detail/iso_surface.h"
 
 namespace pointsurf::detail::iso {
@@ -83,21 +85,23 @@ class Extraction {
   void find_leaves();
   /// Reads the coarse leaves' corner values; adds to the seeds the finest cells around the finest
   /// sub-edge of each coarse-leaf edge whose ends differ in sign (bisection); sorts the seeds.
-  void seed_coarse_crossings();
+  /// Reports its corners evaluated and leaves searched to `progress` as [begin, end] (throws CancelledError).
+  void seed_coarse_crossings(const ProgressCallback& progress = {}, double begin = 0.0, double end = 1.0);
   /// Reads the seeds; produces the bricks that hold them, the seeds pending in them (and clears the seeds).
   void queue_seeds();
   /// Processes every brick with pending cells once (their corner values, the crossed cells made
   /// active, the cells around their crossed edges queued, other bricks' through the outboxes);
   /// returns false when no brick had pending cells.
-  bool follow_round();
+  /// `brick_done`, when given, is called (from any worker) after each brick processed.
+  bool follow_round(const std::function<void()>& brick_done = {});
   /// Sorts the bricks by key and re-indexes them.
   void index_bricks();
   /// Reads the active cells; produces each brick's sorted owned crossed edges and first vertex.
   void collect_crossed_edges();
   /// Reads the owned edges; produces one vertex and unit normal per edge, in brick order.
-  void place_vertices();
+  void place_vertices(const std::function<void()>& brick_done = {});
   /// Reads the active cells and the vertices; produces each brick's triangles and centres.
-  void triangulate_cells();
+  void triangulate_cells(const std::function<void()>& brick_done = {});
   /// The surface: edge vertices, then the centres and triangles of the bricks in key order.
   IsoSurface result() &&;
 
@@ -110,7 +114,7 @@ class Extraction {
 
  private:
   Eigen::Vector3d position(Key corner) const;
-  void evaluate(const std::vector<Key>& corners, std::vector<double>& out) const;
+  void evaluate(const std::vector<Key>& corners, std::vector<double>& out, ProgressReporter* reporter = nullptr) const;
   double value_at(std::uint32_t x, std::uint32_t y, std::uint32_t z) const;
   double sign(double v) const { return params_.inside_positive ? v - params_.iso_value : params_.iso_value - v; }
   void seeds_of_leaf(int level, Key cell, const std::vector<Key>& corners, const std::vector<double>& values,

@@ -51,6 +51,12 @@ namespace {
 
 using Key = std::uint64_t;
 constexpr Key kNoKey = ~Key{0};
+// The progress of PoissonFunction's construction, by phase: shares of its time measured on 1M
+// samples (bench/notes/progress.md); a level's solve is split into set-up, iterations and the
+// carried normals.
+constexpr double kOctreeShare = 0.1, kSplatShare = 0.25, kSampleValueShare = 0.02;
+constexpr double kScreeningCostInNodes = 2.0;  // a level's work per screening point (a cell with samples), in nodes
+constexpr double kLevelSetupShare = 0.2, kLevelSolveShare = 0.6;
 
 Key morton(int x, int y, int z) { return detail::morton_code(std::uint64_t(x), std::uint64_t(y), std::uint64_t(z)); }
 // The hash key of a cell: cheaper than its Morton code, which orders the arrays.
@@ -294,6 +300,10 @@ struct PoissonFunction::Impl {
   std::vector<Eigen::Vector3d> VF;  // the normals splatted at the levels solved so far, as coefficients of the last
   struct LevelSolve;  // solve_level's phases
   PoissonLevelReport solve_level(int l);
+  std::function<void(double)> level_progress;  // the finished fraction of the level being solved (may throw CancelledError)
+  void level_done(double f) const {
+    if (level_progress) level_progress(f);
+  }
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
   double gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const;
@@ -557,7 +567,9 @@ void PoissonFunction::Impl::splat_and_restrict() {
   const int depth = params.depth;
   Level& L = levels[std::size_t(depth)];
   const std::vector<Eigen::Vector3d> v = splat(depth);
+  level_done(0.4);
   add_divergence(L, v);
+  level_done(0.55);
   // The level above the finest directly from V: the finest level's b reaches 3 cells beyond
   // the samples, one more than its nodes, so restricting it would lose a part.
   if (depth >= 2) {
@@ -587,7 +599,9 @@ void PoissonFunction::Impl::splat_and_restrict() {
       }
       C.b[k] = sum;
     });
+    level_done(0.75);
     add_divergence(C, splat(depth - 1));
+    level_done(0.9);
   }
   // restriction: b(coarse k) = sum over fine j of P(j, k) b(fine j)
   for (int l = depth - 1; l >= 2; --l) {
@@ -641,7 +655,7 @@ std::array<std::vector<std::uint32_t>, 27> colour_classes(const std::vector<std:
 
 PcgResult jacobi_pcg(const std::function<void(const std::vector<double>&, std::vector<double>&)>& apply,
                      std::vector<double>& r, const std::vector<double>& diag, std::vector<double>& x, int max_iterations,
-                     double tolerance) {
+                     double tolerance, const std::function<void(int iteration)>& on_iteration) {
   const std::size_t nodes = r.size();
   PcgResult result;
   std::fill(x.begin(), x.end(), 0.0);
@@ -669,6 +683,7 @@ PcgResult jacobi_pcg(const std::function<void(const std::vector<double>&, std::v
     tbb::parallel_for(std::size_t(0), nodes, [&](std::size_t i) { d[i] = z[i] + beta_ * d[i]; });
     rn = std::sqrt(dot(r, r));
     ++it;
+    if (on_iteration) on_iteration(it);
   }
   result.iterations = it;
   result.final_residual = rn;
@@ -853,8 +868,10 @@ void PoissonFunction::Impl::LevelSolve::apply(const std::vector<double>& v, std:
 void PoissonFunction::Impl::LevelSolve::solve() {
   sv.resize(cells.size());
   const int max_it = l <= m.params.full_depth ? std::max(m.params.max_iterations, 100) : m.params.max_iterations;
+  // the iterations take the level's share between the set-up and the carried normals; the
+  // tolerance may end them early (a jump, never a gap)
   const PcgResult cg = jacobi_pcg([&](const std::vector<double>& v, std::vector<double>& out) { apply(v, out); }, r, diag, L.x, max_it,
-                                  m.params.tolerance);
+                                  m.params.tolerance, [&](int it) { m.level_done(kLevelSetupShare + kLevelSolveShare * it / max_it); });
   report.initial_residual = cg.initial_residual;
   report.iterations = cg.iterations;
   report.final_residual = cg.final_residual;
@@ -931,9 +948,12 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
   level.colour_points();
   level.coarse_right_hand_side();
   level.add_screening();
+  level_done(kLevelSetupShare);
   level.solve();
   level.accumulate_coefficients();
+  level_done(kLevelSetupShare + kLevelSolveShare);
   level.carry_normals();
+  level_done(1.0);
   return level.report;
 }
 
@@ -981,25 +1001,46 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   auto report = [&](double f) {
     if (progress && !progress(f)) throw CancelledError("reconstruct_poisson: cancelled");
   };
+  report_phase(progress, "octree");
   m.levels.assign(std::size_t(depth + 1), Level{});
   m.level_of.assign(ns, std::uint8_t(depth));  // every sample reaches the kernel level
-  for (int l = 1; l <= m.params.kernel_depth; ++l) m.build_level(l);
+  for (int l = 1; l <= m.params.kernel_depth; ++l) m.build_level(l), report(kOctreeShare * l / (depth + 1));
   m.estimate_density();
-  for (int l = m.params.kernel_depth + 1; l <= depth; ++l) m.build_level(l);
-  report(0.1);
+  for (int l = m.params.kernel_depth + 1; l <= depth; ++l) m.build_level(l), report(kOctreeShare * l / (depth + 1));
+  report(kOctreeShare);
+  report_phase(progress, "splatting");
+  m.level_progress = [&](double f) { report(kOctreeShare + kSplatShare * f); };
   m.splat_and_restrict();
-  report(0.2);
+  report(kOctreeShare + kSplatShare);
+  // A level's solve costs about its nodes per iteration plus its screening points' set-up and
+  // carried normals: its share of the rest follows that cost (bench/notes/progress.md).
+  std::vector<double> level_cost(std::size_t(depth + 1), 0.0);
+  double total_cost = 0.0;
+  for (int l = 1; l <= depth; ++l) {
+    const std::size_t nodes = m.levels[std::size_t(l)].nodes();
+    // a level holds at most one screening point per sample
+    level_cost[std::size_t(l)] = double(nodes) + kScreeningCostInNodes * double(std::min(nodes, ns));
+    total_cost += level_cost[std::size_t(l)];
+  }
+  double cost_done = 0.0;
+  const double solve_begin = kOctreeShare + kSplatShare, solve_share = 1.0 - solve_begin - kSampleValueShare;
   std::size_t bytes = 0;
   for (const Level& L : m.levels) bytes += L.bytes();
   bytes += ns * (2 * sizeof(Eigen::Vector3d) + sizeof(double) * 2 + sizeof(std::uint32_t) + sizeof(Key));
   std::size_t largest = 0;
   for (int l = 1; l <= depth; ++l) {
+    report_phase(progress, "solve level " + std::to_string(l) + "/" + std::to_string(depth));
+    const double cost = level_cost[std::size_t(l)];
+    m.level_progress = [&](double f) { report(solve_begin + solve_share * (cost_done + cost * f) / std::max(total_cost, 1.0)); };
     reports_.push_back(m.solve_level(l));
+    cost_done += cost;
     // the level's solver work arrays: 27 nodes and 9 weights per sample, 5 doubles per node
     largest = std::max(largest, ns * (27 * sizeof(std::int32_t) + sizeof(std::array<Weights1D, 3>) + sizeof(double)) +
                                     m.levels[std::size_t(l)].nodes() * 5 * sizeof(double));
-    report(0.2 + 0.8 * double(l) / depth);
   }
+  m.level_progress = nullptr;
+  report(1.0 - kSampleValueShare);
+  report_phase(progress, "iso value");
   peak_bytes_ = bytes + largest;
   for (int l = 1; l <= depth; ++l)
     if (m.levels[std::size_t(l)].nodes() > 0) finest_level_ = l;
@@ -1015,6 +1056,7 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
   for (Level& L : m.levels) release(L.b), release(L.first), release(L.last);
   release(m.q), release(m.normals_), release(m.area), release(m.keys), release(m.level_of), release(m.order), release(m.VF);
+  report(1.0);
 }
 
 PoissonFunction::~PoissonFunction() = default;

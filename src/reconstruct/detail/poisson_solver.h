@@ -76,9 +76,10 @@ struct PcgResult {
 /// `apply(v, out)` writing A v to out, `diag` A's diagonal: at most max_iterations steps, stops
 /// when |r| fell by `tolerance` or a direction has no positive curvature. On return r holds the
 /// residual. Deterministic: the reductions are in a fixed order for any thread count.
+/// `on_iteration`, when given, hears each finished iteration's number (for progress).
 PcgResult jacobi_pcg(const std::function<void(const std::vector<double>&, std::vector<double>&)>& apply,
                      std::vector<double>& r, const std::vector<double>& diag, std::vector<double>& x, int max_iterations,
-                     double tolerance);
+                     double tolerance, const std::function<void(int iteration)>& on_iteration = {});
 
 /// The solved implicit function: sum over the levels of their B-splines. Smaller inside (the
 /// normals point outward: the function grows along them), evaluated in the unit cube.

@@ -119,8 +119,7 @@ const KdTree& tree_or_own(std::string_view function, const PointCloud& cloud, co
 }
 
 ProgressCallback sub_progress(const ProgressCallback& progress, double begin, double end) {
-  if (!progress) return {};
-  return [&progress, begin, end](double f) { return progress(begin + (end - begin) * f); };
+  return pointsurf::sub_progress(progress, begin, end);
 }
 
 std::size_t target_count(const SimplifyTarget& target, std::size_t n) {
