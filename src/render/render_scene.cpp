@@ -350,6 +350,13 @@ std::string legend_band(const ColorScale& scale) {
 
 int legend_font(int height) { return std::max(10, height / 48); }
 
+// Pixels of the annotations: anything outside the picture (a legend on a small one) is dropped.
+void paint(Image& img, int x, int y, const Rgb& c) {
+  if (x < 0 || y < 0 || x >= img.width || y >= img.height) return;
+  std::copy(c.begin(), c.end(), img.at(x, y));
+}
+void paint(Image& img, int x, int y, std::uint8_t grey) { paint(img, x, y, Rgb{grey, grey, grey}); }
+
 void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const std::string& field, detail::TextPainter& text) {
   const int font = legend_font(img.height);
   const int bar_w = std::max(10, img.width / 60);
@@ -364,13 +371,13 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
   for (int y = top; y <= bottom; ++y) {
     const double v = hi - (hi - lo) * double(y - top) / double(std::max(1, bottom - top));
     const Rgb c = scale.color(v);
-    for (int k = 0; k < bar_w; ++k) std::copy(c.begin(), c.end(), img.at(x + k, y));
+    for (int k = 0; k < bar_w; ++k) paint(img, x + k, y, c);
   }
   for (int y = top - 1; y <= bottom + 1; ++y)
-    for (int k : {-1, bar_w}) std::fill_n(img.at(x + k, y), 3, std::uint8_t(60));
+    for (int k : {-1, bar_w}) paint(img, x + k, y, 60);
   for (int k = -1; k <= bar_w; ++k) {
-    std::fill_n(img.at(x + k, top - 1), 3, std::uint8_t(60));
-    std::fill_n(img.at(x + k, bottom + 1), 3, std::uint8_t(60));
+    paint(img, x + k, top - 1, 60);
+    paint(img, x + k, bottom + 1, 60);
   }
   // With out-of-range boxes the ends are labelled there ("> +h", "< -h").
   std::vector<std::pair<double, std::string>> ticks = {{hi, scale.out_of_range ? "" : number_label(hi)},
@@ -388,7 +395,7 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
   std::sort(ticks.begin(), ticks.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   for (const auto& [v, label] : ticks) {
     const int y = row_of(v);
-    for (int k = 0; k < 5; ++k) std::fill_n(img.at(x + bar_w + k, std::clamp(y, 0, img.height - 1)), 3, std::uint8_t(60));
+    for (int k = 0; k < 5; ++k) paint(img, x + bar_w + k, std::clamp(y, 0, img.height - 1), 60);
     if (label.empty() || y - last_y < font + 2) continue;  // tolerance labels close to zero: keep the tick, drop the text
     text.draw(img, x + bar_w + 8, y + font / 2 - 1, label, font, {30, 30, 30});
     last_y = y;
@@ -401,8 +408,7 @@ void draw_legend(Image& img, const Layout& lay, const ColorScale& scale, const s
       for (int y = y0; y < y0 + box; ++y)
         for (int k = -1; k <= bar_w; ++k) {
           const bool edge = y == y0 || y == y0 + box - 1 || k == -1 || k == bar_w;
-          std::copy(c.begin(), c.end(), img.at(x + k, std::clamp(y, 0, img.height - 1)));
-          if (edge) std::fill_n(img.at(x + k, std::clamp(y, 0, img.height - 1)), 3, std::uint8_t(60));
+          paint(img, x + k, y, edge ? Rgb{60, 60, 60} : c);
         }
       text.draw(img, x + bar_w + 8, y0 + box - 2, label, font, {30, 30, 30});
     };
@@ -425,11 +431,11 @@ void draw_scale_bar(Image& img, const Layout& lay, double pixels_per_unit, detai
   const int n = int(std::lround(len * pixels_per_unit));
   const int font = std::max(10, img.height / 52);
   const int x = lay.plot_x0 + font, y = img.height - font;
-  for (int k = 0; k < n && x + k < img.width; ++k)
-    for (int t = 0; t < 3; ++t) std::fill_n(img.at(x + k, y - t), 3, std::uint8_t(40));
+  for (int k = 0; k < n; ++k)
+    for (int t = 0; t < 3; ++t) paint(img, x + k, y - t, 40);
   for (int t = 0; t < 8; ++t) {
-    std::fill_n(img.at(x, y - t), 3, std::uint8_t(40));
-    std::fill_n(img.at(std::min(img.width - 1, x + n - 1), y - t), 3, std::uint8_t(40));
+    paint(img, x, y - t, 40);
+    paint(img, std::min(img.width - 1, x + n - 1), y - t, 40);
   }
   text.draw(img, x + n + 6, y, number_label(len), font, {30, 30, 30});
 }
