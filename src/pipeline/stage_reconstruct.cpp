@@ -16,6 +16,7 @@
 #include "pointsurf/reconstruct/cocone.h"
 #include "pointsurf/reconstruct/crust.h"
 #include "pointsurf/reconstruct/flat_regions.h"
+#include "pointsurf/reconstruct/handles.h"
 #include "pointsurf/reconstruct/mesh_cleanup.h"
 #include "pointsurf/reconstruct/poisson.h"
 #include "pointsurf/reconstruct/triangulate.h"
@@ -84,7 +85,7 @@ struct MeshSummary {
   std::size_t non_manifold_edges = 0, non_manifold_vertices = 0, inconsistent_edges = 0, components = 0;
   double holes_total_perimeter = 0.0, largest_hole_perimeter = 0.0, border_perimeter = 0.0;
   std::int64_t euler_characteristic = 0;
-  long genus = -1;
+  long genus = -1, handles = -1;
   bool watertight = false;
   double noise_in_spacings = 0.0, mean_spacing = 0.0;
   bool normals_estimated = false;
@@ -130,6 +131,9 @@ const ResultTable<MeshSummary>& mesh_metrics() {
     t.computed("genus", ResultType::Integer,
                [](const M& m) { return m.genus >= 0 ? ResultValue(std::int64_t{m.genus}) : ResultValue(std::numeric_limits<double>::quiet_NaN()); },
                "Genus of a closed manifold mesh (null where undefined)");
+    t.computed("handles", ResultType::Integer,
+               [](const M& m) { return m.handles >= 0 ? ResultValue(std::int64_t{m.handles}) : ResultValue(std::numeric_limits<double>::quiet_NaN()); },
+               "Genus summed over the components (null where undefined)");
     t.flag("watertight", &M::watertight, "Closed, manifold and consistently oriented");
     t.number("mean_spacing", &M::mean_spacing, "Mean distance to the nearest neighbour").with_unit("cloud units");
     t.flag("normals_estimated", &M::normals_estimated, "The input had no normals: they were estimated");
@@ -148,18 +152,29 @@ std::vector<ResultSpec> reconstruct_specs(const std::vector<std::string>& method
     for (const ResultSpec& spec : ReconstructionStats::results(method).specs())
       if (seen.insert(spec.key).second) out.push_back(spec);
   append(out, SmallComponentsResult::results().specs());
+  append(out, HandleResult::results().specs());
   append(out, FlatRegionResult::results().specs());
   append(out, counted(mesh_counts().specs()));
   append(out, mesh_metrics().specs());
   return out;
 }
 
-// After any method: specks removed (min_component_share), then the flat regions labelled as
-// the face field "region" (issue 12). The topology is analysed again when faces went.
-void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, StageRecord& rec) {
+// After any method: specks removed (min_component_share), short handles cut (max_handle_loop
+// cloud spacings, issue 28), then the flat regions labelled as the face field "region" (issue
+// 12). The topology is analysed again when faces changed.
+HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, double spacing, StageRecord& rec) {
   const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
   rec.add(SmallComponentsResult::results(), removed);
-  if (removed.faces_removed > 0) {
+  HandleParams hp = read_params<HandleParams>(a);
+  hp.spacing = spacing;
+  const HandleResult handles = remove_short_handles(result.mesh, hp);
+  rec.add(HandleResult::results(), handles);
+  if (handles.short_handles > handles.handles_removed)
+    rec.warnings.push_back(fmt::format("{} with a loop at most {} spacings ({:.3g}) long {} (topological noise; shortest loop {:.3g}){}",
+                                       plural(handles.short_handles - handles.handles_removed, "short handle"), hp.max_loop_in_spacings,
+                                       handles.max_loop_length, handles.short_handles - handles.handles_removed == 1 ? "remains" : "remain",
+                                       handles.shortest_loop, hp.remove ? ": they could not be cut cleanly" : "; --remove-handles true cuts them"));
+  if (removed.faces_removed > 0 || handles.handles_removed > 0) {
     const std::size_t used_before = result.topology.vertices;
     result.topology = analyze_topology(result.mesh);
     result.unused_points += used_before - result.topology.vertices;
@@ -168,6 +183,7 @@ void clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, Sta
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
   rec.add(FlatRegionResult::results(), regions);
+  return handles;
 }
 
 void run_reconstruct(StageRun& run) {
@@ -219,7 +235,7 @@ void run_reconstruct(StageRun& run) {
   }
   rec.add(ReconstructionStats::results(method), result.stats);
   report_progress(run.progress, 0.9, "labels and loops");
-  clean_and_label_faces(result, a, rec);
+  const HandleResult handles = clean_and_label_faces(result, a, spacing, rec);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
   // Poisson's surface is closed but where trimming opened it: its loops are borders, and its
@@ -244,6 +260,7 @@ void run_reconstruct(StageRun& run) {
   m.border_perimeter = LoopKinds::perimeter(loops.borders);
   m.euler_characteristic = static_cast<std::int64_t>(t.euler_characteristic);
   m.genus = t.genus();
+  m.handles = t.handles();
   m.watertight = t.watertight();
   m.mean_spacing = spacing;
   m.normals_estimated = estimated;
@@ -266,6 +283,13 @@ void run_reconstruct(StageRun& run) {
                             plural(loops.holes.size(), "hole"), hole_perimeter, plural(loops.borders.size(), "border loop"),
                             t.non_manifold_edges, t.non_manifold_vertices, plural(t.components, "component"),
                             genus >= 0 ? std::to_string(genus) : std::string("-"));
+  if (handles.handles_removed > 0)
+    rec.summary += fmt::format(" ({} cut: {} handles before, loops {:.3g} to {:.3g}, at most {:.3g})", plural(handles.handles_removed, "short handle"),
+                               handles.handles_before >= 0 ? std::to_string(handles.handles_before) : std::string("-"), handles.shortest_loop,
+                               std::max_element(handles.loops.begin(), handles.loops.end(), [](const HandleLoop& x, const HandleLoop& y) {
+                                 return x.length < y.length;
+                               })->length,
+                               handles.max_loop_length);
   // The mesh's vertices are the cloud's points in order (Poisson: new vertices): the item keeps
   // its positions (and so its cached tree) and gains the faces.
   TriangleMesh& mesh = result.mesh;
@@ -280,7 +304,8 @@ StageSpec reconstruct_stage() {
   s.name = "reconstruct";
   s.summary = "Triangle mesh through the points: region-growing triangulation (default), cocone, Crust, ball pivoting or screened Poisson";
   s.description = "Normals are estimated (PCA, normals_k) and MST-oriented when the input has none (cocone and crust need none). Poisson builds new vertices (approximating); its trim loops are border loops. Holes, "
-                  "manifoldness, components and genus are reported.";
+                  "manifoldness, components and genus are reported; handles with a loop at most max_handle_loop cloud spacings long "
+                  "(topological noise) are cut and closed.";
   s.order = 120;
   s.consumes = {Slot{"cloud", DataKind::Cloud}};
   s.produces = Slot{"mesh", DataKind::Mesh};
@@ -293,6 +318,7 @@ StageSpec reconstruct_stage() {
   append(s.params, params_of(BallPivotParams::fields(), {"ball-pivot"}));
   append(s.params, params_of(PoissonParams::fields(), {"poisson"}));
   append(s.params, params_of(SmallComponentParams::fields()));
+  append(s.params, params_of(HandleParams::fields()));
   append(s.params, params_of(FlatRegionParams::fields()));
   s.examples = {"pointsurf reconstruct data/kitten.xyz mesh.ply", "pointsurf reconstruct data/kitten.xyz mesh_bp.ply --method ball-pivot --radii-in-spacings 2,4",
                 "pointsurf reconstruct data/kitten.xyz mesh_poisson.ply --method poisson --trim-depth 5"};
@@ -301,6 +327,7 @@ StageSpec reconstruct_stage() {
   s.check = [](const StageArgs& a) {
     if (a.has("radii") && a.given("radii") && a.given("radii_in_spacings")) throw key_error("radii", " and radii_in_spacings: give only one");
     read_params<SmallComponentParams>(a).validate();
+    read_params<HandleParams>(a).validate();
     read_params<FlatRegionParams>(a).validate();
     if (a.method() == "triangulate") read_params<TriangulateParams>(a).validate();
     else if (a.method() == "cocone") read_params<CoconeParams>(a).validate();

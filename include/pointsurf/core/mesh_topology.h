@@ -50,6 +50,17 @@ struct MeshTopology {
     const long twice = 2 - euler_characteristic - static_cast<long>(boundary_loops.size());
     return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
   }
+  /// Handles summed over the components: (2 c - chi - b) / 2 with c components, under the
+  /// conditions of genus() but for any number of components (Poisson's output with its small
+  /// pieces); -1 otherwise. Equals genus() on one component.
+  long handles() const noexcept {
+    if (triangles == 0 || !edge_manifold() || !oriented()) return -1;
+    std::size_t loop_edges = 0;
+    for (const BoundaryLoop& loop : boundary_loops) loop_edges += loop.vertices.size();
+    if (loop_edges != boundary_edges) return -1;
+    const long twice = 2 * static_cast<long>(components) - euler_characteristic - static_cast<long>(boundary_loops.size());
+    return twice >= 0 && twice % 2 == 0 ? twice / 2 : -1;
+  }
 };
 
 /// Analyses the combinatorics of `mesh` (indices must be valid: see TriangleMesh::validate).
