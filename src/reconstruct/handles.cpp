@@ -23,7 +23,7 @@ namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr int kRounds = 8;
 // A cap is the minimum-area triangulation of its loop, cubic in its corners.
-constexpr std::size_t kMaxCapCorners = 64;
+constexpr std::size_t kMaxCapCorners = 256;
 // Seeds cover the surface to an eighth of the limit; balls grow to 5/8 of it, so that a loop at
 // most the limit long lies in the ball of a seed near it.
 constexpr double kCoverShare = 0.125, kRadiusShare = 0.625;

@@ -294,6 +294,52 @@ TEST_F(ReconstructCli, PoissonWritesAWatertightSphereWithDensityAndReportsTheOct
   EXPECT_FALSE(std::filesystem::exists(dir_ / "bad.ply"));
 }
 
+// Issue 28 item 7: real handles (a torus, the kitten's tail) stay; a handle counts as short
+// only below max_handle_loop cloud spacings, and is then cut, or only counted.
+TEST_F(ReconstructCli, PoissonKeepsRealHandlesAndCutsThemOnlyBelowTheLimit) {
+  const PointCloud torus = test::sample_torus(20000, 1.0, 0.3, 7);  // meridian 1.88, about 80 spacings
+  write_point_cloud(path("torus.ply"), torus);
+  const std::string base = "reconstruct " + path("torus.ply") + " " + path("mesh.ply") + " --method poisson --depth 7 --report " + path("run.json");
+  RunResult r = run_cli(base, dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  nlohmann::json s = stage("run.json", "reconstruct");
+  EXPECT_EQ(s["figures"]["handles_before"], 1);
+  EXPECT_EQ(s["figures"]["short_handles"], 0);
+  EXPECT_EQ(s["figures"]["handles_removed"], 0);
+  EXPECT_EQ(s["figures"]["genus"], 1);
+  EXPECT_EQ(s["figures"]["handles"], 1);
+  EXPECT_NEAR(s["figures"]["max_handle_loop_length"].get<double>(), 10.0 * s["figures"]["mean_spacing"].get<double>(), 1e-12);
+  EXPECT_EQ(analyze_topology(read_mesh(path("mesh.ply")).mesh).genus(), 1);
+
+  // Counted, not cut, when asked: a warning names them.
+  r = run_cli(base + " --max-handle-loop 200 --no-remove-handles", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "1 short handle with a loop at most 200 spacings")) << r.err;
+  s = stage("run.json", "reconstruct");
+  EXPECT_EQ(s["figures"]["short_handles"], 1);
+  EXPECT_EQ(s["figures"]["handles_removed"], 0);
+  EXPECT_EQ(s["figures"]["genus"], 1);
+
+  // Above the meridian's length the torus is cut and closed: a watertight genus-0 mesh.
+  r = run_cli(base + " --max-handle-loop 200", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "1 short handle cut")) << r.err;
+  s = stage("run.json", "reconstruct");
+  EXPECT_EQ(s["figures"]["handles_removed"], 1);
+  EXPECT_GT(s["figures"]["shortest_handle_loop"].get<double>(), 1.8);
+  EXPECT_LT(s["figures"]["shortest_handle_loop"].get<double>(), 2.2);
+  const MeshTopology t = analyze_topology(read_mesh(path("mesh.ply")).mesh);
+  EXPECT_TRUE(t.watertight());
+  EXPECT_EQ(t.genus(), 0);
+
+  // The kitten keeps its tail.
+  r = run_cli("reconstruct " + test::data_path("kitten.xyz").string() + " " + path("kitten.ply") + " --method poisson --report " + path("run.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  s = stage("run.json", "reconstruct");
+  EXPECT_EQ(s["figures"]["genus"], 1);
+  EXPECT_EQ(s["figures"]["handles_removed"], 0);
+}
+
 TEST_F(ReconstructCli, BadInputAndOptionsFailClearlyAndLeaveNoOutput) {
   test::write_bytes(dir_ / "two.xyz", "0 0 0 0 0 1\n1 0 0 0 0 1\n");
   RunResult r = run_cli("reconstruct " + path("two.xyz") + " " + path("out.ply") + " --method ball-pivot", dir_);

@@ -67,7 +67,8 @@ struct HandleResult {
 /// a pocket, are left. A loop is kept when at most the limit long. Only interior, manifold,
 /// consistently oriented vertices are grown over: holes, borders and non-manifold places stop
 /// a ball. Removal: the faces on one side of the loop are removed and the two loops this leaves
-/// are closed by the minimum-area triangulation of their corners (Barequet and Sharir 1995);
+/// are closed by the minimum-area triangulation of their corners (Barequet and Sharir 1995; at
+/// most 256 corners a loop: a longer loop is reported, not cut);
 /// removals that do not lower the genus by one each, or that leave a non-manifold edge, are
 /// undone. Up to 4 rounds. Cost: about 30 Dijkstra steps per vertex for the default limit, plus
 /// the searches on the sides of each closed loop. Throws UsageError for a parameter out of
