@@ -28,22 +28,30 @@ constexpr std::size_t kMaxCapCorners = 256;
 // most the limit long lies in the ball of a seed near it.
 constexpr double kCoverShare = 0.125, kRadiusShare = 0.625;
 
-// The mesh seen from its vertices: the triangles at each vertex and, for interior vertices
-// (one closed, consistently oriented fan), the ring of neighbours counter-clockwise with the
-// triangle between each neighbour and the next.
+// The mesh seen from its vertices: the triangles at each vertex and, for vertices with one
+// consistently oriented fan, the ring of neighbours counter-clockwise with the triangle between
+// each neighbour and the next. Each hole is closed by a virtual vertex (ids n and up, one per
+// boundary loop) joined to the loop's vertices: a border vertex's ring ends with it, through
+// two virtual triangles (kNone). The virtual vertices never join a ball, but the searches on
+// either side of a loop pass through them, so that a surface with holes is seen as the closed
+// surface of the same genus.
 struct Fans {
-  std::vector<std::uint32_t> offset;  // n + 1, into the arrays below (one entry per corner)
-  std::vector<std::uint32_t> ring;    // interior v: ring[offset[v] + j], counter-clockwise
-  std::vector<std::uint32_t> face;    // interior v: triangle (v, ring[j], ring[j + 1])
-  std::vector<std::uint32_t> adjacent;  // every v: the other two corners of each triangle
-                                        // (2 per corner, duplicates kept)
-  std::vector<std::uint8_t> interior;
+  std::size_t n = 0;                     // real vertices
+  std::vector<std::uint32_t> offset;     // n + 1: corners of each vertex (adjacent: 2 per corner)
+  std::vector<std::uint32_t> adjacent;   // every real v: the other two corners of each triangle
+                                         // (duplicates kept)
+  std::vector<std::uint32_t> ring_offset;  // n + 1
+  std::vector<std::uint32_t> ring;       // one-fan v: counter-clockwise, a virtual vertex last on a border
+  std::vector<std::uint32_t> face;       // triangle (v, ring[j], ring[j + 1]); kNone where virtual
+  std::vector<std::uint8_t> interior;    // real, one fan (closed, or open on a border): grown over
+  std::vector<std::uint32_t> hole_offset, hole_members;  // virtual vertex n + h: its loop's vertices
 
-  std::uint32_t degree(std::uint32_t v) const { return offset[v + 1] - offset[v]; }
+  std::size_t total() const { return n + hole_offset.size() - 1; }
+  std::uint32_t degree(std::uint32_t v) const { return ring_offset[v + 1] - ring_offset[v]; }
   // Position of w in v's ring, or kNone.
   std::uint32_t find(std::uint32_t v, std::uint32_t w) const {
-    for (std::uint32_t j = offset[v]; j < offset[v + 1]; ++j)
-      if (ring[j] == w) return j - offset[v];
+    for (std::uint32_t j = ring_offset[v]; j < ring_offset[v + 1]; ++j)
+      if (ring[j] == w) return j - ring_offset[v];
     return kNone;
   }
   bool adjacent_to(std::uint32_t v, std::uint32_t w) const {
@@ -51,10 +59,23 @@ struct Fans {
       if (adjacent[j] == w) return true;
     return false;
   }
+  // Calls f(w) for each neighbour of v (real or virtual).
+  template <class F>
+  void for_each_neighbour(std::uint32_t v, F&& f) const {
+    if (v >= n) {
+      const std::size_t h = v - n;
+      for (std::uint32_t j = hole_offset[h]; j < hole_offset[h + 1]; ++j) f(hole_members[j]);
+    } else if (interior[v]) {
+      for (std::uint32_t j = ring_offset[v]; j < ring_offset[v + 1]; ++j) f(ring[j]);
+    } else {
+      for (std::uint32_t j = 2 * offset[v]; j < 2 * offset[v + 1]; ++j) f(adjacent[j]);
+    }
+  }
 };
 
 Fans build_fans(const std::vector<Triangle>& triangles, std::size_t n) {
   Fans fans;
+  fans.n = n;
   fans.offset.assign(n + 1, 0);
   for (const Triangle& t : triangles)
     for (int c = 0; c < 3; ++c) ++fans.offset[std::size_t(t[c]) + 1];
@@ -66,55 +87,133 @@ Fans build_fans(const std::vector<Triangle>& triangles, std::size_t n) {
     for (std::size_t t = 0; t < triangles.size(); ++t)
       for (int c = 0; c < 3; ++c) around[cursor[std::size_t(triangles[t][c])]++] = static_cast<std::uint32_t>(t);
   }
-  fans.ring.assign(corners, kNone);
-  fans.face.assign(corners, kNone);
   fans.adjacent.assign(2 * corners, kNone);
-  fans.interior.assign(n, 0);
+  // Per vertex: 0 no usable fan, 1 closed, 2 open (a border); the fan's triangles in order in
+  // `ordered` (same slots as `around`) with the neighbour each starts with in `first`.
+  std::vector<std::uint8_t> kind(n, 0);
+  std::vector<std::uint32_t> ordered(corners, kNone), first(corners, kNone), last_of(n, kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::uint32_t> next, prev, tri;
+    std::vector<std::uint32_t> next, prev;
     for (std::size_t v = r.begin(); v != r.end(); ++v) {
       const std::uint32_t begin = fans.offset[v], end = fans.offset[v + 1], d = end - begin;
       if (d == 0) continue;
       next.clear();
       prev.clear();
-      tri.clear();
       for (std::uint32_t i = begin; i < end; ++i) {
         const Triangle& t = triangles[around[i]];
         const int c = std::size_t(t[0]) == v ? 0 : std::size_t(t[1]) == v ? 1 : 2;
         next.push_back(std::uint32_t(t[(c + 1) % 3]));
         prev.push_back(std::uint32_t(t[(c + 2) % 3]));
-        tri.push_back(around[i]);
         fans.adjacent[2 * i] = next.back();
         fans.adjacent[2 * i + 1] = prev.back();
       }
-      if (d < 3) continue;
-      // One closed fan: each neighbour starts exactly one triangle (v, a, b) and ends exactly one,
-      // and following a -> b from the first visits all d.
+      // One fan: each neighbour starts at most one triangle (v, a, b) and ends at most one; the
+      // fan is closed when every neighbour does both, open when exactly one only starts.
       bool ok = true;
+      std::uint32_t start = kNone, opens = 0, closes = 0;
       for (std::uint32_t i = 0; i < d && ok; ++i) {
         if (next[i] == v || prev[i] == v || next[i] == prev[i]) ok = false;
-        int starts = 0, ends = 0;
+        int starts = 0, ends = 0, p_starts = 0;
         for (std::uint32_t k = 0; k < d; ++k) {
           starts += next[k] == next[i];
           ends += prev[k] == next[i];
+          p_starts += next[k] == prev[i];
         }
-        ok = ok && starts == 1 && ends == 1;
+        ok = ok && starts == 1 && ends <= 1;
+        if (ends == 0) {
+          ++opens;
+          start = i;
+        }
+        if (p_starts == 0) ++closes;
       }
-      if (!ok) continue;
-      std::uint32_t k = 0;
-      for (std::uint32_t j = 0; j < d; ++j) {
-        fans.ring[begin + j] = next[k];
-        fans.face[begin + j] = tri[k];
+      if (!ok || opens > 1 || opens != closes || (opens == 0 && d < 3)) continue;
+      std::uint32_t k = opens == 1 ? start : 0;
+      std::uint32_t visited = 0;
+      for (; visited < d && k != kNone; ++visited) {
+        ordered[begin + visited] = around[begin + k];
+        first[begin + visited] = next[k];
         const std::uint32_t b = prev[k];
         k = kNone;
         for (std::uint32_t i = 0; i < d; ++i)
           if (next[i] == b) k = i;
-        if (k == kNone || (k == 0 && j + 1 < d)) {
-          ok = false;
+        if (opens == 0 && k == (opens == 1 ? start : 0)) {
+          ++visited;
           break;
         }
       }
-      fans.interior[v] = static_cast<std::uint8_t>(ok && k == 0);
+      if (visited != d) continue;
+      if (opens == 1) {
+        const Triangle& t = triangles[ordered[end - 1]];
+        const int c = std::size_t(t[0]) == v ? 0 : std::size_t(t[1]) == v ? 1 : 2;
+        last_of[v] = std::uint32_t(t[(c + 2) % 3]);
+      } else if (k != 0) {
+        continue;
+      }
+      kind[v] = static_cast<std::uint8_t>(opens == 1 ? 2 : 1);
+    }
+  });
+  // Holes: border vertices joined along their boundary edges.
+  std::vector<std::uint32_t> parent(n);
+  for (std::size_t v = 0; v < n; ++v) parent[v] = static_cast<std::uint32_t>(v);
+  const auto root = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (std::size_t v = 0; v < n; ++v)
+    if (kind[v] == 2)
+      for (const std::uint32_t w : {first[fans.offset[v]], last_of[v]})
+        if (kind[w] == 2) parent[root(std::uint32_t(v))] = root(w);  // not through a pinched vertex: two holes
+                                                                       // under one cap would make a handle
+  // A hole whose rim passes a pinched or non-manifold vertex is not capped (its rim is not one
+  // loop of border vertices): its vertices are not grown over, as without caps.
+  std::vector<std::uint8_t> broken(n, 0);
+  for (std::size_t v = 0; v < n; ++v)
+    if (kind[v] == 2 && (kind[first[fans.offset[v]]] != 2 || kind[last_of[v]] != 2)) broken[root(std::uint32_t(v))] = 1;
+  for (std::size_t v = 0; v < n; ++v)
+    if (kind[v] == 2 && broken[root(std::uint32_t(v))]) kind[v] = 3;  // a border vertex left out
+  for (std::size_t v = 0; v < n; ++v)
+    if (kind[v] == 3) kind[v] = 0;
+  std::vector<std::uint32_t> hole_of(n, kNone);
+  std::uint32_t holes = 0;
+  std::vector<std::uint32_t> id_of_root(n, kNone);
+  for (std::size_t v = 0; v < n; ++v)
+    if (kind[v] == 2) {
+      const std::uint32_t r0 = root(std::uint32_t(v));
+      if (id_of_root[r0] == kNone) id_of_root[r0] = holes++;
+      hole_of[v] = id_of_root[r0];
+    }
+  fans.hole_offset.assign(holes + 1, 0);
+  for (std::size_t v = 0; v < n; ++v)
+    if (hole_of[v] != kNone) ++fans.hole_offset[hole_of[v] + 1];
+  for (std::uint32_t h = 0; h < holes; ++h) fans.hole_offset[h + 1] += fans.hole_offset[h];
+  fans.hole_members.assign(fans.hole_offset[holes], kNone);
+  {
+    std::vector<std::uint32_t> cursor(fans.hole_offset.begin(), fans.hole_offset.end() - 1);
+    for (std::size_t v = 0; v < n; ++v)
+      if (hole_of[v] != kNone) fans.hole_members[cursor[hole_of[v]]++] = std::uint32_t(v);
+  }
+  // Rings: d neighbours of a closed fan; d + 1 and the hole's virtual vertex of an open one.
+  fans.ring_offset.assign(n + 1, 0);
+  for (std::size_t v = 0; v < n; ++v) {
+    const std::uint32_t d = fans.offset[v + 1] - fans.offset[v];
+    fans.ring_offset[v + 1] = fans.ring_offset[v] + (kind[v] == 1 ? d : kind[v] == 2 ? d + 2 : 0);
+  }
+  fans.ring.assign(fans.ring_offset[n], kNone);
+  fans.face.assign(fans.ring_offset[n], kNone);
+  fans.interior.assign(n + holes, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+      if (kind[v] == 0) continue;
+      const std::uint32_t begin = fans.offset[v], d = fans.offset[v + 1] - begin, out = fans.ring_offset[v];
+      for (std::uint32_t j = 0; j < d; ++j) {
+        fans.ring[out + j] = first[begin + j];
+        fans.face[out + j] = ordered[begin + j];
+      }
+      if (kind[v] == 2) {
+        fans.ring[out + d] = last_of[v];  // face (v, last, hole): virtual
+        fans.ring[out + d + 1] = static_cast<std::uint32_t>(n + hole_of[v]);  // face (v, hole, first): virtual
+      }
+      fans.interior[v] = 1;
     }
   });
   return fans;
@@ -137,7 +236,7 @@ public:
     bool ball;
     std::uint32_t start, count;
   };
-  BallSearch(const Fans& fans, const std::vector<Vector3d>& p) : fans_(fans), p_(p), n_(p.size()) {
+  BallSearch(const Fans& fans, const std::vector<Vector3d>& p) : fans_(fans), p_(p), n_(fans.total()) {
     stamp_.assign(n_, 0);
     settled_.assign(n_, 0);
     dist_.assign(n_, 0.0);
@@ -165,9 +264,9 @@ public:
       if (d > radius) break;
       settled_[v] = 1;
       if (v != seed && closes_loop(v, max_length, found)) return true;
-      for (std::uint32_t j = fans_.offset[v]; j < fans_.offset[v + 1]; ++j) {
+      for (std::uint32_t j = fans_.ring_offset[v]; j < fans_.ring_offset[v + 1]; ++j) {
         const std::uint32_t w = fans_.ring[j];
-        if (!fans_.interior[w]) continue;
+        if (w >= fans_.n || !fans_.interior[w]) continue;
         touch(w);
         if (settled_[w]) continue;
         const double nd = d + (p_[w] - p_[v]).norm();
@@ -196,7 +295,7 @@ private:
   // either side of it is non-separating when the gap's vertices reach those of the other gaps
   // outside the ball.
   bool closes_loop(std::uint32_t v, double max_length, Candidate& found) {
-    const std::uint32_t begin = fans_.offset[v], d = fans_.degree(v);
+    const std::uint32_t begin = fans_.ring_offset[v], d = fans_.degree(v);
     std::uint32_t first_gap_start = kNone;
     for (std::uint32_t j = 0; j < d; ++j)
       if (in_ball(fans_.ring[begin + j]) && !in_ball(fans_.ring[begin + (j + 1) % d])) {
@@ -225,7 +324,7 @@ private:
   }
 
   std::uint32_t nearest(std::uint32_t v, const Run& run) const {
-    const std::uint32_t begin = fans_.offset[v], d = fans_.degree(v);
+    const std::uint32_t begin = fans_.ring_offset[v], d = fans_.degree(v);
     std::uint32_t best = kNone;
     for (std::uint32_t k = 0; k < run.count; ++k) {
       const std::uint32_t w = fans_.ring[begin + (run.start + k) % d];
@@ -264,7 +363,7 @@ private:
     ++bfs_;
     queue_[0].clear();
     queue_[1].clear();
-    const std::uint32_t begin = fans_.offset[v], d = fans_.degree(v);
+    const std::uint32_t begin = fans_.ring_offset[v], d = fans_.degree(v);
     for (std::size_t k = 0; k < runs_.size(); k += 2) {
       const int side = k == g ? 0 : 1;
       for (std::uint32_t i = 0; i < runs_[k].count; ++i) {
@@ -279,17 +378,18 @@ private:
       for (int side = 0; side < 2; ++side) {
         if (head[side] >= queue_[side].size()) return false;
         const std::uint32_t x = queue_[side][head[side]++];
-        for (std::uint32_t j = 2 * fans_.offset[x]; j < 2 * fans_.offset[x + 1]; ++j) {
-          const std::uint32_t w = fans_.adjacent[j];
-          if (w == v || in_ball(w)) continue;
+        bool met = false;
+        fans_.for_each_neighbour(x, [&](std::uint32_t w) {
+          if (met || w == v || in_ball(w)) return;
           if (bfs_stamp_[w] == bfs_) {
-            if (side_[w] != side) return true;
-            continue;
+            met = side_[w] != side;
+            return;
           }
           bfs_stamp_[w] = bfs_;
           side_[w] = static_cast<std::uint8_t>(side);
           queue_[side].push_back(w);
-        }
+        });
+        if (met) return true;
       }
     }
     return false;
@@ -325,9 +425,9 @@ std::vector<std::uint32_t> cover_seeds(const Fans& fans, const std::vector<Vecto
       heap.pop();
       if (d > dist[v]) continue;
       covered[v] = 1;
-      for (std::uint32_t j = fans.offset[v]; j < fans.offset[v + 1]; ++j) {
+      for (std::uint32_t j = fans.ring_offset[v]; j < fans.ring_offset[v + 1]; ++j) {
         const std::uint32_t w = fans.ring[j];
-        if (!fans.interior[w]) continue;
+        if (w >= fans.n || !fans.interior[w]) continue;
         const double nd = d + (p[w] - p[v]).norm();
         if (nd <= cover && nd < dist[w]) {
           if (!std::isfinite(dist[w])) reached.push_back(w);
@@ -439,7 +539,11 @@ bool plan_cut(const Candidate& c, const std::vector<Triangle>& triangles, const 
     if (!fans.interior[v] || dirty[v]) return false;
     const std::uint32_t jp = fans.find(v, prev), jq = fans.find(v, next), d = fans.degree(v);
     if (jp == kNone || jq == kNone) return false;
-    for (std::uint32_t j = jp; j != jq; j = (j + 1) % d) removed.push_back(fans.face[fans.offset[v] + j]);
+    for (std::uint32_t j = jp; j != jq; j = (j + 1) % d) {
+      const std::uint32_t t = fans.face[fans.ring_offset[v] + j];
+      if (t == kNone) return false;  // the loop runs along a hole: its side there is the hole
+      removed.push_back(t);
+    }
   }
   std::sort(removed.begin(), removed.end());
   removed.erase(std::unique(removed.begin(), removed.end()), removed.end());
@@ -451,7 +555,8 @@ bool plan_cut(const Candidate& c, const std::vector<Triangle>& triangles, const 
       if (dirty[x] || dirty[y] || !fans.interior[y]) return false;
       const std::uint32_t j = fans.find(y, x);
       if (j == kNone) return false;
-      const std::uint32_t twin = fans.face[fans.offset[y] + j];
+      const std::uint32_t twin = fans.face[fans.ring_offset[y] + j];
+      if (twin == kNone) return false;
       if (!std::binary_search(removed.begin(), removed.end(), twin)) hole.emplace_back(x, y);
     }
   std::sort(hole.begin(), hole.end());
@@ -496,6 +601,7 @@ std::vector<Edit> plan_cuts(const std::vector<Triangle>& triangles, const std::v
   std::vector<Edit> edits;
   std::vector<std::uint8_t> dirty(p.size(), 0);
   Edit e;
+  Candidate reversed;
   for (const Candidate& c : candidates) {
     e.centre = Vector3d::Zero();
     for (const std::uint32_t v : c.loop) e.centre += p[v];
@@ -505,7 +611,12 @@ std::vector<Edit> plan_cuts(const std::vector<Triangle>& triangles, const std::v
     if (std::any_of(edits.begin(), edits.end(),
                     [&](const Edit& o) { return (o.centre - e.centre).norm() < o.radius + e.radius + apart; }))
       continue;
-    if (!plan_cut(c, triangles, p, fans, dirty, e.removed, e.caps)) continue;
+    // The faces on the right of the loop go; where that side is a hole (a loop along a border),
+    // those on the left.
+    if (!plan_cut(c, triangles, p, fans, dirty, e.removed, e.caps)) {
+      reversed.loop.assign(c.loop.rbegin(), c.loop.rend());
+      if (!plan_cut(reversed, triangles, p, fans, dirty, e.removed, e.caps)) continue;
+    }
     for (const std::uint32_t t : e.removed)
       for (int k = 0; k < 3; ++k) dirty[std::size_t(triangles[t][k])] = 1;
     e.loop = HandleLoop{std::vector<int>(c.loop.begin(), c.loop.end()), c.length};
@@ -632,11 +743,24 @@ HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params
     unresolved.clear();
     for (const Candidate& c : candidates) unresolved.insert(unresolved.end(), c.loop.begin(), c.loop.end());
     if (round.applied == 0) {
-      left = 1;  // found but none could be cut (counted once: the loops may be one handle's)
+      // Found but none could be cut: loops farther apart than the limit count as one handle
+      // each (several seeds find each handle).
+      std::vector<std::pair<Vector3d, double>> taken;
       for (const Candidate& c : candidates) {
+        Vector3d centre = Vector3d::Zero();
+        for (const std::uint32_t v : c.loop) centre += p[v];
+        centre /= double(c.loop.size());
+        double radius = 0.0;
+        for (const std::uint32_t v : c.loop) radius = std::max(radius, (p[v] - centre).norm());
+        if (std::any_of(taken.begin(), taken.end(), [&](const auto& o) {
+              return (o.first - centre).norm() < o.second + radius + result.max_loop_length;
+            }))
+          continue;
+        taken.emplace_back(centre, radius);
         if (result.shortest_loop == 0.0 || c.length < result.shortest_loop) result.shortest_loop = c.length;
-        if (result.loops.empty()) result.loops.push_back(HandleLoop{std::vector<int>(c.loop.begin(), c.loop.end()), c.length});
+        result.loops.push_back(HandleLoop{std::vector<int>(c.loop.begin(), c.loop.end()), c.length});
       }
+      left = taken.size();
       break;
     }
     for (HandleLoop& loop : round.loops) {

@@ -143,6 +143,26 @@ TEST(Handles, TheSmallRingOfASphereIsCutAndBothSidesClosed) {
   }
 }
 
+TEST(Handles, HolesElsewhereDoNotHideTheRing) {
+  // The sphere with its small ring, open where z > 0.45 (a cap cut off) and around (0, -0.6, 0):
+  // the searches on either side of a loop pass through the holes.
+  TriangleMesh mesh = contour(sphere_with_small_handle());
+  std::erase_if(mesh.triangles, [&](const Triangle& t) {
+    const Vector3d c = (mesh.vertices.positions[std::size_t(t[0])] + mesh.vertices.positions[std::size_t(t[1])] +
+                        mesh.vertices.positions[std::size_t(t[2])]) / 3.0;
+    return c.z() > 0.45 || (c - Vector3d(0, -0.6, 0)).norm() < 0.1;
+  });
+  const MeshTopology before = analyze_topology(mesh);
+  ASSERT_EQ(before.boundary_loops.size(), 2u);
+  ASSERT_EQ(before.genus(), 1);
+  const HandleResult r = remove_short_handles(mesh, spacing(0.04));
+  EXPECT_EQ(r.handles_removed, 1u);
+  const MeshTopology after = analyze_topology(mesh);
+  EXPECT_EQ(after.genus(), 0);
+  EXPECT_EQ(after.boundary_loops.size(), 2u);
+  EXPECT_EQ(after.boundary_edges, before.boundary_edges);
+}
+
 TEST(Handles, RealHandlesAndThinLimbsAreLeftAlone) {
   // A torus (meridian 1.26) with a thin finger (a separating loop of 0.31 around it).
   TriangleMesh mesh = contour(join(torus(Vector3d::Zero(), 0.5, 0.2, 2), capsule(Vector3d(0.65, 0, 0), Vector3d(0.95, 0, 0), 0.05)));

@@ -64,9 +64,11 @@ struct HandleResult {
 /// along two or more separate arcs of its ring, a loop closes through it; the loop is a handle's
 /// when the unreached vertices on its two sides are still connected (a breadth-first search
 /// from both sides, stopped when either is exhausted): separating loops, around a thin limb or
-/// a pocket, are left. A loop is kept when at most the limit long. Only interior, manifold,
-/// consistently oriented vertices are grown over: holes, borders and non-manifold places stop
-/// a ball. Removal: the faces on one side of the loop are removed and the two loops this leaves
+/// a pocket, are left. A loop is kept when at most the limit long. Each hole is closed by a
+/// virtual vertex for the search (the surface is seen as the closed one of the same genus);
+/// balls grow over manifold, consistently oriented vertices, borders included, and stop at
+/// non-manifold places and at the rims of holes that pass one. A loop that runs along a hole
+/// is counted but not cut (neither side is all triangles). Removal: the faces on one side of the loop are removed and the two loops this leaves
 /// are closed by the minimum-area triangulation of their corners (Barequet and Sharir 1995; at
 /// most 256 corners a loop: a longer loop is reported, not cut);
 /// removals that do not lower the genus by one each, or that leave a non-manifold edge, are
