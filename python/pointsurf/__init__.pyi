@@ -552,13 +552,13 @@ def reconstruct(cloud: PointCloud, /, *, method: Literal['triangulate', 'cocone'
     region_seed_angle_deg = 30.0: Flat regions: largest normal angle to the region's seed face; 180: off (degrees, (0, 180])
     """
 
-QualityCounts = TypedDict('QualityCounts', {}, total=False)
+QualityCounts = TypedDict('QualityCounts', {'short_handles': int}, total=False)
 QualityMetricsQualityAnglesDegHistogram = TypedDict('QualityMetricsQualityAnglesDegHistogram', {'edges': list[float], 'counts': list[float]}, total=False)
 QualityMetricsQualityAnglesDeg = TypedDict('QualityMetricsQualityAnglesDeg', {'min': float, 'max': float, 'mean': float, 'p05': float, 'p50': float, 'p95': float, 'histogram': QualityMetricsQualityAnglesDegHistogram}, total=False)
 QualityMetricsQualityAspectRatiosHistogram = TypedDict('QualityMetricsQualityAspectRatiosHistogram', {'edges': list[float], 'counts': list[float]}, total=False)
 QualityMetricsQualityAspectRatios = TypedDict('QualityMetricsQualityAspectRatios', {'min': float, 'max': float, 'mean': float, 'p05': float, 'p50': float, 'p95': float, 'histogram': QualityMetricsQualityAspectRatiosHistogram}, total=False)
 QualityMetricsQuality = TypedDict('QualityMetricsQuality', {'vertices': int, 'isolated_vertices': int, 'triangles': int, 'edges': int, 'boundary_edges': int, 'non_manifold_edges': int, 'non_manifold_vertices': int, 'inconsistent_edges': int, 'edge_manifold': bool, 'vertex_manifold': bool, 'oriented': bool, 'closed': bool, 'watertight': bool, 'components': int, 'euler_characteristic': int, 'genus': int, 'boundary_loops': int, 'boundary_loop_lengths': list[float], 'degenerate_faces': int, 'duplicate_faces': int, 'self_intersections': int, 'area': float, 'volume': float, 'angles_deg': QualityMetricsQualityAnglesDeg, 'aspect_ratios': QualityMetricsQualityAspectRatios}, total=False)
-QualityMetrics = TypedDict('QualityMetrics', {'quality': QualityMetricsQuality}, total=False)
+QualityMetrics = TypedDict('QualityMetrics', {'quality': QualityMetricsQuality, 'shortest_handle_loop': float, 'max_handle_loop_length': float}, total=False)
 class QualityReport(TypedDict):
     type: str
     parameters: dict[str, Any]
@@ -572,8 +572,10 @@ class QualityReport(TypedDict):
 class QualityMesh(TriangleMesh):
     report: QualityReport
 
-def quality(mesh: TriangleMesh, /, *, progress: Progress = None) -> QualityMesh:
+def quality(mesh: TriangleMesh, /, *, max_handle_loop: float = ..., progress: Progress = None) -> QualityMesh:
     """Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume
+
+    max_handle_loop = 10.0: Handles with a non-separating loop at most this long are topological noise; 0: none looked for (spacings, [0, inf))
     """
 
 EvaluateCounts = TypedDict('EvaluateCounts', {'reference_points': int, 'mesh_triangles': int, 'points_not_vertices': int, 'regions': int, 'mesh_samples': int}, total=False)

@@ -23,6 +23,7 @@
 #include "pointsurf/evaluate/surface_distance.h"
 #include "pointsurf/evaluate/triangle_bvh.h"
 #include "pointsurf/pipeline/context.h"
+#include "pointsurf/reconstruct/handles.h"
 #include "pointsurf/spatial/kd_tree.h"
 
 namespace pointsurf::detail {
@@ -212,13 +213,40 @@ RigidTransform align_reference(StageRun& run, const TriangleMesh& mesh, const st
   return r.transform;
 }
 
+// The quality stage's count of short handles (reconstruct/handles.h), spacings being the mesh's
+// mean edge length: a mesh from elsewhere has no cloud to take its spacing from.
+const ResultTable<HandleResult>& quality_handle_results() {
+  static const ResultTable<HandleResult> table = [] {
+    ResultTable<HandleResult> t;
+    t.count("short_handles", &HandleResult::short_handles, "Handles with a loop at most max_handle_loop mean edge lengths long (topological noise)")
+        .lower_is_better()
+        .as_count();
+    t.number("shortest_handle_loop", &HandleResult::shortest_loop, "Length of the shortest such loop; 0 when none").with_unit("mesh units");
+    t.number("max_handle_loop_length", &HandleResult::max_loop_length, "The limit used, max_handle_loop x the mean edge length").with_unit("mesh units");
+    return t;
+  }();
+  return table;
+}
+std::vector<ParamSpec> quality_params() {
+  std::vector<ParamSpec> specs = params_of(HandleParams::fields());
+  std::erase_if(specs, [](const ParamSpec& p) { return p.name != "max_handle_loop"; });  // it only counts
+  return specs;
+}
+
 void run_quality(StageRun& run) {
   const DataItem& item = run.context.item(run.output);
   const TriangleMesh mesh = mesh_of(item, run.inputs.front());
   const MeshQuality q = analyze_mesh_quality(mesh);
   record_quality(run.record, q);
   quality_warnings(run.record, q);
-  run.record.summary = "quality: " + quality_line(q);
+  const HandleResult handles = find_short_handles(mesh, read_params<HandleParams>(run.args));
+  run.record.add(quality_handle_results(), handles);
+  if (handles.short_handles > 0)
+    run.record.warnings.push_back(fmt::format("{} with a loop at most {} mean edge lengths ({:.4g}) long (topological noise?; shortest loop {:.4g}); "
+                                              "reconstruct cuts them (max_handle_loop, remove_handles)",
+                                              plural(handles.short_handles, "short handle"), run.args.number("max_handle_loop"),
+                                              handles.max_loop_length, handles.shortest_loop));
+  run.record.summary = "quality: " + quality_line(q) + (handles.short_handles > 0 ? ", " + plural(handles.short_handles, "short handle") : "");
 }
 
 void run_evaluate(StageRun& run) {
@@ -423,8 +451,11 @@ StageSpec quality_stage() {
   StageSpec s;
   s.name = "quality";
   s.results = quality_specs();
+  append(s.results, quality_handle_results().specs());
+  s.params = quality_params();
   s.shape = CommandShape::Measure;
   s.summary = "Mesh quality: manifoldness, orientation, holes, components, genus, self-intersections, angles, area, volume";
+  s.description = "Short handles (topological noise) are counted with spacings taken as the mesh's mean edge length.";
   s.order = 125;
   s.consumes = {Slot{"mesh", DataKind::Mesh}};
   s.produces = Slot{"mesh", DataKind::Mesh};

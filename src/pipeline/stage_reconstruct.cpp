@@ -162,9 +162,11 @@ std::vector<ResultSpec> reconstruct_specs(const std::vector<std::string>& method
 // After any method: specks removed (min_component_share), short handles cut (max_handle_loop
 // cloud spacings, issue 28), then the flat regions labelled as the face field "region" (issue
 // 12). The topology is analysed again when faces changed.
-HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, double spacing, StageRecord& rec) {
+HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, double spacing, StageRecord& rec,
+                                   const ProgressCallback& progress) {
   const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
   rec.add(SmallComponentsResult::results(), removed);
+  report_progress(progress, 0.91, "short handles");
   HandleParams hp = read_params<HandleParams>(a);
   hp.spacing = spacing;
   const HandleResult handles = remove_short_handles(result.mesh, hp);
@@ -179,6 +181,7 @@ HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs
     result.topology = analyze_topology(result.mesh);
     result.unused_points += used_before - result.topology.vertices;
   }
+  report_progress(progress, 0.95, "flat regions");
   const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a));
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
@@ -234,8 +237,8 @@ void run_reconstruct(StageRun& run) {
     rec.set_used("radii", radii);
   }
   rec.add(ReconstructionStats::results(method), result.stats);
-  report_progress(run.progress, 0.9, "labels and loops");
-  const HandleResult handles = clean_and_label_faces(result, a, spacing, rec);
+  report_progress(run.progress, 0.9, "small components");
+  const HandleResult handles = clean_and_label_faces(result, a, spacing, rec, run.progress);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
   // Poisson's surface is closed but where trimming opened it: its loops are borders, and its

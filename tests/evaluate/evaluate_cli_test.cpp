@@ -108,6 +108,46 @@ TEST_F(EvaluateCli, ReportsTheDeviationAndQualityBlocksAndWritesTheDeviationFiel
   EXPECT_NEAR(qs["metrics"]["quality"]["area"].get<double>(), q["area"].get<double>(), 1e-12);
 }
 
+// A torus of major radius 1 and minor r as a u x v grid, outward, closed.
+TriangleMesh torus_mesh(double r, int nu, int nv) {
+  TriangleMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+      m.vertices.positions.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
+    }
+  const auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+      m.triangles.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+    }
+  return m;
+}
+
+// Issue 28 item 7: quality counts short handles of any mesh, spacings being its mean edge
+// length; a thin ring (meridian 0.31, under 10 edges of about 0.06) is one, a fat one is not.
+TEST_F(EvaluateCli, QualityCountsShortHandles) {
+  write_mesh(path("thin.ply"), torus_mesh(0.05, 100, 8));
+  write_mesh(path("fat.ply"), torus_mesh(0.4, 100, 40));
+  test::CliResult r = test::run_cli("quality " + path("thin.ply") + " --report " + path("q.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::contains(r.err, "1 short handle with a loop at most 10 mean edge lengths")) << r.err;
+  nlohmann::json q = stage("q.json", "quality");
+  EXPECT_EQ(q["counts"]["short_handles"], 1);
+  EXPECT_NEAR(q["metrics"]["shortest_handle_loop"].get<double>(), 2 * M_PI * 0.05, 0.03);
+  EXPECT_EQ(q["metrics"]["quality"]["genus"], 1);
+  r = test::run_cli("quality " + path("thin.ply") + " --max-handle-loop 2 --report " + path("q.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(stage("q.json", "quality")["counts"]["short_handles"], 0);
+  r = test::run_cli("quality " + path("fat.ply") + " --report " + path("q.json"), dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  q = stage("q.json", "quality");
+  EXPECT_EQ(q["counts"]["short_handles"], 0);
+  EXPECT_EQ(q["metrics"]["shortest_handle_loop"], 0.0);
+  EXPECT_FALSE(test::contains(r.err, "short handle")) << r.err;
+}
+
 TEST_F(EvaluateCli, BadInputGetsAClearAnswer) {
   const Scene s = make_scene();
   write_mesh(path("mesh.ply"), s.mesh);
