@@ -35,7 +35,7 @@ POINTS="${3:-1000000}"
 PY=/usr/bin/python3
 RUNNER="$BUILD_DIR/bench/mesh_distance_runner"
 PEERS="$BUILD_DIR/bench/mesh_distance_peers"
-CLI="$BUILD_DIR/pointsurf"
+CLI="${CLI:-$BUILD_DIR/pointsurf}"  # CLI=... times another build of the command
 WORK="$ROOT/bench/out/evaluate"
 CSV="$ROOT/bench/results/evaluate_distance.csv"
 mkdir -p "$WORK" "$ROOT/bench/results"

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -11,7 +12,9 @@
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/combinable.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/evaluate/triangle_bvh.h"
@@ -99,32 +102,53 @@ MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bv
   for (const Triangle& t : mesh.triangles)
     for (int c = 0; c < 3; ++c) box.extend(mesh.vertices.positions[static_cast<std::size_t>(t[c])]);
   const Vector3d origin = box.center();
-  std::vector<std::array<int, 3>> sorted_faces;
-  std::vector<double> angles, aspects;
+  // Per triangle in parallel, into slots of its own; the sums then run in triangle order, so the
+  // figures do not depend on the thread count.
+  const std::size_t f = mesh.triangles.size();
+  std::vector<std::array<int, 3>> sorted_faces(f);
+  std::vector<double> angles(3 * f), aspects(f), areas(f), volumes(f);
+  std::vector<std::uint8_t> degenerate(f, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      const Triangle& t = mesh.triangles[k];
+      const Vector3d a = mesh.vertices.positions[static_cast<std::size_t>(t[0])] - origin, b = mesh.vertices.positions[static_cast<std::size_t>(t[1])] - origin,
+                     c = mesh.vertices.positions[static_cast<std::size_t>(t[2])] - origin;
+      std::array<int, 3> key = {t[0], t[1], t[2]};
+      std::sort(key.begin(), key.end());
+      sorted_faces[k] = key;
+      const double area = 0.5 * (b - a).cross(c - a).norm();
+      volumes[k] = a.dot(b.cross(c));
+      const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
+      const double longest = std::max({la, lb, lc});
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(area > 1e-14 * longest * longest)) {
+        degenerate[k] = 1;
+        continue;
+      }
+      areas[k] = area;
+      const std::array<Vector3d, 3> p = {a, b, c};
+      for (int i = 0; i < 3; ++i) {
+        const Vector3d e1 = p[std::size_t((i + 1) % 3)] - p[std::size_t(i)], e2 = p[std::size_t((i + 2) % 3)] - p[std::size_t(i)];
+        angles[3 * k + std::size_t(i)] = std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180.0 / std::numbers::pi;
+      }
+      aspects[k] = longest * (la + lb + lc) / (4.0 * std::sqrt(3.0) * area);
+    }
+  });
   double volume6 = 0.0;
-  for (const Triangle& t : mesh.triangles) {
-    const Vector3d a = mesh.vertices.positions[static_cast<std::size_t>(t[0])] - origin, b = mesh.vertices.positions[static_cast<std::size_t>(t[1])] - origin,
-                   c = mesh.vertices.positions[static_cast<std::size_t>(t[2])] - origin;
-    std::array<int, 3> key = {t[0], t[1], t[2]};
-    std::sort(key.begin(), key.end());
-    sorted_faces.push_back(key);
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    volume6 += a.dot(b.cross(c));
-    const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
-    const double longest = std::max({la, lb, lc});
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(area > 1e-14 * longest * longest)) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < f; ++k) {
+    volume6 += volumes[k];
+    if (degenerate[k]) {
       ++q.degenerate_faces;
       continue;
     }
-    q.area += area;
-    const std::array<Vector3d, 3> p = {a, b, c};
-    for (int i = 0; i < 3; ++i) {
-      const Vector3d e1 = p[std::size_t((i + 1) % 3)] - p[std::size_t(i)], e2 = p[std::size_t((i + 2) % 3)] - p[std::size_t(i)];
-      angles.push_back(std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180.0 / std::numbers::pi);
-    }
-    aspects.push_back(longest * (la + lb + lc) / (4.0 * std::sqrt(3.0) * area));
+    q.area += areas[k];
+    for (int i = 0; i < 3; ++i) angles[3 * kept + std::size_t(i)] = angles[3 * k + std::size_t(i)];
+    aspects[kept] = aspects[k];
+    ++kept;
   }
-  std::sort(sorted_faces.begin(), sorted_faces.end());
+  angles.resize(3 * kept);
+  aspects.resize(kept);
+  tbb::parallel_sort(sorted_faces.begin(), sorted_faces.end());
   for (std::size_t i = 1; i < sorted_faces.size(); ++i)
     if (sorted_faces[i] == sorted_faces[i - 1]) ++q.duplicate_faces;
   q.has_volume = q.closed && q.oriented && q.edge_manifold;
