@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <queue>
+#include <span>
 #include <utility>
 
 #include <fmt/format.h>
@@ -229,6 +230,20 @@ struct Candidate {
   double length = 0.0;
 };
 
+// Where a loop lies: the centroid of its vertices and the largest distance from it. Loops
+// closer than `gap` (spheres' distance) are taken for the same handle.
+struct LoopSphere {
+  Vector3d centre = Vector3d::Zero();
+  double radius = 0.0;
+  LoopSphere() = default;
+  LoopSphere(const std::vector<std::uint32_t>& loop, const std::vector<Vector3d>& p) {
+    for (const std::uint32_t v : loop) centre += p[v];
+    centre /= double(loop.size());
+    for (const std::uint32_t v : loop) radius = std::max(radius, (p[v] - centre).norm());
+  }
+  bool near(const LoopSphere& o, double gap) const { return (o.centre - centre).norm() < o.radius + radius + gap; }
+};
+
 // One geodesic ball at a time (per thread): distances, tree and marks, reset by stamp.
 class BallSearch {
 public:
@@ -406,37 +421,54 @@ private:
   std::vector<std::uint32_t> path_a_, path_b_, queue_[2];
 };
 
+// Dijkstra along the edges from `sources` up to `reach`: visit(v) once for each vertex reached,
+// over the rings of interior vertices when `interior_only`, else over every edge. `dist` (size
+// n, all infinite) is left as it was found; `reached` is a buffer.
+template <class Visit>
+void grow_within(const Fans& fans, const std::vector<Vector3d>& p, std::span<const std::uint32_t> sources, double reach, bool interior_only,
+                 std::vector<double>& dist, std::vector<std::uint32_t>& reached, Visit&& visit) {
+  using Item = std::pair<double, std::uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
+  reached.clear();
+  for (const std::uint32_t s : sources) {
+    if (std::isfinite(dist[s])) continue;
+    dist[s] = 0.0;
+    reached.push_back(s);
+    heap.emplace(0.0, s);
+  }
+  const auto relax = [&](std::uint32_t v, double d, std::uint32_t w) {
+    const double nd = d + (p[w] - p[v]).norm();
+    if (nd <= reach && nd < dist[w]) {
+      if (!std::isfinite(dist[w])) reached.push_back(w);
+      dist[w] = nd;
+      heap.emplace(nd, w);
+    }
+  };
+  while (!heap.empty()) {
+    const auto [d, v] = heap.top();
+    heap.pop();
+    if (d > dist[v]) continue;
+    visit(v);
+    if (interior_only) {
+      for (std::uint32_t j = fans.ring_offset[v]; j < fans.ring_offset[v + 1]; ++j)
+        if (const std::uint32_t w = fans.ring[j]; w < fans.n && fans.interior[w]) relax(v, d, w);
+    } else {
+      for (std::uint32_t j = 2 * fans.offset[v]; j < 2 * fans.offset[v + 1]; ++j) relax(v, d, fans.adjacent[j]);
+    }
+  }
+  for (const std::uint32_t v : reached) dist[v] = std::numeric_limits<double>::infinity();
+}
+
 // Seeds: every interior vertex within kCoverShare x limit (along edges) of one.
 std::vector<std::uint32_t> cover_seeds(const Fans& fans, const std::vector<Vector3d>& p, double cover, const std::vector<std::uint8_t>& region) {
   const std::size_t n = p.size();
   std::vector<std::uint8_t> covered(n, 0);
   std::vector<double> dist(n, std::numeric_limits<double>::infinity());
   std::vector<std::uint32_t> seeds, reached;
-  using Item = std::pair<double, std::uint32_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
   for (std::uint32_t s = 0; s < n; ++s) {
     if (!fans.interior[s] || covered[s] || (!region.empty() && !region[s])) continue;
     seeds.push_back(s);
-    dist[s] = 0.0;
-    reached.assign(1, s);
-    heap.emplace(0.0, s);
-    while (!heap.empty()) {
-      const auto [d, v] = heap.top();
-      heap.pop();
-      if (d > dist[v]) continue;
-      covered[v] = 1;
-      for (std::uint32_t j = fans.ring_offset[v]; j < fans.ring_offset[v + 1]; ++j) {
-        const std::uint32_t w = fans.ring[j];
-        if (w >= fans.n || !fans.interior[w]) continue;
-        const double nd = d + (p[w] - p[v]).norm();
-        if (nd <= cover && nd < dist[w]) {
-          if (!std::isfinite(dist[w])) reached.push_back(w);
-          dist[w] = nd;
-          heap.emplace(nd, w);
-        }
-      }
-    }
-    for (std::uint32_t v : reached) dist[v] = std::numeric_limits<double>::infinity();
+    grow_within(fans, p, std::span<const std::uint32_t>(&s, 1), cover, true, dist, reached, [&](std::uint32_t v) { covered[v] = 1; });
   }
   return seeds;
 }
@@ -445,26 +477,8 @@ std::vector<std::uint32_t> cover_seeds(const Fans& fans, const std::vector<Vecto
 std::vector<std::uint8_t> near(const Fans& fans, const std::vector<Vector3d>& p, const std::vector<std::uint32_t>& sources, double reach) {
   std::vector<std::uint8_t> in(p.size(), 0);
   std::vector<double> dist(p.size(), std::numeric_limits<double>::infinity());
-  using Item = std::pair<double, std::uint32_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
-  for (const std::uint32_t s : sources) {
-    dist[s] = 0.0;
-    heap.emplace(0.0, s);
-  }
-  while (!heap.empty()) {
-    const auto [d, v] = heap.top();
-    heap.pop();
-    if (d > dist[v]) continue;
-    in[v] = 1;
-    for (std::uint32_t j = 2 * fans.offset[v]; j < 2 * fans.offset[v + 1]; ++j) {
-      const std::uint32_t w = fans.adjacent[j];
-      const double nd = d + (p[w] - p[v]).norm();
-      if (nd <= reach && nd < dist[w]) {
-        dist[w] = nd;
-        heap.emplace(nd, w);
-      }
-    }
-  }
+  std::vector<std::uint32_t> reached;
+  grow_within(fans, p, sources, reach, false, dist, reached, [&](std::uint32_t v) { in[v] = 1; });
   return in;
 }
 
@@ -589,8 +603,7 @@ struct Edit {
   std::vector<std::uint32_t> removed;
   std::vector<Triangle> caps;
   HandleLoop loop;
-  Vector3d centre = Vector3d::Zero();
-  double radius = 0.0;
+  LoopSphere where;
 };
 
 // Plans the cuts of `candidates` (shortest first) that touch no vertex another changes and lie
@@ -603,14 +616,8 @@ std::vector<Edit> plan_cuts(const std::vector<Triangle>& triangles, const std::v
   Edit e;
   Candidate reversed;
   for (const Candidate& c : candidates) {
-    e.centre = Vector3d::Zero();
-    for (const std::uint32_t v : c.loop) e.centre += p[v];
-    e.centre /= double(c.loop.size());
-    e.radius = 0.0;
-    for (const std::uint32_t v : c.loop) e.radius = std::max(e.radius, (p[v] - e.centre).norm());
-    if (std::any_of(edits.begin(), edits.end(),
-                    [&](const Edit& o) { return (o.centre - e.centre).norm() < o.radius + e.radius + apart; }))
-      continue;
+    e.where = LoopSphere(c.loop, p);
+    if (std::any_of(edits.begin(), edits.end(), [&](const Edit& o) { return o.where.near(e.where, apart); })) continue;
     // The faces on the right of the loop go; where that side is a hole (a loop along a border),
     // those on the left.
     if (!plan_cut(c, triangles, p, fans, dirty, e.removed, e.caps)) {
@@ -745,18 +752,11 @@ HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params
     if (round.applied == 0) {
       // Found but none could be cut: loops farther apart than the limit count as one handle
       // each (several seeds find each handle).
-      std::vector<std::pair<Vector3d, double>> taken;
+      std::vector<LoopSphere> taken;
       for (const Candidate& c : candidates) {
-        Vector3d centre = Vector3d::Zero();
-        for (const std::uint32_t v : c.loop) centre += p[v];
-        centre /= double(c.loop.size());
-        double radius = 0.0;
-        for (const std::uint32_t v : c.loop) radius = std::max(radius, (p[v] - centre).norm());
-        if (std::any_of(taken.begin(), taken.end(), [&](const auto& o) {
-              return (o.first - centre).norm() < o.second + radius + result.max_loop_length;
-            }))
-          continue;
-        taken.emplace_back(centre, radius);
+        const LoopSphere where(c.loop, p);
+        if (std::any_of(taken.begin(), taken.end(), [&](const LoopSphere& o) { return o.near(where, result.max_loop_length); })) continue;
+        taken.push_back(where);
         if (result.shortest_loop == 0.0 || c.length < result.shortest_loop) result.shortest_loop = c.length;
         result.loops.push_back(HandleLoop{std::vector<int>(c.loop.begin(), c.loop.end()), c.length});
       }
