@@ -11,6 +11,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include "pipeline/detail/declare.h"
@@ -291,10 +292,24 @@ void run_evaluate(StageRun& run) {
   const std::vector<Vector3d>& measured = surface || fit ? moved : ref.cloud().positions;
 
   const auto share = [s0 = fit ? 0.3 : 0.0](double f) { return s0 + (1.0 - s0) * f; };  // progress: the shares after the fit
-  report_progress(run.progress, share(0.0), "BVH build");
-  const TriangleBvh bvh(mesh);
-  report_progress(run.progress, share(0.12), "quality");
-  const MeshQuality q = analyze_mesh_quality(mesh, &bvh);  // its self-intersection count also serves the sign
+  // The reference's kd-tree (the default tolerance, Chamfer) builds on one core (nanoflann):
+  // beside the BVH and the quality pass, which keep the other cores busy.
+  const bool needs_tree = !fit && !ref.is_mesh;
+  std::optional<TriangleBvh> bvh_holder;
+  MeshQuality q;
+  tbb::parallel_invoke(
+      [&] {
+        report_progress(run.progress, share(0.0), "BVH build");
+        bvh_holder.emplace(mesh);
+        report_progress(run.progress, share(0.12), "quality");
+        q = analyze_mesh_quality(mesh, &*bvh_holder);  // its self-intersection count also serves the sign
+      },
+      [&] {
+        if (!needs_tree) return;
+        if (read_params<DeviationParams>(a).tolerance == 0.0 && !surface) run.context.mean_spacing(ref_tag);  // the default tolerance
+        else run.context.tree(ref_tag);
+      });
+  const TriangleBvh& bvh = *bvh_holder;
   MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
   report_progress(run.progress, share(0.45), "distances");  // its set-up (signs) reports nothing: its first call comes at 0.6

@@ -81,7 +81,7 @@ double percentile_of_sorted(std::span<const double> sorted, double percent);
 
 /// Statistics of `deviations` (cloud units, signed). Non-finite values are counted in `ignored`.
 /// Throws UsageError for a negative tolerance, percentiles outside [0, 100] or
-/// histogram_max < histogram_min. O(N log N); thread-safe.
+/// histogram_max < histogram_min. O(N log k) for k percentiles (selection, no sort); thread-safe.
 DeviationStats summarize_deviation(std::span<const double> deviations, const DeviationParams& params = {});
 
 /// The statistics per value of `labels` (one per deviation; regions in increasing label order).
