@@ -179,10 +179,11 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
       }
       result.distances[i] = s * d;
     }
-    const std::size_t total = done.fetch_add(range.size()) + range.size();
-    // The callback is never called from two threads at once (core/progress.h).
+    done.fetch_add(range.size());
+    // The callback is never called from two threads at once (core/progress.h); the count is
+    // read under the lock, so successive reports never go backwards.
     if (progress && progress_lock.try_lock()) {
-      if (!progress(static_cast<double>(total) / static_cast<double>(n))) cancelled = true;
+      if (!progress(static_cast<double>(done.load()) / static_cast<double>(n))) cancelled = true;
       progress_lock.unlock();
     }
   });

@@ -15,6 +15,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 
 namespace pointsurf {
@@ -220,9 +221,18 @@ struct TriangleBvh::BuildItem {
 struct TriangleBvh::BuildInput {
   std::span<const Vector3d> vertices;
   std::span<const Triangle> triangles;
+  detail::ProgressReporter* reporter;  // advanced by the triangles of each finished subtree below kReportItems
 };
 
-TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles) {
+namespace {
+// Subtrees of at most this many triangles report when finished (a few hundred reports on 1M).
+constexpr int kReportItems = 4096;
+// Shares of the build's time (1.2M triangles): centroids, the recursive split, corners in
+// leaf order, the wide nodes, the float lanes.
+constexpr double kShareSplit = 0.6, kShareCorners = 0.75, kShareCollapse = 0.85;
+}  // namespace
+
+TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles, const ProgressCallback& progress) {
   BoundingBox box;
   for (const Triangle& t : triangles)
     for (int c = 0; c < 3; ++c) {
@@ -246,7 +256,13 @@ TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Tri
     }
   });
   nodes_.resize(static_cast<std::size_t>(subtree_nodes(static_cast<int>(f))));
-  build(0, 0, static_cast<int>(f), items, BuildInput{vertices, triangles}, 0);
+  {
+    detail::ProgressReporter reporter(progress, 0.05, kShareSplit, f);
+    reporter.report(0.05);
+    build(0, 0, static_cast<int>(f), items, BuildInput{vertices, triangles, &reporter}, 0);
+    reporter.throw_if_cancelled();
+  }
+  if (progress && !progress(kShareSplit)) throw CancelledError();
   // Corners in leaf order: a leaf's triangles lie side by side in memory.
   order_.resize(f);
   slot_.resize(f);
@@ -259,9 +275,12 @@ TriangleBvh::TriangleBvh(std::span<const Vector3d> vertices, std::span<const Tri
       for (int c = 0; c < 3; ++c) corners_[i].c[c] = vertices[static_cast<std::size_t>(triangles[t][c])] - origin_;
     }
   });
+  if (progress && !progress(kShareCorners)) throw CancelledError();
   wide_.reserve(nodes_.size() / 2 + 1);
   collapse(0);
+  if (progress && !progress(kShareCollapse)) throw CancelledError();
   make_lanes();
+  if (progress && !progress(1.0)) throw CancelledError();
 }
 
 void TriangleBvh::make_lanes() {
@@ -311,8 +330,15 @@ void TriangleBvh::make_lanes() {
 }
 
 void TriangleBvh::build(int index, int begin, int end, std::vector<BuildItem>& items, const BuildInput& in, int depth) {
-  Node& node = nodes_[static_cast<std::size_t>(index)];
   const int n = end - begin;
+  if (n <= kReportItems && in.reporter != nullptr) {
+    // A subtree small enough to report when finished; below it, no reporting.
+    if (in.reporter->cancelled()) return;
+    build(index, begin, end, items, BuildInput{in.vertices, in.triangles, nullptr}, depth);
+    in.reporter->advance(static_cast<std::size_t>(n));
+    return;
+  }
+  Node& node = nodes_[static_cast<std::size_t>(index)];
   if (n <= kLeafSize) {
     node.lo = Vector3d::Constant(std::numeric_limits<double>::infinity());
     node.hi = -node.lo;

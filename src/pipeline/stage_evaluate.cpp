@@ -237,7 +237,8 @@ std::vector<ParamSpec> quality_params() {
 void run_quality(StageRun& run) {
   const DataItem& item = run.context.item(run.output);
   const TriangleMesh mesh = mesh_of(item, run.inputs.front());
-  const MeshQuality q = analyze_mesh_quality(mesh);
+  const MeshQuality q = analyze_mesh_quality(mesh, nullptr, sub_progress(run.progress, 0.0, 0.7));
+  report_progress(run.progress, 0.7, "short handles");
   record_quality(run.record, q);
   quality_warnings(run.record, q);
   const HandleResult handles = find_short_handles(mesh, read_params<HandleParams>(run.args));
@@ -291,18 +292,38 @@ void run_evaluate(StageRun& run) {
   }
   const std::vector<Vector3d>& measured = surface || fit ? moved : ref.cloud().positions;
 
-  const auto share = [s0 = fit ? 0.3 : 0.0](double f) { return s0 + (1.0 - s0) * f; };  // progress: the shares after the fit
+  // Progress: each phase's share of the bar from a cost model in microseconds per triangle or
+  // point (fitted to traces of 1M points against 75k and 1.2M triangles on 2 cores,
+  // bench/notes/progress.md), so the bar follows the clock whatever the sizes.
+  const double s0 = fit ? 0.3 : 0.0;  // the fit's share
+  const double triangles = static_cast<double>(mesh.triangles.size()), points = static_cast<double>(measured.size());
+  const bool needs_tree = !fit && !ref.is_mesh;
+  const bool signed_run = read_params<MeshDistanceParams>(a).sign != DistanceSign::Unsigned;
+  const double bvh_cost = 0.7 * triangles, quality_cost = 0.75 * triangles;
+  const double tree_cost = needs_tree ? 0.45 * points : 0.0;  // beside the two above, on one core
+  const double prepare_cost = std::max(bvh_cost + quality_cost, tree_cost);
+  const double sign_cost = signed_run ? 0.5 * triangles : 0.0;
+  const double distance_cost = points * (0.5 + 1.2 * triangles / (triangles + 3e5));
+  const double statistics_cost = 0.2 * points + 0.1 * static_cast<double>(mesh.vertices.positions.size());
+  const double samples_cost = 0.8 * static_cast<double>(sd.samples);
+  const double total_cost = std::max(prepare_cost + sign_cost + distance_cost + statistics_cost + samples_cost, 1.0);
+  double spent = 0.0;
+  // The share of the bar at the start of the next phase, after `cost` more.
+  const auto share = [&](double cost = 0.0) { return s0 + (1.0 - s0) * std::min(1.0, (spent += cost) / total_cost); };
+  const double prepare_scale = prepare_cost / std::max(bvh_cost + quality_cost, 1.0);
+  const double at_bvh = share(), at_quality = share(bvh_cost * prepare_scale), at_distances = share(quality_cost * prepare_scale);
+  const double at_counted = share(sign_cost), at_statistics = share(distance_cost);
+  const double at_vertices = share(0.1 * statistics_cost), at_samples = share(0.9 * statistics_cost);
+
   // The reference's kd-tree (the default tolerance, Chamfer) builds on one core (nanoflann):
   // beside the BVH and the quality pass, which keep the other cores busy.
-  const bool needs_tree = !fit && !ref.is_mesh;
   std::optional<TriangleBvh> bvh_holder;
   MeshQuality q;
   tbb::parallel_invoke(
       [&] {
-        report_progress(run.progress, share(0.0), "BVH build");
-        bvh_holder.emplace(mesh);
-        report_progress(run.progress, share(0.12), "quality");
-        q = analyze_mesh_quality(mesh, &*bvh_holder);  // its self-intersection count also serves the sign
+        bvh_holder.emplace(mesh, sub_progress(run.progress, at_bvh, at_quality, "BVH build"));
+        // its self-intersection count also serves the sign
+        q = analyze_mesh_quality(mesh, &*bvh_holder, sub_progress(run.progress, at_quality, at_distances, "quality"));
       },
       [&] {
         if (!needs_tree) return;
@@ -312,9 +333,9 @@ void run_evaluate(StageRun& run) {
   const TriangleBvh& bvh = *bvh_holder;
   MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
-  report_progress(run.progress, share(0.45), "distances");  // its set-up (signs) reports nothing: its first call comes at 0.6
-  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, share(0.6), share(0.7)));
-  report_progress(run.progress, share(0.7), "statistics");
+  report_progress(run.progress, at_distances, "distances");  // its set-up (signs) reports nothing
+  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, at_counted, at_statistics));
+  report_progress(run.progress, at_statistics, "statistics");
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
   DeviationParams sp = read_params<DeviationParams>(a);
@@ -335,7 +356,7 @@ void run_evaluate(StageRun& run) {
   // simplification, or left out by the reconstruction): their deviation on its own.
   std::vector<double> unused;
   {
-    report_progress(run.progress, share(0.75), "points at vertices");
+    report_progress(run.progress, at_vertices, "points at vertices");
     const std::vector<char> is_vertex = at_used_vertex(mesh, surface ? std::span<const Vector3d>(measured) : ref.cloud().positions);
     for (std::size_t i = 0; i < is_vertex.size(); ++i)
       if (!is_vertex[i]) unused.push_back(dist.distances[i]);
@@ -361,7 +382,7 @@ void run_evaluate(StageRun& run) {
   }
 
   // Chamfer and Hausdorff: reference to mesh exactly, mesh to reference from area-uniform samples.
-  report_progress(run.progress, share(0.85), "mesh samples");
+  report_progress(run.progress, at_samples, "mesh samples");
   const std::vector<Vector3d> on_mesh = sample_mesh_surface(mesh, sd.samples, sd.seed);
   const SurfaceView ref_view = surface ? SurfaceView{fit ? std::span<const Vector3d>(ref_vertices) : std::span<const Vector3d>(ref.cloud().positions),
                                                     ref.mesh.triangles}

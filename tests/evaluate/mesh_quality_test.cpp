@@ -4,7 +4,10 @@
 // duplicate faces; the angle and aspect-ratio distributions; a 1e6 m shift.
 #include "pointsurf/evaluate/mesh_quality.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <vector>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -146,6 +149,30 @@ TEST(MeshQuality, BadInputIsNamed) {
   const MeshQuality empty = analyze_mesh_quality(TriangleMesh{});
   EXPECT_FALSE(empty.watertight);
   EXPECT_EQ(empty.area, 0.0);
+}
+
+// Progress names the phases, grows to 1 through the self-intersection pass, changes nothing,
+// and a false answer cancels.
+TEST(MeshQuality, ReportsPhasesAndProgressAndCanBeCancelled) {
+  const TriangleMesh mesh = test::icosphere_mesh(5);
+  std::vector<std::string> phases;
+  std::vector<double> fractions;
+  PhasedProgress listener;
+  listener.on_fraction = [&](double f) {
+    fractions.push_back(f);
+    return true;
+  };
+  listener.on_phase = [&](std::string_view name) { phases.emplace_back(name); };
+  const MeshQuality heard = analyze_mesh_quality(mesh, nullptr, listener);
+  EXPECT_EQ(phases, (std::vector<std::string>{"topology", "geometry", "self-intersections"}));
+  ASSERT_GE(fractions.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  const MeshQuality plain = analyze_mesh_quality(mesh);
+  EXPECT_EQ(heard.self_intersections, plain.self_intersections);
+  EXPECT_EQ(heard.genus, 0);
+  EXPECT_EQ(heard.area, plain.area);
+  EXPECT_THROW(analyze_mesh_quality(mesh, nullptr, [](double f) { return f < 0.5; }), CancelledError);
 }
 
 }  // namespace

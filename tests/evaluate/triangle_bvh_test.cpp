@@ -4,6 +4,7 @@
 // overlaps, and the error paths.
 #include "pointsurf/evaluate/triangle_bvh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
@@ -168,6 +169,27 @@ TEST(TriangleBvh, BadIndicesThrowAndAnEmptyMeshFindsNothing) {
   const TriangleBvh empty(TriangleMesh{});
   EXPECT_FALSE(empty.closest(Vector3d::Zero()).found());
   EXPECT_EQ(empty.winding_number(Vector3d::Zero()), 0.0);
+}
+
+// The build reports growing fractions up to 1 (subtrees of 4096 triangles as they finish), the
+// same hierarchy with or without a listener, and stops with CancelledError when told to.
+TEST(TriangleBvh, BuildReportsProgressAndCanBeCancelled) {
+  const TriangleMesh mesh = test::icosphere_mesh(6);  // 81920 triangles
+  std::vector<double> fractions;
+  const TriangleBvh heard(mesh, [&](double f) {
+    fractions.push_back(f);
+    return true;
+  });
+  ASSERT_GE(fractions.size(), 10u);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  const TriangleBvh plain(mesh);
+  for (const Vector3d& p : {Vector3d(0.3, 0.2, 0.1), Vector3d(2, -1, 0.5), Vector3d(0, 0, 1.01)}) {
+    EXPECT_EQ(heard.closest(p).triangle, plain.closest(p).triangle);
+    EXPECT_EQ(heard.closest(p).squared_distance, plain.closest(p).squared_distance);
+  }
+  std::size_t calls = 0;
+  EXPECT_THROW(TriangleBvh(mesh, [&](double) { return ++calls < 3; }), CancelledError);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pointsurf/core/mesh_topology.h"
+#include "pointsurf/core/progress.h"
 #include "pointsurf/core/triangle_mesh.h"
 #include "pointsurf/evaluate/deviation_stats.h"
 
@@ -36,11 +37,13 @@ struct MeshQuality {
 
 /// The quality of `mesh`. Throws InputError when an index is out of range or a vertex used by a
 /// face is not finite. Parallel where it matters (self-intersections); thread-safe.
-/// O(F log F). `bvh` may be a hierarchy over the mesh already built.
-MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bvh = nullptr);
+/// O(F log F). `bvh` may be a hierarchy over the mesh already built. `progress` hears the
+/// phases (topology, geometry, self-intersections) and fractions through the self-intersection
+/// pass; its false answer throws CancelledError.
+MeshQuality analyze_mesh_quality(const TriangleMesh& mesh, const TriangleBvh* bvh = nullptr, const ProgressCallback& progress = {});
 
 /// Pairs of triangles that share no vertex and intersect (touching counts; coplanar overlaps
-/// are not detected). Parallel; thread-safe.
-std::size_t count_self_intersections(const TriangleMesh& mesh, const TriangleBvh& bvh);
+/// are not detected). Parallel; thread-safe. `progress` as above.
+std::size_t count_self_intersections(const TriangleMesh& mesh, const TriangleBvh& bvh, const ProgressCallback& progress = {});
 
 }  // namespace pointsurf

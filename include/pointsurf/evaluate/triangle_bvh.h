@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include "pointsurf/core/point_cloud.h"
+#include "pointsurf/core/progress.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -42,8 +43,11 @@ struct ClosestPoint {
 /// triangles (repeated or collinear corners) are kept and answered as segments.
 class TriangleBvh {
 public:
-  TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles);
-  explicit TriangleBvh(const TriangleMesh& mesh) : TriangleBvh(mesh.vertices.positions, mesh.triangles) {}
+  /// `progress` hears fractions of the build (subtrees finished); its false answer throws
+  /// CancelledError.
+  TriangleBvh(std::span<const Vector3d> vertices, std::span<const Triangle> triangles, const ProgressCallback& progress = {});
+  explicit TriangleBvh(const TriangleMesh& mesh, const ProgressCallback& progress = {})
+      : TriangleBvh(mesh.vertices.positions, mesh.triangles, progress) {}
 
   std::size_t triangle_count() const noexcept { return corners_.size(); }
   const Vector3d& origin() const noexcept { return origin_; }
