@@ -16,7 +16,6 @@
 #include <Eigen/SparseCore>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "core/detail/progress_reporter.h"
@@ -32,8 +31,12 @@ using Eigen::Vector3d;
 constexpr const char* kFunction = "fit_bspline_surface";
 constexpr std::size_t kNeighbours = 12;         // local PCA: noise estimate and fold test
 constexpr double kFoldShare = 0.02;             // more tilted points than this: folded
-constexpr double kToleranceInNoise = 6.0;       // default tolerance: 6 x the noise estimate...
-constexpr double kToleranceFloorInSpacings = 1e-3;  // ...and at least this many spacings
+// Default tolerance: the largest of N Gaussian deviations is about sqrt(2 ln N) sigma; the
+// local-PCA estimate runs about 15 % under sigma, so a margin of 1.5, and at least 6 x the
+// estimate (small N), and at least 0.001 spacings (noise-free data).
+constexpr double kToleranceMargin = 1.5;
+constexpr double kToleranceInNoise = 6.0;
+constexpr double kToleranceFloorInSpacings = 1e-3;
 constexpr double kSmoothingFloor = 1e-12;       // where a control point has no data (smoothing 0)
 constexpr double kFramePhase = 0.1;             // share of the progress before the first fit
 
@@ -138,40 +141,50 @@ struct Fitter {
     const int bw = 2 * p + 1;
     const std::size_t width = std::size_t(bw * bw);
     auto slot = [&](int di, int dj) { return std::size_t((di + p) * bw + (dj + p)); };
-    // Data term B^T B and B^T P, one band array per thread, summed after.
-    struct Accumulator {
-      std::vector<double> band, rhs;
-    };
-    tbb::enumerable_thread_specific<Accumulator> accumulators([&] {
-      Accumulator a;
-      a.band.assign(nctrl * width, 0.0);
-      a.rhs.assign(nctrl * 3, 0.0);
-      return a;
-    });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.size(), 512), [&](const tbb::blocked_range<std::size_t>& range) {
-      Accumulator& acc = accumulators.local();
-      double w[(kMaxBSplineDegree + 1) * (kMaxBSplineDegree + 1)];
+    // Data term B^T B and B^T P, row by row: the points sorted by knot-span cell, each row of
+    // the band summed by one task over the cells under its basis function, in a fixed order, so
+    // that the result does not depend on the threads.
+    const int cells_u = nu - p, cells_v = nv - p;
+    const std::size_t stride = std::size_t(p + 1);
+    std::vector<double> nu_of(q.size() * stride), nv_of(q.size() * stride);
+    std::vector<std::uint32_t> cell_of(q.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.size(), 1024), [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t k = range.begin(); k < range.end(); ++k) {
         const BSplineBasis bu = bspline_basis(uv[k].x(), p, U, 0), bv = bspline_basis(uv[k].y(), p, V, 0);
-        const int i0 = bu.span - p, j0 = bv.span - p;
-        for (int a = 0; a <= p; ++a)
-          for (int b = 0; b <= p; ++b) w[a * (p + 1) + b] = bu.d[0][std::size_t(a)] * bv.d[0][std::size_t(b)];
-        for (int a = 0; a <= p; ++a)
-          for (int b = 0; b <= p; ++b) {
-            const double wr = w[a * (p + 1) + b];
-            const std::size_t row = std::size_t(i0 + a) * std::size_t(nv) + std::size_t(j0 + b);
-            double* band = acc.band.data() + row * width;
-            for (int c = 0; c <= p; ++c)
-              for (int d = 0; d <= p; ++d) band[slot(c - a, d - b)] += wr * w[c * (p + 1) + d];
-            for (int e = 0; e < 3; ++e) acc.rhs[row * 3 + std::size_t(e)] += wr * q[k][e];
-          }
+        for (std::size_t a = 0; a < stride; ++a) nu_of[k * stride + a] = bu.d[0][a], nv_of[k * stride + a] = bv.d[0][a];
+        cell_of[k] = std::uint32_t((bu.span - p) * cells_v + (bv.span - p));
       }
     });
-    std::vector<double> band(nctrl * width, 0.0), rhs(nctrl * 3, 0.0);
-    for (const Accumulator& acc : accumulators) {
-      for (std::size_t i = 0; i < band.size(); ++i) band[i] += acc.band[i];
-      for (std::size_t i = 0; i < rhs.size(); ++i) rhs[i] += acc.rhs[i];
+    std::vector<std::uint32_t> cell_start(std::size_t(cells_u) * std::size_t(cells_v) + 1, 0), sorted(q.size());
+    for (std::uint32_t c : cell_of) ++cell_start[c + 1];
+    for (std::size_t c = 1; c < cell_start.size(); ++c) cell_start[c] += cell_start[c - 1];
+    {
+      std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
+      for (std::size_t k = 0; k < q.size(); ++k) sorted[fill[cell_of[k]]++] = std::uint32_t(k);
     }
+    std::vector<double> band(nctrl * width, 0.0), rhs(nctrl * 3, 0.0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, nu), [&](const tbb::blocked_range<int>& range) {
+      for (int i = range.begin(); i < range.end(); ++i)
+        for (int j = 0; j < nv; ++j) {
+          const std::size_t row = std::size_t(i) * std::size_t(nv) + std::size_t(j);
+          double* out = band.data() + row * width;
+          for (int cu = std::max(0, i - p); cu <= std::min(i, cells_u - 1); ++cu)
+            for (int cv = std::max(0, j - p); cv <= std::min(j, cells_v - 1); ++cv) {
+              const std::size_t cell = std::size_t(cu) * std::size_t(cells_v) + std::size_t(cv);
+              for (std::uint32_t m = cell_start[cell]; m < cell_start[cell + 1]; ++m) {
+                const std::size_t k = sorted[m];
+                const double* bu = nu_of.data() + k * stride;
+                const double* bv = nv_of.data() + k * stride;
+                const double wr = bu[i - cu] * bv[j - cv];
+                for (int c = 0; c <= p; ++c) {
+                  const double wc = wr * bu[c];
+                  for (int d = 0; d <= p; ++d) out[slot(cu + c - i, cv + d - j)] += wc * bv[d];
+                }
+                for (int e = 0; e < 3; ++e) rhs[row * 3 + std::size_t(e)] += wr * q[k][e];
+              }
+            }
+        }
+    });
     // Smoothing floor: without smoothing, a control point with no point under it leaves the
     // system singular.
     smoothing_used = smoothing;
@@ -280,7 +293,7 @@ const FieldTable<BSplineFitParams>& BSplineFitParams::fields() {
     using P = BSplineFitParams;
     FieldTable<P> t;
     t.integer("degree", &P::degree, "Degree of the B-spline in u and in v").range(1, kMaxBSplineDegree);
-    t.number("tolerance", &P::tolerance, "Largest |deviation| wanted; 0: 6 x the noise estimate (at least 0.001 x the mean spacing)")
+    t.number("tolerance", &P::tolerance, "Largest |deviation| wanted; 0: max(6, 1.5 sqrt(2 ln N)) x the noise estimate, at least 0.001 x the mean spacing")
         .unit("cloud units")
         .non_negative();
     t.number("smoothing", &P::smoothing, "Weight of the thin-plate energy, independent of the patch's size and point count; 0: none")
@@ -410,8 +423,9 @@ BSplineFitResult fit_bspline_surface(std::span<const Vector3d> points, const BSp
     std::nth_element(smallest.begin(), smallest.begin() + std::ptrdiff_t(n / 2), smallest.end());
     result.noise = std::sqrt(smallest[n / 2]);
   }
-  result.tolerance = params.tolerance > 0.0 ? params.tolerance
-                                            : std::max(kToleranceInNoise * result.noise, kToleranceFloorInSpacings * result.spacing);
+  const double noise_factor = std::max(kToleranceInNoise, kToleranceMargin * std::sqrt(2.0 * std::log(double(n))));
+  result.tolerance =
+      params.tolerance > 0.0 ? params.tolerance : std::max(noise_factor * result.noise, kToleranceFloorInSpacings * result.spacing);
   monitor.report(0.08);
 
   // Parameterization by projection onto the plane, scaled to [0, 1]^2 over the bounding rectangle.

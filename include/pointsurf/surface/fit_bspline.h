@@ -3,7 +3,7 @@
 // Least-squares fit of one tensor-product B-spline surface to a patch of points, refined until
 // a deviation tolerance is met (SPEC C14, issue 29 items 1, 2 and 7).
 //
-//   BSplineFitParams params;            // bicubic; tolerance 0: 6 x the noise estimate
+//   BSplineFitParams params;            // bicubic; tolerance 0: from the noise estimate
 //   params.tolerance = 0.002;           // cloud units (max |deviation|)
 //   const BSplineFitResult r = fit_bspline_surface(points, params);
 //   // r.tolerance_met, r.max_deviation, r.rounds; r.surface.point(u, v) anywhere on [0, 1]^2
@@ -26,9 +26,11 @@ namespace pointsurf {
 
 struct BSplineFitParams {
   int degree = 3;                     // [1, 7]: degree in u and in v
-  double tolerance = 0.0;             // >= 0, cloud units: the largest |deviation| wanted; 0: 6 x
-                                      // the noise estimate (BSplineFitResult::noise), at least
-                                      // 0.001 x the mean spacing
+  double tolerance = 0.0;             // >= 0, cloud units: the largest |deviation| wanted; 0:
+                                      // max(6, 1.5 sqrt(2 ln N)) x the noise estimate
+                                      // (BSplineFitResult::noise; the largest of N Gaussian
+                                      // deviations is about sqrt(2 ln N) sigma), at least 0.001 x
+                                      // the mean spacing
   double smoothing = 1e-9;            // >= 0: weight of the thin-plate energy (see below), the
                                       // same for any size and point count of the patch; 0: none
                                       // (a floor of 1e-12 is used where a control point has no
