@@ -302,7 +302,7 @@ const FieldTable<BSplineFitParams>& BSplineFitParams::fields() {
         .unit("points")
         .positive();
     t.integer("max_rounds", &P::max_rounds, "Knot-insertion rounds at most").at_least(0);
-    t.integer("max_control_points", &P::max_control_points, "The control net never grows beyond this many points").at_least(4);
+    t.integer("max_control_points", &P::max_control_points, "The control net never grows beyond this many points, nor beyond the number of input points").at_least(4);
     t.integer("parameter_corrections", &P::parameter_corrections, "Re-projections of the points onto the surface (and refits) per round")
         .at_least(0);
     t.number("max_tilt_deg", &P::max_tilt_deg, "Points whose local normal is further than this from the base plane's are on a fold")
@@ -443,13 +443,16 @@ BSplineFitResult fit_bspline_surface(std::span<const Vector3d> points, const BSp
     uv[k] = Vector2d(std::clamp((q[k].dot(frame.axis_u) - frame.a_min) / width, 0.0, 1.0),
                      std::clamp((q[k].dot(frame.axis_v) - frame.b_min) / height, 0.0, 1.0));
 
+  // The net never has more control points than there are points: beyond that it would only
+  // interpolate the noise.
+  const long max_control = std::min<long>(params.max_control_points, std::max<long>(long(n), long(needed)));
   // The first net: about N / points_per_span cells, shaped like the rectangle.
   const double cells = std::max(1.0, double(n) / params.points_per_span);
   int su = std::max(1, int(std::lround(std::sqrt(cells * width / height))));
   int sv = std::max(1, int(std::lround(std::sqrt(cells * height / width))));
-  su = std::min(su, params.max_control_points);
-  sv = std::min(sv, params.max_control_points);
-  while (long(su + p) * long(sv + p) > params.max_control_points) (su >= sv ? su : sv) = std::max(1, (su >= sv ? su : sv) - 1);
+  su = int(std::min<long>(su, max_control));
+  sv = int(std::min<long>(sv, max_control));
+  while (long(su + p) * long(sv + p) > max_control) (su >= sv ? su : sv) = std::max(1, (su >= sv ? su : sv) - 1);
   std::vector<double> U = uniform_knots(su, p), V = uniform_knots(sv, p);
 
   Fitter fitter{q, p, height / width, params.smoothing};
@@ -511,7 +514,7 @@ BSplineFitResult fit_bspline_surface(std::span<const Vector3d> points, const BSp
     long nu = long(U.size()) - p - 1, nv = long(V.size()) - p - 1;
     std::vector<double> add_u, add_v;
     for (const Candidate& c : candidates) {
-      if ((nu + (c.in_u ? 1 : 0)) * (nv + (c.in_u ? 0 : 1)) > params.max_control_points) continue;
+      if ((nu + (c.in_u ? 1 : 0)) * (nv + (c.in_u ? 0 : 1)) > max_control) continue;
       (c.in_u ? add_u : add_v).push_back(c.knot);
       (c.in_u ? nu : nv) += 1;
     }

@@ -43,7 +43,8 @@ struct BSplineFitParams {
                                       // knot-span cells, split between u and v by the patch's
                                       // aspect ratio
   int max_rounds = 8;                 // >= 0: knot-insertion rounds at most
-  int max_control_points = 10000;     // >= (degree + 1)^2: the net never grows beyond
+  int max_control_points = 10000;     // >= (degree + 1)^2: the net never grows beyond this,
+                                      // nor beyond the number of points
   int parameter_corrections = 2;      // >= 0: re-projections (and refits) of the points per round
   double max_tilt_deg = 80.0;         // (0, 90], degrees: a point whose local normal (PCA of its
                                       // 12 nearest neighbours) is further than this from the base
@@ -115,7 +116,7 @@ struct BSplineFitResult {
 /// refitted, params.parameter_corrections times; the signed deviations are then measured. While
 /// the largest exceeds the tolerance, knots are inserted at the midpoints of the u- and v-spans
 /// holding the points whose |deviation| is above max(tolerance, half the largest), up to
-/// max_rounds rounds and max_control_points control points; the result says which limit
+/// max_rounds rounds and min(max_control_points, N) control points; the result says which limit
 /// stopped it. Never loops without bound.
 ///
 /// Progress: monotone fractions ending at 1; a callback returning false throws CancelledError.
