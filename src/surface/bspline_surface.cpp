@@ -304,12 +304,20 @@ ClosestPoint BSplineSurface::closest_local(const Vector3d& x, double u0, double 
   if (empty()) throw UsageError("BSplineSurface::closest: the surface is empty");
   ClosestPoint best = newton(x, u0, v0, max_iterations, tolerance);
   if (best.converged) return best;
-  // Fallback: the best of a grid of samples (4 per knot span and direction) as a new start.
+  // Fallback: the best of a grid of samples as a new start: 4 per knot span and direction, at
+  // most 64 per direction (bounded work on a fine net).
   auto samples = [](const std::vector<double>& knots, int degree) {
+    int spans = 0;
+    for (std::size_t i = std::size_t(degree); i + std::size_t(degree) + 1 < knots.size(); ++i) spans += knots[i + 1] > knots[i] ? 1 : 0;
     std::vector<double> out;
-    for (std::size_t i = std::size_t(degree); i + std::size_t(degree) + 1 < knots.size(); ++i) {
-      if (!(knots[i + 1] > knots[i])) continue;
-      for (int k = 0; k < 4; ++k) out.push_back(knots[i] + (knots[i + 1] - knots[i]) * (k + 0.5) / 4.0);
+    const double lo = knots[std::size_t(degree)], hi = knots[knots.size() - std::size_t(degree) - 1];
+    if (spans <= 16) {
+      for (std::size_t i = std::size_t(degree); i + std::size_t(degree) + 1 < knots.size(); ++i) {
+        if (!(knots[i + 1] > knots[i])) continue;
+        for (int k = 0; k < 4; ++k) out.push_back(knots[i] + (knots[i + 1] - knots[i]) * (k + 0.5) / 4.0);
+      }
+    } else {
+      for (int k = 0; k < 64; ++k) out.push_back(lo + (hi - lo) * (k + 0.5) / 64.0);
     }
     return out;
   };

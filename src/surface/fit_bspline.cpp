@@ -10,7 +10,6 @@
 #include <numbers>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -18,6 +17,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/local_pca.h"
 #include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/spatial/kd_tree.h"
@@ -358,70 +358,51 @@ BSplineFitResult fit_bspline_surface(std::span<const Vector3d> points, const BSp
     throw InputError(fmt::format("{}: {} points, a surface of degree {} needs at least (degree + 1)^2 = {}", kFunction, n, p, needed));
   report_phase(progress, "base plane");
 
-  // Centroid about the first point, so that 1e6 m offsets cancel before any sum.
+  // The least-squares plane: PCA of the offsets from the first point, so that 1e6 m offsets
+  // cancel before any sum; its centroid is the origin of everything after.
   BSplineFitResult result;
   BSplineFitFrame& frame = result.frame;
-  Vector3d mean = Vector3d::Zero();
-  for (const Vector3d& x : points) mean += x - points[0];
-  frame.origin = points[0] + mean / double(n);
+  const detail::LocalPca plane = detail::local_pca([&](std::size_t k) { return Vector3d(points[k] - points[0]); }, n);
+  if (!plane.valid) throw InputError(fmt::format("{}: the {} points coincide or lie on a line; a surface needs a patch", kFunction, n));
+  frame.origin = points[0] + plane.mean;
+  frame.normal = canonical(plane.eigenvectors.col(0));
+  frame.axis_u = canonical(plane.eigenvectors.col(2));
+  frame.axis_v = frame.normal.cross(frame.axis_u).normalized();
   std::vector<Vector3d> q(n);
   for (std::size_t k = 0; k < n; ++k) q[k] = points[k] - frame.origin;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const Vector3d& x : q) cov += x * x.transpose();
-  cov /= double(n);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> pca(cov);
-  const Vector3d ev = pca.eigenvalues();  // ascending
-  if (!(ev[2] > 0.0)) throw InputError(fmt::format("{}: all {} points coincide", kFunction, n));
-  if (!(ev[1] > 1e-12 * ev[2])) throw InputError(fmt::format("{}: the {} points lie on a line; a surface needs a patch", kFunction, n));
-  frame.normal = canonical(pca.eigenvectors().col(0));
-  frame.axis_u = canonical(pca.eigenvectors().col(2));
-  frame.axis_v = frame.normal.cross(frame.axis_u).normalized();
   monitor.report(0.02);
 
-  // Local analysis over the 12 nearest neighbours: spacing, noise, and the fold test.
+  // Local planes of the 12 nearest neighbours: the noise estimate and the fold test.
   {
     const KdTree tree(q);
+    result.spacing = mean_spacing(tree);
     const NeighborLists lists = tree.knn_all({}, std::min(kNeighbours, n));
     monitor.report(0.05);
-    std::vector<double> smallest(n), nearest(n);
+    std::vector<double> smallest(n, -1.0);  // -1: no plane
     std::vector<std::uint8_t> tilted(n, 0);
     const double cos_tilt = std::cos(params.max_tilt_deg * std::numbers::pi / 180.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t k = range.begin(); k < range.end(); ++k) {
         const auto nb = lists[k];
-        Vector3d c = Vector3d::Zero();
-        for (const Neighbor& m : nb) c += q[m.index];
-        c /= double(nb.size());
-        Eigen::Matrix3d local = Eigen::Matrix3d::Zero();
-        nearest[k] = 0.0;
-        for (const Neighbor& m : nb) {
-          const Vector3d d = q[m.index] - c;
-          local += d * d.transpose();
-          if (nearest[k] == 0.0 && m.squared_distance > 0.0) nearest[k] = std::sqrt(m.squared_distance);
-        }
-        local /= double(nb.size());
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-        es.computeDirect(local);
-        smallest[k] = std::max(es.eigenvalues()[0], 0.0);
-        // A neighbourhood without a plane (fewer than 3 distinct points) tells nothing.
-        tilted[k] = es.eigenvalues()[1] > 1e-12 * es.eigenvalues()[2] && std::abs(es.eigenvectors().col(0).dot(frame.normal)) < cos_tilt;
+        const detail::LocalPca local = detail::local_pca([&](std::size_t i) { return Vector3d(q[nb[i].index] - q[k]); }, nb.size());
+        if (!local.valid) continue;  // fewer than 3 distinct points: no plane, nothing to tell
+        smallest[k] = std::max(local.eigenvalues[0], 0.0);
+        tilted[k] = std::abs(local.normal().dot(frame.normal)) < cos_tilt;
       }
     });
-    double spacing_sum = 0.0;
-    std::size_t spaced = 0, folded = 0;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (nearest[k] > 0.0) spacing_sum += nearest[k], ++spaced;
-      folded += tilted[k];
-    }
-    result.spacing = spaced > 0 ? spacing_sum / double(spaced) : 0.0;
+    const std::size_t folded = std::size_t(std::count(tilted.begin(), tilted.end(), std::uint8_t{1}));
     if (double(folded) > kFoldShare * double(n))
       throw InputError(fmt::format(
           "{}: the patch folds over its base plane: {} of {} points ({:.1f} %) have a local normal more than {} degrees from the plane's "
           "normal, so projecting onto the plane is not one-to-one; split the patch into height fields over a plane (quadric base "
           "surfaces are not implemented yet)",
           kFunction, folded, n, 100.0 * double(folded) / double(n), params.max_tilt_deg));
-    std::nth_element(smallest.begin(), smallest.begin() + std::ptrdiff_t(n / 2), smallest.end());
-    result.noise = std::sqrt(smallest[n / 2]);
+    std::erase(smallest, -1.0);
+    if (!smallest.empty()) {
+      const auto middle = smallest.begin() + std::ptrdiff_t(smallest.size() / 2);
+      std::nth_element(smallest.begin(), middle, smallest.end());
+      result.noise = std::sqrt(*middle);
+    }
   }
   const double noise_factor = std::max(kToleranceInNoise, kToleranceMargin * std::sqrt(2.0 * std::log(double(n))));
   result.tolerance =

@@ -109,7 +109,8 @@ public:
   /// The point of the surface closest to x, by Newton's method on the squared distance from
   /// (u0, v0), steps clamped to the domain with a backtracking line search (the distance never
   /// grows). When Newton fails (no convergence in `max_iterations`), the best point of a grid
-  /// of 4 x 4 samples per knot span is a second start, and the closer answer is returned.
+  /// of 4 x 4 samples per knot span (at most 64 x 64 in all) is a second start, and the closer
+  /// answer is returned.
   /// `tolerance` is the step in parameter space (relative to the domain's size) below which
   /// Newton stops. Thread-safe (const).
   ClosestPoint closest(const Eigen::Vector3d& x, double u0, double v0, int max_iterations = 30, double tolerance = 1e-12) const;
