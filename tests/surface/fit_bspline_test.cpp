@@ -233,6 +233,57 @@ TEST(FitBSpline, PermutingThePointsChangesNothing) {
     for (double v : {0.1, 0.6}) EXPECT_LT((b.surface.point(u, v) - a.surface.point(u, v)).norm(), 1e-9 * diagonal);
 }
 
+TEST(FitBSpline, RigidMotionAndScaleMoveTheResultAlong) {
+  // A rectangle (distinct principal axes, so the frame is defined by the data alone).
+  auto patch = [](double s, double t) -> Vector3d {
+    const double x = 2 * s - 1, y = 1.2 * t - 0.6;
+    return {x, y, 0.5 * (x * x - y * y) + 0.1 * x * y * y};
+  };
+  const std::vector<Vector3d> points = sample(patch, [](double, double) { return Vector3d::UnitZ(); }, 2000, 1e-3, 21);
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const double scale = 1000.0;
+  const Vector3d shift(3e5, -4e5, 120);
+  std::vector<Vector3d> moved;
+  for (const Vector3d& x : points) moved.push_back(scale * (rotation * x) + shift);
+  BSplineFitParams params;
+  params.tolerance = 2.5e-3;  // a few rounds; the moved fit gets the same tolerance scaled
+  const BSplineFitResult a = fit_bspline_surface(points, params);
+  params.tolerance *= scale;
+  const BSplineFitResult b = fit_bspline_surface(moved, params);
+  ASSERT_EQ(a.rounds, b.rounds);
+  ASSERT_EQ(a.control_points, b.control_points);
+  EXPECT_GE(a.rounds, 1);
+  const double diagonal = std::sqrt(4.0 + 1.44);
+  for (std::size_t k = 0; k < points.size(); ++k) ASSERT_NEAR(b.deviations[k] / scale, a.deviations[k], 1e-9 * diagonal) << k;
+  EXPECT_NEAR(b.noise / scale, a.noise, 1e-9 * diagonal);
+  // The same surface, moved (up to the parameterization's orientation: the axes' signs come
+  // from the data, so compare foot points).
+  for (std::size_t k = 0; k < points.size(); k += 97) {
+    const ClosestPoint ca = a.surface.closest(points[k], a.parameters[k].x(), a.parameters[k].y());
+    const ClosestPoint cb = b.surface.closest(moved[k], b.parameters[k].x(), b.parameters[k].y());
+    EXPECT_LT(((cb.point - shift) / scale - rotation * ca.point).norm(), 1e-9 * diagonal);
+  }
+}
+
+TEST(FitBSpline, HeavySmoothingTendsToTheLeastSquaresPlane) {
+  // The thin-plate energy vanishes exactly on planes: with a huge weight the fit is the
+  // least-squares plane z = 0 of the saddle, whose rms distance is sqrt(2/5 - 2/9).
+  const std::vector<Vector3d> points = sample(saddle, saddle_normal, 3000, 0.0, 22);
+  BSplineFitParams params;
+  params.smoothing = 1e3;
+  params.max_rounds = 0;
+  const BSplineFitResult r = fit_bspline_surface(points, params);
+  EXPECT_NEAR(r.rms_deviation, std::sqrt(2.0 / 5.0 - 2.0 / 9.0), 0.01);
+  for (double u : {0.1, 0.5, 0.9})
+    for (double v : {0.2, 0.7}) {
+      const SurfaceDerivatives d = r.surface.derivatives(u, v);
+      EXPECT_LT(d.suu.norm() + d.suv.norm() + d.svv.norm(), 1e-3 * d.su.norm()) << u << ", " << v;
+    }
+  // And a weight of 1e-9 leaves the saddle itself (the border bias stays near 1e-4).
+  params.smoothing = 1e-9;
+  EXPECT_LT(fit_bspline_surface(points, params).max_deviation, 3e-4);
+}
+
 TEST(FitBSpline, OneThreadGivesTheSameBitsAsMany) {
   auto waves = [](double s, double t) -> Vector3d { return {s, t, 0.1 * std::sin(6 * s) * std::cos(4 * t)}; };
   const std::vector<Vector3d> points = sample(waves, [](double, double) { return Vector3d::UnitZ(); }, 3000, 1e-4, 19);
