@@ -222,12 +222,12 @@ void BSplineSurface::insert_knot_v(double v) {
   nv_ = nv1;
 }
 
-ClosestPoint BSplineSurface::newton(const Vector3d& x, double u, double v, int max_iterations, double tolerance) const {
+SurfaceFootPoint BSplineSurface::newton(const Vector3d& x, double u, double v, int max_iterations, double tolerance) const {
   const double u0 = u_min(), u1 = u_max(), v0 = v_min(), v1 = v_max();
   const double step_limit_u = tolerance * (u1 - u0), step_limit_v = tolerance * (v1 - v0);
   u = std::clamp(u, u0, u1);
   v = std::clamp(v, v0, v1);
-  ClosestPoint out;
+  SurfaceFootPoint out;
   SurfaceDerivatives s = local_derivatives(u, v, 2);
   Vector3d r = s.point - x;
   double f = r.squaredNorm();
@@ -300,9 +300,9 @@ ClosestPoint BSplineSurface::newton(const Vector3d& x, double u, double v, int m
   return out;
 }
 
-ClosestPoint BSplineSurface::closest_local(const Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const {
+SurfaceFootPoint BSplineSurface::closest_local(const Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const {
   if (empty()) throw UsageError("BSplineSurface::closest: the surface is empty");
-  ClosestPoint best = newton(x, u0, v0, max_iterations, tolerance);
+  SurfaceFootPoint best = newton(x, u0, v0, max_iterations, tolerance);
   if (best.converged) return best;
   // Fallback: the best of a grid of samples as a new start: 4 per knot span and direction, at
   // most 64 per direction (bounded work on a fine net).
@@ -328,7 +328,7 @@ ClosestPoint BSplineSurface::closest_local(const Vector3d& x, double u0, double 
       const double d = (local_point(u, v) - x).squaredNorm();
       if (d < sd) sd = d, su = u, sv = v;
     }
-  ClosestPoint second = newton(x, su, sv, max_iterations, tolerance);
+  SurfaceFootPoint second = newton(x, su, sv, max_iterations, tolerance);
   second.used_fallback = true;
   second.iterations += best.iterations;
   if (second.distance <= best.distance || !std::isfinite(best.distance)) return second;
@@ -337,8 +337,8 @@ ClosestPoint BSplineSurface::closest_local(const Vector3d& x, double u0, double 
   return best;
 }
 
-ClosestPoint BSplineSurface::closest(const Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const {
-  ClosestPoint c = closest_local(x - origin_, u0, v0, max_iterations, tolerance);
+SurfaceFootPoint BSplineSurface::closest(const Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const {
+  SurfaceFootPoint c = closest_local(x - origin_, u0, v0, max_iterations, tolerance);
   c.point += origin_;
   return c;
 }

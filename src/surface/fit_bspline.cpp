@@ -256,7 +256,7 @@ void project(const BSplineSurface& s, std::span<const Vector3d> q, const Vector3
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.size(), 256), [&](const tbb::blocked_range<std::size_t>& range) {
     if (reporter.cancelled()) return;
     for (std::size_t k = range.begin(); k < range.end(); ++k) {
-      const ClosestPoint c = s.closest_local(q[k], uv[k].x(), uv[k].y());
+      const SurfaceFootPoint c = s.closest_local(q[k], uv[k].x(), uv[k].y());
       uv[k] = Vector2d(c.u, c.v);
       if (deviations) {
         Vector3d n = s.normal(c.u, c.v);

@@ -138,7 +138,7 @@ TEST(BSplineSurface, ClosestPointFindsAKnownFootPoint) {
     const double u = param(rng), v = param(rng);
     // A point off the surface along its normal, close enough that the foot is unique.
     const Vector3d x = s.point(u, v) + offset(rng) * s.normal(u, v);
-    const ClosestPoint c = s.closest(x, std::clamp(u + 0.1, 0.0, 1.0), std::clamp(v - 0.1, 0.0, 1.0));
+    const SurfaceFootPoint c = s.closest(x, std::clamp(u + 0.1, 0.0, 1.0), std::clamp(v - 0.1, 0.0, 1.0));
     EXPECT_TRUE(c.converged);
     EXPECT_NEAR(c.u, u, 1e-8);
     EXPECT_NEAR(c.v, v, 1e-8);
@@ -146,7 +146,7 @@ TEST(BSplineSurface, ClosestPointFindsAKnownFootPoint) {
   }
   // A point beyond the border lands on it, the foot orthogonal along the border.
   const Vector3d out = s.point(1.0, 0.5) + 0.5 * s.derivatives(1.0, 0.5).su.normalized();
-  const ClosestPoint c = s.closest(out, 0.5, 0.5);
+  const SurfaceFootPoint c = s.closest(out, 0.5, 0.5);
   EXPECT_DOUBLE_EQ(c.u, 1.0);
   EXPECT_NEAR(s.derivatives(c.u, c.v).sv.dot(c.point - out), 0.0, 1e-8);
 }
@@ -155,9 +155,9 @@ TEST(BSplineSurface, ClosestPointFallsBackWhenNewtonCannotConverge) {
   const BSplineSurface s = wavy_surface();
   const Vector3d x = s.point(0.8, 0.7) + 0.01 * s.normal(0.8, 0.7);
   // One iteration cannot converge from the far corner: the grid search gives a better start.
-  const ClosestPoint c = s.closest(x, 0.0, 0.0, 1);
+  const SurfaceFootPoint c = s.closest(x, 0.0, 0.0, 1);
   EXPECT_TRUE(c.used_fallback);
-  const ClosestPoint full = s.closest(x, 0.0, 0.0);
+  const SurfaceFootPoint full = s.closest(x, 0.0, 0.0);
   EXPECT_NEAR(full.distance, 0.01, 1e-9);
 }
 

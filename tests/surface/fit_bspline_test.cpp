@@ -259,8 +259,8 @@ TEST(FitBSpline, RigidMotionAndScaleMoveTheResultAlong) {
   // The same surface, moved (up to the parameterization's orientation: the axes' signs come
   // from the data, so compare foot points).
   for (std::size_t k = 0; k < points.size(); k += 97) {
-    const ClosestPoint ca = a.surface.closest(points[k], a.parameters[k].x(), a.parameters[k].y());
-    const ClosestPoint cb = b.surface.closest(moved[k], b.parameters[k].x(), b.parameters[k].y());
+    const SurfaceFootPoint ca = a.surface.closest(points[k], a.parameters[k].x(), a.parameters[k].y());
+    const SurfaceFootPoint cb = b.surface.closest(moved[k], b.parameters[k].x(), b.parameters[k].y());
     EXPECT_LT(((cb.point - shift) / scale - rotation * ca.point).norm(), 1e-9 * diagonal);
   }
 }

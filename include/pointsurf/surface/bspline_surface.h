@@ -6,7 +6,7 @@
 //
 //   BSplineSurface s(3, 3, U, V, nu, nv, control, origin);  // control[i * nv + j], relative to origin
 //   Eigen::Vector3d x = s.point(0.5, 0.25);                  // in the input's coordinates
-//   const ClosestPoint c = s.closest(y, 0.5, 0.5);           // foot point of y, started at (0.5, 0.5)
+//   const SurfaceFootPoint c = s.closest(y, 0.5, 0.5);           // foot point of y, started at (0.5, 0.5)
 //
 // Control points are stored relative to `origin()` so that surfaces in georeferenced
 // coordinates (1e6..1e7 m) keep their precision: everything is computed on the small relative
@@ -49,7 +49,7 @@ struct SurfaceDerivatives {
 };
 
 /// The closest point of a surface to a query point.
-struct ClosestPoint {
+struct SurfaceFootPoint {
   double u = 0.0, v = 0.0;                       // parameters of the foot point (in the domain)
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  // the foot point, input coordinates
   double distance = 0.0;                         // |query - point|, cloud units
@@ -113,14 +113,14 @@ public:
   /// answer is returned.
   /// `tolerance` is the step in parameter space (relative to the domain's size) below which
   /// Newton stops. Thread-safe (const).
-  ClosestPoint closest(const Eigen::Vector3d& x, double u0, double v0, int max_iterations = 30, double tolerance = 1e-12) const;
+  SurfaceFootPoint closest(const Eigen::Vector3d& x, double u0, double v0, int max_iterations = 30, double tolerance = 1e-12) const;
   /// The same relative to origin(): `x_local` = x - origin(); the point returned is relative too.
-  ClosestPoint closest_local(const Eigen::Vector3d& x_local, double u0, double v0, int max_iterations = 30, double tolerance = 1e-12) const;
+  SurfaceFootPoint closest_local(const Eigen::Vector3d& x_local, double u0, double v0, int max_iterations = 30, double tolerance = 1e-12) const;
 
 private:
   // Derivatives relative to the origin, up to order `order` (0: the point only).
   SurfaceDerivatives local_derivatives(double u, double v, int order) const;
-  ClosestPoint newton(const Eigen::Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const;
+  SurfaceFootPoint newton(const Eigen::Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const;
 
   int p_ = 0, q_ = 0, nu_ = 0, nv_ = 0;
   std::vector<double> U_, V_;
