@@ -59,7 +59,7 @@ constexpr std::size_t kMaxOffNeighbours = 1;
 constexpr std::size_t kSurfaceFitFactor = 2;
 
 // Per-thread buffers of the surface fits (no allocation per point).
-struct PlaneScratch {
+struct FitScratch {
   std::vector<Vector3d> offsets, kept;
   std::vector<double> residuals, leverage, deleted;
 };
@@ -128,15 +128,15 @@ bool fit_quadric(const std::vector<Vector3d>& pts, LocalSurface& f, std::vector<
 }
 
 // The surface of `s.offsets` (a neighbourhood seen from the point it judges, the point
-// excluded): the least-squares plane, refitted
-// once without the offsets farther than kRefitSigmas robust standard deviations from the first
-// plane; then a quadric height over it, fitted to all offsets and refitted once without those
-// whose deleted residual (residual over 1 - leverage: the quadric bends to a point at its rim,
-// which hides an outlier there) is beyond kRefitSigmas robust standard deviations. A plane bends
-// away from thin, strongly curved parts (a statue's limbs, horns): the quadric follows them, so
-// its residuals measure the noise, not the curvature. The plane when the quadric is ill-posed; a
-// zero normal and flatness 1 when the offsets span no plane.
-LocalSurface fit_local_surface(PlaneScratch& s) {
+// excluded): the least-squares plane, refitted once without the offsets farther than
+// kRefitSigmas robust standard deviations from the first plane; then a quadric height over it,
+// fitted to all offsets and refitted once without those whose deleted residual (residual over
+// 1 - leverage: the quadric bends to a point at its rim, which hides an outlier there) is beyond
+// kRefitSigmas robust standard deviations. A plane bends away from thin, strongly curved parts
+// (a statue's limbs, horns): the quadric follows them, so its residuals measure the noise, not
+// the curvature. The plane when the quadric is ill-posed; a zero normal and flatness 1 when the
+// offsets span no plane.
+LocalSurface fit_local_surface(FitScratch& s) {
   const std::vector<Vector3d>& q = s.offsets;
   const detail::LocalPca first = detail::local_pca([&](std::size_t j) { return q[j]; }, q.size());
   if (!first.valid) return {};
@@ -266,21 +266,21 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
   std::vector<double> noise_scale, surface_distance;
   std::vector<std::uint8_t> off_surface;  // empty without the surface test
   if (params.surface_sigmas > 0.0) {
-    std::vector<LocalSurface> plane(n);
-    tbb::enumerable_thread_specific<PlaneScratch> planes;
+    std::vector<LocalSurface> fit(n);
+    tbb::enumerable_thread_specific<FitScratch> fits;
     for_points([&](std::size_t i) {
-      PlaneScratch& s = planes.local();
+      FitScratch& s = fits.local();
       s.offsets.clear();
       for (std::uint32_t j : std::span<const std::uint32_t>(neighbour_of.data() + i * m, m))
         if (j != i) s.offsets.push_back(positions[j] - positions[i]);
-      plane[i] = fit_local_surface(s);
-      plane[i].centre += positions[i];
+      fit[i] = fit_local_surface(s);
+      fit[i].centre += positions[i];
     });
     noise_scale.resize(n);
     for_points([&](std::size_t i) {
       std::vector<double>& pool = scratch.local();
-      pool.assign(1, plane[i].variance);
-      for (std::uint32_t j : neighbours(i)) pool.push_back(plane[j].variance);
+      pool.assign(1, fit[i].variance);
+      for (std::uint32_t j : neighbours(i)) pool.push_back(fit[j].variance);
       const double cut = kPoolTrim * kPoolTrim * median_of(pool);
       double sum = 0.0;
       std::size_t count = 0;
@@ -289,7 +289,7 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
       noise_scale[i] = count > 0 ? sum / double(count) : 0.0;  // a variance until smoothed
     });
     std::vector<double> flatness(n), smoothed(n);
-    for (std::size_t i = 0; i < n; ++i) flatness[i] = plane[i].flatness;
+    for (std::size_t i = 0; i < n; ++i) flatness[i] = fit[i].flatness;
     auto smooth = [&](std::vector<double>& values) {
       for (int pass = 0; pass < kScaleSmoothing; ++pass) {
         for_points([&](std::size_t i) {
@@ -307,10 +307,10 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
       noise_scale[i] = std::max(std::sqrt(noise_scale[i]), params.surface_floor * reference[i]);
       std::vector<double>& local = scratch.local();
       local.clear();
-      for (std::uint32_t j : neighbours(i)) local.push_back(plane[j].distance(positions[i]));
+      for (std::uint32_t j : neighbours(i)) local.push_back(fit[j].distance(positions[i]));
       surface_distance[i] = median_of(local);
     });
-    // Off the surface: far from the neighbours' planes where the neighbourhoods are surfaces;
+    // Off the surface: far from the neighbours' surfaces where the neighbourhoods are surfaces;
     // a sparse point also when its own neighbours form no surface (outliers inside a closed
     // part, each other's neighbours). Kept anyway: a point at about the surface's density with
     // more than kMaxOffNeighbours off-surface neighbours (a structure).
@@ -319,8 +319,8 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
     std::vector<std::uint8_t> off(n);
     for (std::size_t i = 0; i < n; ++i) {
       const bool sparse = mean_distance[i] > dense;
-      const bool far_from_planes = surface_distance[i] > params.surface_sigmas * noise_scale[i];
-      off[i] = sparse ? far_from_planes || plane[i].flatness > kMaxFlatness : flatness[i] <= kMaxFlatness && far_from_planes;
+      const bool far_from_surfaces = surface_distance[i] > params.surface_sigmas * noise_scale[i];
+      off[i] = sparse ? far_from_surfaces || fit[i].flatness > kMaxFlatness : flatness[i] <= kMaxFlatness && far_from_surfaces;
     }
     off_surface.assign(n, 0);
     for_points([&](std::size_t i) {
@@ -365,7 +365,7 @@ OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierP
   detail::ProgressReporter reporter(progress, 0.0, 1.0, (surface ? 4 : 2) * n);
   OutlierResult result = judge_local_outliers(cloud.positions, t, params, reporter);
   // With the surface test, once more over the points kept: an outlier whose neighbours were
-  // partly other outliers (one plane through both, a wide noise scale) now has surface points
+  // partly other outliers (one fit through both, a wide noise scale) now has surface points
   // around it.
   if (surface && result.removed > 0 && result.kept.size() > std::size_t(params.k)) {
     std::vector<Vector3d> kept_positions(result.kept.size());

@@ -128,7 +128,7 @@ struct LocalOutlierParams {
 /// outliers beyond 5 sigma left, at most 0.1 % of the surface samples removed.
 /// `threshold` in the result is the density test's ratio cut (mean spacings of the
 /// neighbourhood, dimensionless). Memory O(k N) (the neighbour lists and surfaces); parallel
-/// passes (oneTBB), about 3-4x the density test's time with the surface test. Throws UsageError
+/// passes (oneTBB), about 7-9x the density test's time with the surface test. Throws UsageError
 /// for k < 2, min_ratio <= 1, mad_sigmas <= 0, far_ratio <= 1, surface_sigmas < 0,
 /// surface_floor <= 0, fewer than k + 1 points; CancelledError when `progress` returns false.
 OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierParams& params = {}, const KdTree* tree = nullptr,
