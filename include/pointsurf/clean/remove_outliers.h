@@ -76,8 +76,8 @@ struct LocalOutlierParams {
                              // many times the median over the cloud (groups of far outliers that
                              // are each other's neighbours), > 1
   double surface_sigmas = 4.25;  // also dropped: a point farther than this many local noise
-                                // scales from the plane of its k neighbours (see below), >= 0;
-                                // 0 turns the surface test off
+                                // scales from the surface (quadric) fitted to its neighbours (see
+                                // below), >= 0; 0 turns the surface test off
   double surface_floor = 0.1;   // the noise scale is at least this many times the neighbourhood's
                                 // mean neighbour distance (clean, exact surfaces), > 0
   /// Key, unit, range and doc of each field (core/fields.h).
@@ -102,15 +102,19 @@ struct LocalOutlierParams {
 /// In the spirit of the local outlier factor (Breunig et al. 2000) with a robust cut. A point
 /// whose neighbours all coincide with it (r undefined) is kept.
 /// Surface test (surface_sigmas > 0), for outliers near the surface at its density:
-///   - each point's plane: least squares over its k neighbours (the point excluded), refitted
-///     without those beyond 2.5 robust standard deviations; e_i = distance of p_i to it;
-///   - noise s_i: RMS of e over p_i and its neighbours (those within 3.5 robust standard
-///     deviations), the variance averaged over the point and its neighbours 3 times, at least
+///   - each point's surface: over its 2k nearest others (the point excluded), a least-squares
+///     plane refitted without those beyond 2.5 robust standard deviations, then a quadric height
+///     over that plane refitted without those whose deleted residual (residual / (1 - leverage))
+///     is beyond 2.5 robust standard deviations; v_i = its residual variance (over n - 6 and
+///     corrected for the trim);
+///   - noise s_i: square root of the mean of v over p_i and its neighbours (those within 4 times
+///     their median), averaged over the point and its neighbours 3 times, at least
 ///     surface_floor * median of the neighbours' d;
-///   - surface distance h_i = median over the neighbours of p_i's distance to their planes
-///     (between two sheets p_i's own plane would run between them);
+///   - surface distance h_i = median over the neighbours of p_i's distance to their surfaces
+///     (between two sheets p_i's own fit would run between them);
 ///   - p_i is off the surface iff h_i > surface_sigmas * s_i where the neighbourhoods are
-///     surfaces (flatness, smallest over middle eigenvalue, averaged like the noise, <= 0.35),
+///     surfaces (flatness of the planes, smallest over middle eigenvalue, averaged like the
+///     noise, <= 0.35),
 ///     or, for a sparse point (d_i > min_ratio * median(d)), also when its own neighbours form
 ///     no surface (a group of outliers inside a closed part);
 ///   - an off-surface point is dropped unless it has 2 or more off-surface neighbours and is
@@ -123,8 +127,8 @@ struct LocalOutlierParams {
 /// noise 0.1 % of the diagonal along the normal and 1 % uniform outliers: at most 0.2 % of the
 /// outliers beyond 5 sigma left, at most 0.1 % of the surface samples removed.
 /// `threshold` in the result is the density test's ratio cut (mean spacings of the
-/// neighbourhood, dimensionless). Memory O(k N) (the neighbour lists and planes); parallel
-/// passes (oneTBB), about 3x the density test's time with the surface test. Throws UsageError
+/// neighbourhood, dimensionless). Memory O(k N) (the neighbour lists and surfaces); parallel
+/// passes (oneTBB), about 7-9x the density test's time with the surface test. Throws UsageError
 /// for k < 2, min_ratio <= 1, mad_sigmas <= 0, far_ratio <= 1, surface_sigmas < 0,
 /// surface_floor <= 0, fewer than k + 1 points; CancelledError when `progress` returns false.
 OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierParams& params = {}, const KdTree* tree = nullptr,
