@@ -200,7 +200,7 @@ def clean(cloud: Data, /, *, method: Literal['local', 'sor', 'radius', 'ransac',
     min_ratio = 3.0: Drop only points whose mean neighbour distance is above this many times their neighbours' ((1, inf))
     mad_sigmas = 10.0: ... and above the median ratio by this many robust standard deviations ((0, inf))
     far_ratio = 12.0: Also drop points whose mean neighbour distance is above this many times the cloud's median ((1, inf))
-    surface_sigmas = 4.25: Also drop points farther than this many local noise scales from their neighbours' plane (0: off) ([0, inf))
+    surface_sigmas = 4.25: Also drop points farther than this many local noise scales from their neighbours' surface fits (0: off) ([0, inf))
     surface_floor = 0.1: The noise scale is at least this many times the neighbourhood's mean neighbour distance ((0, inf))
     std_ratio = 2.0: Drop points whose mean kNN distance >= mean + std_ratio x std ((0, inf))
     min_neighbors = 4: Keep points with at least this many others within the radius (points, [1, inf))
