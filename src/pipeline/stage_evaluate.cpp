@@ -241,7 +241,7 @@ void run_quality(StageRun& run) {
   report_progress(run.progress, 0.7, "short handles");
   record_quality(run.record, q);
   quality_warnings(run.record, q);
-  const HandleResult handles = find_short_handles(mesh, read_params<HandleParams>(run.args));
+  const HandleResult handles = find_short_handles(mesh, read_params<HandleParams>(run.args), sub_progress(run.progress, 0.7, 1.0));
   run.record.add(quality_handle_results(), handles);
   if (handles.short_handles > 0)
     run.record.warnings.push_back(fmt::format("{} with a loop at most {} mean edge lengths ({:.4g}) long (topological noise?; shortest loop {:.4g}); "

@@ -169,7 +169,7 @@ HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs
   report_progress(progress, 0.91, "short handles");
   HandleParams hp = read_params<HandleParams>(a);
   hp.spacing = spacing;
-  const HandleResult handles = remove_short_handles(result.mesh, hp);
+  const HandleResult handles = remove_short_handles(result.mesh, hp, sub_progress(progress, 0.91, 0.95));
   rec.add(HandleResult::results(), handles);
   if (handles.short_handles > handles.handles_removed)
     rec.warnings.push_back(fmt::format("{} with a loop at most {} spacings ({:.3g}) long {} (topological noise; shortest loop {:.3g}){}",

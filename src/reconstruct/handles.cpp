@@ -15,6 +15,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/detail/progress_reporter.h"
 #include "pointsurf/core/error.h"
 #include "pointsurf/core/mesh_topology.h"
 
@@ -460,12 +461,17 @@ void grow_within(const Fans& fans, const std::vector<Vector3d>& p, std::span<con
 }
 
 // Seeds: every interior vertex within kCoverShare x limit (along edges) of one.
-std::vector<std::uint32_t> cover_seeds(const Fans& fans, const std::vector<Vector3d>& p, double cover, const std::vector<std::uint8_t>& region) {
+std::vector<std::uint32_t> cover_seeds(const Fans& fans, const std::vector<Vector3d>& p, double cover, const std::vector<std::uint8_t>& region,
+                                       detail::ProgressReporter& reporter) {
   const std::size_t n = p.size();
   std::vector<std::uint8_t> covered(n, 0);
   std::vector<double> dist(n, std::numeric_limits<double>::infinity());
   std::vector<std::uint32_t> seeds, reached;
   for (std::uint32_t s = 0; s < n; ++s) {
+    if ((s & 0xffffu) == 0xffffu) {
+      reporter.advance(0x10000);
+      reporter.throw_if_cancelled();
+    }
     if (!fans.interior[s] || covered[s] || (!region.empty() && !region[s])) continue;
     seeds.push_back(s);
     grow_within(fans, p, std::span<const std::uint32_t>(&s, 1), cover, true, dist, reached, [&](std::uint32_t v) { covered[v] = 1; });
@@ -483,15 +489,25 @@ std::vector<std::uint8_t> near(const Fans& fans, const std::vector<Vector3d>& p,
 }
 
 // Candidates from seeds covering the surface, or only `region` where it is not empty.
-std::vector<Candidate> search(const Fans& fans, const std::vector<Vector3d>& p, double limit, const std::vector<std::uint8_t>& region) {
-  const std::vector<std::uint32_t> seeds = cover_seeds(fans, p, kCoverShare * limit, region);
+// Progress: the seed cover (serial) about a tenth of the time, the ball searches the rest.
+std::vector<Candidate> search(const Fans& fans, const std::vector<Vector3d>& p, double limit, const std::vector<std::uint8_t>& region,
+                              const ProgressCallback& progress) {
+  std::vector<std::uint32_t> seeds;
+  {
+    detail::ProgressReporter cover(progress, 0.0, 0.1, p.size());
+    seeds = cover_seeds(fans, p, kCoverShare * limit, region, cover);
+  }
   std::vector<Candidate> found(seeds.size());
   tbb::enumerable_thread_specific<BallSearch> searches([&] { return BallSearch(fans, p); });
+  detail::ProgressReporter reporter(progress, 0.1, 1.0, seeds.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, seeds.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    if (reporter.cancelled()) return;
     BallSearch& s = searches.local();
     for (std::size_t i = r.begin(); i != r.end(); ++i)
       if (!s.grow(seeds[i], kRadiusShare * limit, limit, found[i])) found[i].loop.clear();
+    reporter.advance(r.size());
   });
+  reporter.throw_if_cancelled();
   std::erase_if(found, [](const Candidate& c) { return c.loop.empty(); });
   std::sort(found.begin(), found.end(), [](const Candidate& a, const Candidate& b) {
     return a.length != b.length ? a.length < b.length : a.loop < b.loop;
@@ -691,7 +707,7 @@ void HandleParams::validate() const {
   fields().validate(*this, "remove_short_handles");
 }
 
-HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params) {
+HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params, const ProgressCallback& progress) {
   params.validate();
   mesh.validate();
   HandleResult result;
@@ -700,7 +716,7 @@ HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params
   const double spacing = params.spacing > 0.0 ? params.spacing : mean_edge_length(mesh);
   result.max_loop_length = params.max_loop_in_spacings * spacing;
   if (!(result.max_loop_length > 0.0) || mesh.triangles.empty() || result.handles_before == 0) return result;
-  if (!params.remove) return find_short_handles(mesh, params);
+  if (!params.remove) return find_short_handles(mesh, params, progress);
   // Local origin: georeferenced coordinates keep their precision in the differences.
   const std::size_t n = mesh.vertices.positions.size();
   const Vector3d origin = mesh.vertices.positions[std::size_t(mesh.triangles.front()[0])];
@@ -714,7 +730,10 @@ HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params
     // After the first round, only where a loop was found but not cut: the cuts elsewhere leave
     // the rest of the surface as it was.
     const std::vector<std::uint8_t> region = r == 0 ? std::vector<std::uint8_t>{} : near(fans, p, unresolved, 2.0 * result.max_loop_length);
-    const std::vector<Candidate> candidates = search(fans, p, result.max_loop_length, region);
+    // Progress: the first round searches the whole surface (90 %), later ones only near the
+    // loops left, each half the share of the one before.
+    const double begin = r == 0 ? 0.0 : 1.0 - 0.1 * std::pow(0.5, r - 1), end = 1.0 - 0.1 * std::pow(0.5, r);
+    const std::vector<Candidate> candidates = search(fans, p, result.max_loop_length, region, sub_progress(progress, begin, end));
     if (candidates.empty()) {
       left = 0;
       break;
@@ -777,12 +796,12 @@ HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params
   return result;
 }
 
-HandleResult find_short_handles(const TriangleMesh& mesh, HandleParams params) {
+HandleResult find_short_handles(const TriangleMesh& mesh, HandleParams params, const ProgressCallback& progress) {
   TriangleMesh copy;
   copy.vertices.positions = mesh.vertices.positions;
   copy.triangles = mesh.triangles;
   params.remove = true;
-  HandleResult result = remove_short_handles(copy, params);
+  HandleResult result = remove_short_handles(copy, params, progress);
   result.handles_after = result.handles_before;
   result.handles_removed = 0;
   return result;

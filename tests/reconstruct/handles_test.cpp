@@ -220,6 +220,26 @@ TEST(Handles, SeveralSmallRingsAndAFarOffsetGiveTheSameCut) {
   EXPECT_NEAR(double(far.triangles.size()), double(near.triangles.size()), 0.01 * double(near.triangles.size()));
 }
 
+// Progress grows through the searches and changes nothing; a false answer cancels.
+TEST(Handles, ReportsProgressAndCanBeCancelled) {
+  const TriangleMesh original = contour(sphere_with_small_handle());
+  TriangleMesh heard = original, plain = original;
+  std::vector<double> fractions;
+  const HandleResult a = remove_short_handles(heard, spacing(0.04), [&](double f) {
+    fractions.push_back(f);
+    return true;
+  });
+  const HandleResult b = remove_short_handles(plain, spacing(0.04));
+  ASSERT_GE(fractions.size(), 2u);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_GE(fractions.back(), 0.9);
+  EXPECT_LE(fractions.back(), 1.0);
+  EXPECT_EQ(a.handles_removed, b.handles_removed);
+  EXPECT_EQ(heard.triangles, plain.triangles);
+  TriangleMesh cancelled = original;
+  EXPECT_THROW(remove_short_handles(cancelled, spacing(0.04), [](double f) { return f < 0.3; }), CancelledError);
+}
+
 TEST(Handles, DefaultSpacingIsTheMeanEdgeLength) {
   TriangleMesh mesh = contour(sphere_with_small_handle());
   const HandleResult r = find_short_handles(mesh, {});

@@ -15,6 +15,7 @@
 
 #include "pointsurf/core/fields.h"
 #include "pointsurf/core/results.h"
+#include "pointsurf/core/progress.h"
 #include "pointsurf/core/triangle_mesh.h"
 
 namespace pointsurf {
@@ -75,9 +76,11 @@ struct HandleResult {
 /// undone. Up to 4 rounds. Cost: about 30 Dijkstra steps per vertex for the default limit, plus
 /// the searches on the sides of each closed loop. Throws UsageError for a parameter out of
 /// range, InputError for an invalid mesh. Not thread-safe on one mesh (modifies it).
-HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params = {});
+/// `progress` hears fractions through the searches (the first, over the whole surface, is
+/// most of the time); its false answer throws CancelledError.
+HandleResult remove_short_handles(TriangleMesh& mesh, const HandleParams& params = {}, const ProgressCallback& progress = {});
 
 /// The same search without changing the mesh (params.remove is ignored).
-HandleResult find_short_handles(const TriangleMesh& mesh, HandleParams params = {});
+HandleResult find_short_handles(const TriangleMesh& mesh, HandleParams params = {}, const ProgressCallback& progress = {});
 
 }  // namespace pointsurf
