@@ -177,48 +177,40 @@ Vector3d BSplineSurface::normal(double u, double v) const {
   return len > 0.0 ? Vector3d(n / len) : Vector3d::Zero();
 }
 
-void BSplineSurface::insert_knot_u(double u) {
-  if (empty()) throw UsageError("BSplineSurface::insert_knot_u: the surface is empty");
-  if (!(u > u_min() && u < u_max()))
-    throw UsageError(fmt::format("BSplineSurface::insert_knot_u: {} is not inside the domain ({}, {})", u, u_min(), u_max()));
-  const int s = multiplicity(U_, u);
-  if (s + 1 > p_) throw UsageError(fmt::format("BSplineSurface::insert_knot_u: knot {} already has multiplicity {} (degree {})", u, s, p_));
-  const int k = bspline_find_span(u, p_, U_);
-  std::vector<Vector3d> next(std::size_t(nu_ + 1) * std::size_t(nv_));
-  auto at = [&](std::vector<Vector3d>& net, int i, int j) -> Vector3d& { return net[std::size_t(i) * std::size_t(nv_) + std::size_t(j)]; };
-  for (int j = 0; j < nv_; ++j) {
-    for (int i = 0; i <= k - p_; ++i) at(next, i, j) = control(i, j);
-    for (int i = k - s; i < nu_; ++i) at(next, i + 1, j) = control(i, j);
-    for (int i = k - p_ + 1; i <= k - s; ++i) {
-      const double alpha = (u - U_[std::size_t(i)]) / (U_[std::size_t(i + p_)] - U_[std::size_t(i)]);
-      at(next, i, j) = alpha * control(i, j) + (1.0 - alpha) * control(i - 1, j);
-    }
-  }
-  U_.insert(U_.begin() + k + 1, u);
-  control_ = std::move(next);
-  ++nu_;
-}
+void BSplineSurface::insert_knot_u(double u) { insert_knot(true, u); }
+void BSplineSurface::insert_knot_v(double v) { insert_knot(false, v); }
 
-void BSplineSurface::insert_knot_v(double v) {
-  if (empty()) throw UsageError("BSplineSurface::insert_knot_v: the surface is empty");
-  if (!(v > v_min() && v < v_max()))
-    throw UsageError(fmt::format("BSplineSurface::insert_knot_v: {} is not inside the domain ({}, {})", v, v_min(), v_max()));
-  const int s = multiplicity(V_, v);
-  if (s + 1 > q_) throw UsageError(fmt::format("BSplineSurface::insert_knot_v: knot {} already has multiplicity {} (degree {})", v, s, q_));
-  const int k = bspline_find_span(v, q_, V_);
-  const int nv1 = nv_ + 1;
-  std::vector<Vector3d> next(std::size_t(nu_) * std::size_t(nv1));
-  auto at = [&](int i, int j) -> Vector3d& { return next[std::size_t(i) * std::size_t(nv1) + std::size_t(j)]; };
-  for (int i = 0; i < nu_; ++i) {
-    for (int j = 0; j <= k - q_; ++j) at(i, j) = control(i, j);
-    for (int j = k - s; j < nv_; ++j) at(i, j + 1) = control(i, j);
-    for (int j = k - q_ + 1; j <= k - s; ++j) {
-      const double alpha = (v - V_[std::size_t(j)]) / (V_[std::size_t(j + q_)] - V_[std::size_t(j)]);
-      at(i, j) = alpha * control(i, j) + (1.0 - alpha) * control(i, j - 1);
+// Boehm's insertion (NURBS Book A5.1) along u or v: each row of the net across that direction
+// gets one more control point; the surface is unchanged.
+void BSplineSurface::insert_knot(bool along_u, double t) {
+  const char* name = along_u ? "BSplineSurface::insert_knot_u" : "BSplineSurface::insert_knot_v";
+  if (empty()) throw UsageError(fmt::format("{}: the surface is empty", name));
+  std::vector<double>& knots = along_u ? U_ : V_;
+  const int degree = along_u ? p_ : q_;
+  const double lo = along_u ? u_min() : v_min(), hi = along_u ? u_max() : v_max();
+  if (!(t > lo && t < hi)) throw UsageError(fmt::format("{}: {} is not inside the domain ({}, {})", name, t, lo, hi));
+  const int s = multiplicity(knots, t);
+  if (s + 1 > degree) throw UsageError(fmt::format("{}: knot {} already has multiplicity {} (degree {})", name, t, s, degree));
+  const int k = bspline_find_span(t, degree, knots);
+  const int nu1 = along_u ? nu_ + 1 : nu_, nv1 = along_u ? nv_ : nv_ + 1;
+  const int along = along_u ? nu_ : nv_, across = along_u ? nv_ : nu_;
+  std::vector<Vector3d> next(std::size_t(nu1) * std::size_t(nv1));
+  // Control point `i` along the direction of insertion in row `r` across it, in the old and new nets.
+  const auto old_at = [&](int i, int r) -> const Vector3d& { return along_u ? control(i, r) : control(r, i); };
+  const auto new_at = [&](int i, int r) -> Vector3d& {
+    return along_u ? next[std::size_t(i) * std::size_t(nv1) + std::size_t(r)] : next[std::size_t(r) * std::size_t(nv1) + std::size_t(i)];
+  };
+  for (int r = 0; r < across; ++r) {
+    for (int i = 0; i <= k - degree; ++i) new_at(i, r) = old_at(i, r);
+    for (int i = k - s; i < along; ++i) new_at(i + 1, r) = old_at(i, r);
+    for (int i = k - degree + 1; i <= k - s; ++i) {
+      const double alpha = (t - knots[std::size_t(i)]) / (knots[std::size_t(i + degree)] - knots[std::size_t(i)]);
+      new_at(i, r) = alpha * old_at(i, r) + (1.0 - alpha) * old_at(i - 1, r);
     }
   }
-  V_.insert(V_.begin() + k + 1, v);
+  knots.insert(knots.begin() + k + 1, t);
   control_ = std::move(next);
+  nu_ = nu1;
   nv_ = nv1;
 }
 

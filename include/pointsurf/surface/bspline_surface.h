@@ -121,6 +121,7 @@ private:
   // Derivatives relative to the origin, up to order `order` (0: the point only).
   SurfaceDerivatives local_derivatives(double u, double v, int order) const;
   SurfaceFootPoint newton(const Eigen::Vector3d& x, double u0, double v0, int max_iterations, double tolerance) const;
+  void insert_knot(bool along_u, double t);
 
   int p_ = 0, q_ = 0, nu_ = 0, nv_ = 0;
   std::vector<double> U_, V_;
