@@ -84,6 +84,10 @@ struct LocalSurface {
   }
 };
 
+// Progress units a point of the surface fits (the neighbour search counts 1): they take about
+// three times as long as the search of the 2k nearest.
+constexpr std::size_t kFitUnits = 3;
+
 // Fewer offsets than this (after trimming) keep the plane: six coefficients need a margin.
 constexpr std::size_t kMinQuadricPoints = 10;
 // A normal variable trimmed at +-kRefitSigmas (2.5) standard deviations keeps this share of its
@@ -205,7 +209,7 @@ void LocalOutlierParams::validate() const { fields().validate(*this, "remove_loc
 namespace {
 
 // One round of remove_local_outliers over `positions` (`t` built over them), advancing
-// `reporter` by 2 units a point.
+// `reporter` by 2 units a point, 2 + kFitUnits with the surface test.
 OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const KdTree& t, const LocalOutlierParams& params,
                                    detail::ProgressReporter& reporter) {
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -235,10 +239,12 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
   // 2. Ratio to the neighbourhood's median mean distance. The passes below run in parallel in
   // the tree's spatial order (neighbours close in memory).
   const std::span<const std::uint32_t> order = t.spatial_order();
-  auto for_points = [&](auto&& body) {
+  // `units` progress units a point, reported block by block (0: none).
+  auto for_points = [&](auto&& body, std::size_t units = 0) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
       if (reporter.cancelled()) return;
       for (std::size_t pos = r.begin(); pos != r.end(); ++pos) body(std::size_t(order[pos]));
+      if (units > 0) reporter.advance(units * r.size());
     });
     reporter.throw_if_cancelled();
   };
@@ -275,7 +281,7 @@ OutlierResult judge_local_outliers(std::span<const Vector3d> positions, const Kd
         if (j != i) s.offsets.push_back(positions[j] - positions[i]);
       fit[i] = fit_local_surface(s);
       fit[i].centre += positions[i];
-    });
+    }, kFitUnits);
     noise_scale.resize(n);
     for_points([&](std::size_t i) {
       std::vector<double>& pool = scratch.local();
@@ -362,7 +368,9 @@ OutlierResult remove_local_outliers(const PointCloud& cloud, const LocalOutlierP
   const KdTree& t = detail::tree_for(cloud, tree, own);
   const std::size_t n = cloud.size();
   const bool surface = params.surface_sigmas > 0.0;
-  detail::ProgressReporter reporter(progress, 0.0, 1.0, (surface ? 4 : 2) * n);
+  // Units a point and round: the neighbours 1, the ratios 1/2, the surface fits kFitUnits, the
+  // rest 1/2; with the surface test a second round over the points kept.
+  detail::ProgressReporter reporter(progress, 0.0, 1.0, (surface ? 2 * (2 + kFitUnits) : 2) * n);
   OutlierResult result = judge_local_outliers(cloud.positions, t, params, reporter);
   // With the surface test, once more over the points kept: an outlier whose neighbours were
   // partly other outliers (one fit through both, a wide noise scale) now has surface points
