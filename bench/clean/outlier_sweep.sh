@@ -67,23 +67,17 @@ PYEOF
   done
 done
 "$PY" - "$ROWS" "$ROOT" "$TUNED" "$POINTS" "$CSV" "${NO_CSV:-0}" <<'PYEOF' | tee "$OUT/clean_outliers.md"
-import csv, datetime, json, os, subprocess, sys
+import json, os, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 root, tuned, points, path, no_csv = sys.argv[2], sys.argv[3].split(), sys.argv[4], sys.argv[5], sys.argv[6] == "1"
-commit = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-dirty = subprocess.run(["git", "-C", root, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout.strip()
-commit += "+dirty" if dirty else ""
-date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-machine = f"{os.uname().nodename} {os.cpu_count()} cores"
+sys.path.insert(0, os.path.join(root, "bench"))
+from sweep_csv import append_rows, provenance
+commit, date, machine = provenance(root)
 keys = ["shape", "role", "seed", "variant", "args", "points", "sigma", "far_outliers", "far_left", "surface_removed", "near_edge",
         "near_edge_removed", "seconds"]
 for r in rows: r["role"] = "tuned" if r["shape"] in tuned else "unseen"
 if not no_csv:
-    new = not os.path.exists(path)
-    with open(path, "a", newline="") as f:
-        w = csv.writer(f)
-        if new: w.writerow(["commit", "date", "machine"] + keys)
-        for r in rows: w.writerow([commit, date, machine] + [r[k] for k in keys])
+    append_rows(path, keys, rows, (commit, date, machine))
 print(f"# Outliers left and surface samples removed by `pointsurf clean` ({commit}, {date}, {machine}; {points} points + 1 % outliers)\n")
 print("| shape | role | variant | seeds | far outliers left (of > 5 sigma) | share, worst seed | surface removed | share, worst seed | of them near creases | seconds (mean) |")
 print("|---|---|---|---|---|---|---|---|---|---|")

@@ -70,22 +70,16 @@ PYEOF
   done
 done
 "$PY" - "$ROWS" "$ROOT" "$POINTS" "$CSV" "${NO_CSV:-0}" <<'PYEOF' | tee "$OUT/genus.md"
-import csv, datetime, json, os, subprocess, sys
+import json, os, sys
 rows = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
 root, points, path, no_csv = sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5] == "1"
-commit = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-dirty = subprocess.run(["git", "-C", root, "status", "--porcelain", "--untracked-files=no"], capture_output=True, text=True).stdout.strip()
-commit += "+dirty" if dirty else ""
-date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-machine = f"{os.uname().nodename} {os.cpu_count()} cores"
+sys.path.insert(0, os.path.join(root, "bench"))
+from sweep_csv import append_rows, provenance
+commit, date, machine = provenance(root)
 keys = ["shape", "seed", "method", "args", "true_genus", "handles_before", "handles_after", "short_handles", "handles_removed",
         "shortest_loop", "limit", "components", "triangles", "seconds"]
 if not no_csv:
-    new = not os.path.exists(path)
-    with open(path, "a", newline="") as f:
-        w = csv.writer(f)
-        if new: w.writerow(["commit", "date", "machine"] + keys)
-        for r in rows: w.writerow([commit, date, machine] + [r[k] for k in keys])
+    append_rows(path, keys, rows, (commit, date, machine))
 print(f"# Genus after reconstruct, before and after the short-handle cut ({commit}, {date}, {machine}; {points} points + 1 % outliers, cleaned)\n")
 print("| shape | method | true genus | seeds | handles before (per seed) | after (per seed) | cut | seconds (mean) |")
 print("|---|---|---|---|---|---|---|---|")
