@@ -103,7 +103,7 @@ PseudoNormals pseudo_normals(const TriangleMesh& mesh) {
 }
 
 MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshDistanceParams& params,
-                                  const TriangleBvh* bvh, const ProgressCallback& progress) {
+                                  const TriangleBvh* bvh, const ProgressCallback& progress, const MeshTopology* topology) {
   check_measurable_mesh(mesh, "mesh");
   params.validate();
   for (std::size_t i = 0; i < points.size(); ++i)
@@ -114,7 +114,8 @@ MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const Triang
   MeshDistanceResult result;
   DistanceSign sign = params.sign;
   if (sign == DistanceSign::Auto) {
-    const MeshTopology topo = analyze_topology(mesh);
+    std::optional<MeshTopology> own_topology;
+    const MeshTopology& topo = topology != nullptr ? *topology : own_topology.emplace(analyze_topology(mesh));
     const bool manifold = topo.edge_manifold() && topo.non_manifold_vertices == 0 && topo.oriented();
     bool intersecting = false;
     if (manifold && topo.closed()) {

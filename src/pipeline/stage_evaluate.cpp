@@ -298,7 +298,9 @@ void run_evaluate(StageRun& run) {
   const double s0 = fit ? 0.3 : 0.0;  // the fit's share
   const double triangles = static_cast<double>(mesh.triangles.size()), points = static_cast<double>(measured.size());
   const bool needs_tree = !fit && !ref.is_mesh;
-  const bool signed_run = read_params<MeshDistanceParams>(a).sign != DistanceSign::Unsigned;
+  MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
+  DeviationParams sp = read_params<DeviationParams>(a);
+  const bool signed_run = dp.sign != DistanceSign::Unsigned;
   const double bvh_cost = 0.7 * triangles, quality_cost = 0.75 * triangles;
   const double tree_cost = needs_tree ? 0.45 * points : 0.0;  // beside the two above, on one core
   const double prepare_cost = std::max(bvh_cost + quality_cost, tree_cost);
@@ -327,18 +329,16 @@ void run_evaluate(StageRun& run) {
       },
       [&] {
         if (!needs_tree) return;
-        if (read_params<DeviationParams>(a).tolerance == 0.0 && !surface) run.context.mean_spacing(ref_tag);  // the default tolerance
+        if (sp.tolerance == 0.0 && !surface) run.context.mean_spacing(ref_tag);  // the default tolerance
         else run.context.tree(ref_tag);
       });
   const TriangleBvh& bvh = *bvh_holder;
-  MeshDistanceParams dp = read_params<MeshDistanceParams>(a);
   dp.known_self_intersections = static_cast<long>(q.self_intersections);
   report_progress(run.progress, at_distances, "distances");  // its set-up (signs) reports nothing
-  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, at_counted, at_statistics));
+  const MeshDistanceResult dist = mesh_distances(measured, mesh, dp, &bvh, sub_progress(run.progress, at_counted, at_statistics), &q.topology);
   report_progress(run.progress, at_statistics, "statistics");
   for (const std::string& w : dist.warnings) rec.warnings.push_back(w);
 
-  DeviationParams sp = read_params<DeviationParams>(a);
   if (sp.tolerance == 0.0) {
     sp.tolerance = surface ? mean_spacing(measured) : run.context.mean_spacing(ref_tag);
     rec.set_used("tolerance", sp.tolerance);

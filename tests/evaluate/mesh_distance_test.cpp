@@ -88,6 +88,18 @@ TEST(MeshDistance, SphereMeshIsExactAndSignedOnBothSides) {
   for (std::size_t i = 0; i < points.size(); ++i) EXPECT_NEAR(r.distances[i], convex_signed_distance(points[i], sphere), 1e-9 * diagonal) << i;
 }
 
+// A caller's hierarchy and topology give the same answer as the ones built inside.
+TEST(MeshDistance, AKnownHierarchyAndTopologyGiveTheSameDistances) {
+  const TriangleMesh sphere = test::icosphere_mesh(3);
+  const std::vector<Vector3d> points = random_points(500, -1.5, 1.5, 17);
+  const TriangleBvh bvh(sphere);
+  const MeshTopology topology = analyze_topology(sphere);
+  const MeshDistanceResult own = mesh_distances(points, sphere), given = mesh_distances(points, sphere, {}, &bvh, {}, &topology);
+  EXPECT_EQ(given.sign_used, DistanceSign::PseudoNormal);
+  EXPECT_EQ(given.sign_used, own.sign_used);
+  EXPECT_EQ(given.distances, own.distances);
+}
+
 TEST(MeshDistance, ShiftBy1e6MetresChangesNothing) {
   const Vector3d shift(1.0e6, -2.0e6, 3.0e5);
   const TriangleMesh sphere = test::icosphere_mesh(2), shifted = test::icosphere_mesh(2, 1.0, shift);

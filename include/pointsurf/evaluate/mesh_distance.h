@@ -55,11 +55,14 @@ struct MeshDistanceResult {
 void check_measurable_mesh(const TriangleMesh& mesh, const std::string& what);
 
 /// Signed distance from each point to `mesh` (exact closest point on the triangles, in double
-/// precision about the mesh's centre). `bvh` may be a hierarchy over `mesh` already built.
-/// Throws InputError on an unmeasurable mesh (see check_measurable_mesh) and when a point is not
-/// finite. Parallel (oneTBB); thread-safe. O((N + F) log F).
+/// precision about the mesh's centre). `bvh` may be a hierarchy over `mesh` already built, and
+/// `topology` its analyze_topology() (the automatic sign needs it), so a caller that has them
+/// does not pay for them twice. Throws InputError on an unmeasurable mesh (see
+/// check_measurable_mesh) and when a point is not finite. Parallel (oneTBB); thread-safe.
+/// O((N + F) log F).
 MeshDistanceResult mesh_distances(std::span<const Vector3d> points, const TriangleMesh& mesh, const MeshDistanceParams& params = {},
-                                  const TriangleBvh* bvh = nullptr, const ProgressCallback& progress = {});
+                                  const TriangleBvh* bvh = nullptr, const ProgressCallback& progress = {},
+                                  const MeshTopology* topology = nullptr);
 
 /// Angle-weighted pseudo-normals of a mesh: per vertex (the angle-weighted sum of the unit
 /// normals of its faces) and per face (unit normals; zero for degenerate faces). An edge's
