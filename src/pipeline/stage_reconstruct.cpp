@@ -159,17 +159,49 @@ std::vector<ResultSpec> reconstruct_specs(const std::vector<std::string>& method
   return out;
 }
 
+// Where the stage's tail (after the method) starts in the stage's progress, and where its short
+// handles and flat regions start: fixed for the interpolating methods; for Poisson, whose tail
+// follows its output's triangles, from a cost model (below).
+struct TailShares {
+  double begin = 0.9, handles = 0.91, flats = 0.95;
+};
+
+// Poisson's tail in seconds on 2 cores (quiet runs of 10 meshes sampled at 150k-500k points,
+// bench/notes/progress.md): small components, the topology and the flat regions follow the
+// triangles; the short-handle search runs only on a surface with handles, and its balls (of a
+// fixed size in cloud spacings) hold more triangles as the mesh gets finer than the cloud: its
+// cost per triangle grows with the triangles per point (1.2 us at 5.7 and 6.2). Until the
+// surface is known, the search is assumed at most kAssumedSearch of the method's time.
+struct PoissonTailCost {
+  static constexpr double kComponents = 0.14e-6, kTopology = 0.15e-6, kFlats = 0.33e-6;  // per triangle
+  static constexpr double kSearch = 0.21e-6;  // per triangle and triangle per point
+  static constexpr double kAssumedSearch = 0.12;
+  double components = 0.0, handles = 0.0, flats = 0.0;
+  // `cap`: at most this long for the search (a surface whose handles are not known yet may have
+  // none: an assumed search that does not run leaves the progress behind)
+  PoissonTailCost(double triangles, double points, bool has_handles, double cap = std::numeric_limits<double>::infinity())
+      : components(kComponents * triangles), handles(kTopology * triangles), flats(kFlats * triangles) {
+    if (has_handles) handles += std::min(cap, kSearch * triangles * triangles / std::max(points, 1.0));
+  }
+  double total() const { return components + handles + flats; }
+  TailShares shares(double begin) const {
+    const double t = std::max(total(), 1e-12), rest = 1.0 - begin;
+    return {begin, begin + rest * components / t, begin + rest * (components + handles) / t};
+  }
+};
+
 // After any method: specks removed (min_component_share), short handles cut (max_handle_loop
 // cloud spacings, issue 28), then the flat regions labelled as the face field "region" (issue
 // 12). The topology is analysed again when faces changed.
 HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs& a, double spacing, StageRecord& rec,
-                                   const ProgressCallback& progress) {
+                                   const ProgressCallback& progress, const TailShares& tail) {
+  report_progress(progress, tail.begin, "small components");
   const SmallComponentsResult removed = remove_small_components(result.mesh, read_params<SmallComponentParams>(a));
   rec.add(SmallComponentsResult::results(), removed);
-  report_progress(progress, 0.91, "short handles");
+  report_progress(progress, tail.handles, "short handles");
   HandleParams hp = read_params<HandleParams>(a);
   hp.spacing = spacing;
-  const HandleResult handles = remove_short_handles(result.mesh, hp, sub_progress(progress, 0.91, 0.95));
+  const HandleResult handles = remove_short_handles(result.mesh, hp, sub_progress(progress, tail.handles, tail.flats));
   rec.add(HandleResult::results(), handles);
   if (handles.short_handles > handles.handles_removed)
     rec.warnings.push_back(fmt::format("{} with a loop at most {} spacings ({:.3g}) long {} (topological noise; shortest loop {:.3g}){}",
@@ -181,8 +213,8 @@ HandleResult clean_and_label_faces(ReconstructionResult& result, const StageArgs
     result.topology = analyze_topology(result.mesh);
     result.unused_points += used_before - result.topology.vertices;
   }
-  report_progress(progress, 0.95, "flat regions");
-  const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a));
+  report_progress(progress, tail.flats, "flat regions");
+  const FlatRegionResult regions = label_flat_regions(result.mesh, read_params<FlatRegionParams>(a), sub_progress(progress, tail.flats, 1.0));
   ScalarField& field = result.mesh.face_fields.add("region", regions.region.size(), ScalarType::Int32);
   std::copy(regions.region.begin(), regions.region.end(), field.values.begin());
   rec.add(FlatRegionResult::results(), regions);
@@ -199,10 +231,25 @@ void run_reconstruct(StageRun& run) {
   if (!(spacing > 0.0)) throw InputError(fmt::format("all {} coincide; no surface can be built", plural(item.cloud().size(), "point")));
   StageRecord& rec = run.record;
   const bool estimated = method != "cocone" && method != "crust" && !item.cloud().has_normals();
-  if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, 0.2));
+  // the normals' share: Poisson takes about 15 times as long as the normals (200k points: 0.7 s
+  // against 11-12 s), the interpolating methods about 4 times
+  const double normals_share = method == "poisson" ? 0.06 : 0.2;
+  if (estimated) estimate_missing_normals(run, a.int32("normals_k"), sub_progress(run.progress, 0.0, normals_share));
   const PointCloud& cloud = item.cloud();
   const KdTree& tree = run.context.tree(run.output);
-  const ProgressCallback progress = sub_progress(run.progress, estimated ? 0.2 : 0.0, 0.9);  // the rest: labels, loops
+  // the rest: labels, loops. Poisson's forecast (after its octree) moves the split; its tail
+  // assumes handles to search until the surface says.
+  const double begin = estimated ? normals_share : 0.0;
+  TailShares tail;
+  double forecast_tail = 0.0;
+  // Poisson's share starts after the noise estimate (1-7 % of the stage: more at low depths)
+  MovableProgress method_part(run.progress, method == "poisson" ? begin + 0.03 : begin, tail.begin);
+  const ProgressCallback progress = method_part.callback([&](const ProgressForecast& f) {
+    if (method != "poisson" || !(f.seconds > 0.0)) return;
+    forecast_tail = PoissonTailCost(f.output_size, double(cloud.size()), true, PoissonTailCost::kAssumedSearch * f.seconds).total();
+    const double from = begin + 0.03;
+    method_part.move_end(from + (1.0 - from) * f.seconds / (f.seconds + forecast_tail));
+  });
   const NoiseEstimate noise = estimate_noise(cloud, tree);
   MeshSummary m;
   m.noise_in_spacings = noise.median_in_spacings;
@@ -226,6 +273,14 @@ void run_reconstruct(StageRun& run) {
     if (poisson.skipped_normals > 0)
       rec.warnings.push_back(fmt::format("{} skipped: zero or non-finite normal", plural(poisson.skipped_normals, "point")));
     result = std::move(poisson);
+    if (forecast_tail > 0.0) {
+      // The surface is known: the tail as predicted now, against what its share assumed; less
+      // work than assumed (no handles) moves the progress on to the share done by time.
+      const PoissonTailCost cost(double(result.mesh.triangles.size()), double(cloud.size()), result.topology.handles() > 0);
+      const double end = method_part.end();
+      const double at = std::max(end, end / (end + (1.0 - end) * cost.total() / forecast_tail));
+      tail = cost.shares(at);
+    }
   } else {
     const BallPivotParams p = read_params<BallPivotParams>(a);
     result = reconstruct_ball_pivoting(cloud, p, &tree, progress);
@@ -237,8 +292,7 @@ void run_reconstruct(StageRun& run) {
     rec.set_used("radii", radii);
   }
   rec.add(ReconstructionStats::results(method), result.stats);
-  report_progress(run.progress, 0.9, "small components");
-  const HandleResult handles = clean_and_label_faces(result, a, spacing, rec, run.progress);
+  const HandleResult handles = clean_and_label_faces(result, a, spacing, rec, run.progress, tail);
   if (method == "poisson") result.unused_points = 0;  // approximating: its vertices are not the points
   const MeshTopology& t = result.topology;
   // Poisson's surface is closed but where trimming opened it: its loops are borders, and its

@@ -54,7 +54,10 @@ struct FaceGeometry {
 
 }  // namespace
 
-FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionParams& params) {
+FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionParams& params, const ProgressCallback& progress) {
+  const auto report = [&](double fraction) {
+    if (progress && !progress(fraction)) throw CancelledError("label_flat_regions: cancelled");
+  };
   params.validate();
   mesh.validate();
   FlatRegionResult result;
@@ -81,6 +84,7 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
     }
   });
 
+  report(0.1);
   // Neighbours across manifold edges only: a boundary edge has none, and on a non-manifold
   // edge no pair of its faces is the surface's continuation more than another.
   std::vector<std::array<int, 3>> neighbours(f, std::array<int, 3>{-1, -1, -1});
@@ -97,6 +101,7 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
     });
   }
   const auto has_normal = [&](std::size_t t) { return geo[t].area > 0.0; };
+  report(0.35);
 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t t = r.begin(); t < r.end(); ++t) {
@@ -108,6 +113,7 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
     }
   });
 
+  report(0.4);
   // Seeds flattest first, then largest, then by centroid: an order of the geometry, not of the
   // face indices, so that a permutation of the faces gives the same regions.
   std::vector<int> order(f);
@@ -124,10 +130,13 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
 
   // A region is the set of unlabelled faces in the seed's cone that the seed reaches across
   // joinable edges: a fixed set, whatever order the stack visits it in.
+  report(0.7);
   std::vector<int> label(f, -1);
   std::vector<int> stack;
   int regions = 0;
+  std::size_t seeds_seen = 0;
   for (const int seed : order) {
+    if ((++seeds_seen & 0x3ffffu) == 0) report(0.7 + 0.25 * double(seeds_seen) / double(f));
     if (label[std::size_t(seed)] >= 0) continue;
     const int r = regions++;
     label[std::size_t(seed)] = r;
@@ -147,6 +156,7 @@ FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionPa
     }
   }
 
+  report(0.95);
   // Numbered by each region's smallest face index.
   std::vector<int> renumber(std::size_t(regions), -1);
   std::vector<std::size_t> sizes(std::size_t(regions), 0);

@@ -26,9 +26,9 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr int kRounds = 8;
 // A cap is the minimum-area triangulation of its loop, cubic in its corners.
 constexpr std::size_t kMaxCapCorners = 256;
-// Seeds cover the surface to an eighth of the limit; balls grow to 5/8 of it, so that a loop at
+// Seeds cover the surface to a quarter of the limit; balls grow to 3/4 of it, so that a loop at
 // most the limit long lies in the ball of a seed near it.
-constexpr double kCoverShare = 0.125, kRadiusShare = 0.625;
+constexpr double kCoverShare = 0.25, kRadiusShare = 0.75;
 
 // The mesh seen from its vertices: the triangles at each vertex and, for vertices with one
 // consistently oriented fan, the ring of neighbours counter-clockwise with the triangle between

@@ -431,25 +431,28 @@ void Extraction::follow_crossed_edges(Brick& b, std::uint16_t cell, std::vector<
   }
 }
 
-void Extraction::process(Brick& b) const {
+std::size_t Extraction::process(Brick& b) const {
   std::vector<std::uint16_t> wave = std::move(b.pending), next_wave;
   b.pending.clear();
+  std::size_t cells = 0;
   while (!wave.empty()) {
+    cells += wave.size();
     evaluate_missing_corners(b, wave);
     next_wave.clear();
     for (std::uint16_t cell : wave) follow_crossed_edges(b, cell, next_wave);
     std::swap(wave, next_wave);
   }
+  return cells;
 }
 
-bool Extraction::follow_round(const std::function<void()>& brick_done) {
+bool Extraction::follow_round(const std::function<void(std::size_t cells)>& brick_done) {
   std::vector<Brick*> busy;
   for (const auto& b : bricks_)
     if (!b->pending.empty()) busy.push_back(b.get());
   if (busy.empty()) return false;
   tbb::parallel_for(std::size_t(0), busy.size(), [&](std::size_t i) {
-    process(*busy[i]);
-    if (brick_done) brick_done();
+    const std::size_t cells = process(*busy[i]);
+    if (brick_done) brick_done(cells);
   });
   for (Brick* b : busy) {
     std::vector<Key> outbox = std::move(b->outbox);
@@ -667,34 +670,41 @@ IsoSurface extract_iso_surface(const IsoFunction& f, const IsoLattice& lattice, 
   report_phase(progress, "extraction: leaves");
   x.find_leaves();
   report(0.02);
-  x.seed_coarse_crossings(progress, 0.02, 0.5);
-  report(0.5);
+  const double seeded = params.seed_share > 0.0 ? std::clamp(params.seed_share, 0.05, 0.9) : 0.5;
+  x.seed_coarse_crossings(progress, 0.02, seeded);
+  report(seeded);
   // Following the surface takes rounds of unknown number: round r ends at share
-  // 0.5 + 0.35 (1 - 1 / (1 + r / 8)), and within a round the bricks done move it on. The
-  // shares follow the phases' time at 200k and 1M samples (bench/notes/progress.md).
+  // s + 0.7 (1 - s) (1 - 1 / (1 + r / 8)), s the share of the seeds, and within a round the
+  // bricks done move it on; the vertices and triangles take the rest.
   report_phase(progress, "extraction: surface cells");
   x.queue_seeds();
-  const auto round_end = [](double r) { return 0.5 + 0.35 * (1.0 - 1.0 / (1.0 + r / 8.0)); };
-  for (std::size_t round = 0;; ++round) {
-    std::size_t pending = 0;
-    for (const auto& b : x.bricks()) pending += b->pending.empty() ? 0 : 1;
-    ProgressReporter reporter(progress, round_end(double(round)), round_end(double(round + 1)), pending);
-    if (!x.follow_round([&] { reporter.advance(1); })) break;
-    reporter.throw_if_cancelled();
+  const double cells_end = seeded + 0.7 * (1.0 - seeded), vertices_end = seeded + 0.92 * (1.0 - seeded);
+  const auto round_end = [&](double r) { return seeded + (cells_end - seeded) * (1.0 - 1.0 / (1.0 + r / 8.0)); };
+  if (params.expected_cells > 0.0) {
+    ProgressReporter reporter(progress, seeded, cells_end, std::size_t(std::max(1.0, params.expected_cells)));
+    while (x.follow_round([&](std::size_t cells) { reporter.advance(cells); })) reporter.throw_if_cancelled();
+  } else {
+    for (std::size_t round = 0;; ++round) {
+      std::size_t pending = 0;
+      for (const auto& b : x.bricks()) pending += b->pending.empty() ? 0 : 1;
+      ProgressReporter reporter(progress, round_end(double(round)), round_end(double(round + 1)), pending);
+      if (!x.follow_round([&](std::size_t) { reporter.advance(1); })) break;
+      reporter.throw_if_cancelled();
+    }
   }
   x.index_bricks();
-  report(0.85);
+  report(cells_end);
   report_phase(progress, "extraction: vertices");
   x.collect_crossed_edges();
   {
-    ProgressReporter reporter(progress, 0.86, 0.96, x.bricks().size());
+    ProgressReporter reporter(progress, cells_end, vertices_end, x.bricks().size());
     x.place_vertices([&] { reporter.advance(1); });
     reporter.throw_if_cancelled();
   }
-  report(0.96);
+  report(vertices_end);
   report_phase(progress, "extraction: triangles");
   {
-    ProgressReporter reporter(progress, 0.96, 0.995, x.bricks().size());
+    ProgressReporter reporter(progress, vertices_end, 0.995, x.bricks().size());
     x.triangulate_cells([&] { reporter.advance(1); });
     reporter.throw_if_cancelled();
   }

@@ -31,9 +31,56 @@ namespace {
 constexpr int kMaxDepth = 16;
 constexpr int kMinAutoDepth = 6, kMaxAutoDepth = 10;
 
-// The shares of reconstruct_poisson's time (bench/notes/progress.md): the octree and the solve,
-// the extraction, then the density, the colours and fields, the trim and the topology.
-constexpr double kSolveEnd = 0.4, kExtractionEnd = 0.85;
+// The shares of reconstruct_poisson's time until the octree is known (bench/notes/progress.md):
+// the octree and the solve, the extraction, then the density, the colours and fields, the trim
+// and the topology. Then PoissonCost decides them.
+constexpr double kSolveEnd = 0.45, kExtractionEnd = 0.85;
+
+// reconstruct_poisson's time predicted from its octree, in seconds on 2 cores (fitted on quiet
+// runs of 150k-500k samples of 10 meshes, within 0.8-1.3x per part: bench/notes/progress.md):
+// the solver follows its nodes, samples and the finest levels' size, the rest the output's triangles,
+// which the extraction makes at the finest level the samples reach, over the whole surface. A
+// level that covers the surface holds about 1 / kTrianglesPerNode times the triangles a surface
+// meshed at that level has, and each finer level 4 times as many: the larger of the finest
+// level's nodes and 4 times the level above's estimates them within 0.9-1.08x on those 10 and a
+// noisy scan with outliers (coarser levels' nodes fill a thicker shell where the samples are
+// noisy: 4.6x there).
+struct PoissonCost {
+  static constexpr double kPerNode = 1.1e-6, kSolverPerTriangle = 0.7e-6, kPerSample = 2.0e-6;  // the solver
+  static constexpr double kPerCoarseLeaf = 2.0e-6, kDensityPerTriangle = 0.5e-6;  // the extraction: below
+  static constexpr double kTrianglesPerNode = 0.215;
+  double solver = 0.0, seeds = 0.0, extraction = 0.0, density = 0.0, triangles = 0.0, cells = 0.0;
+
+  PoissonCost(const std::vector<std::size_t>& nodes_per_level, std::size_t samples, int full_depth) {
+    std::size_t nodes = 0;
+    int finest = 0;
+    for (std::size_t l = 0; l < nodes_per_level.size(); ++l) {
+      nodes += nodes_per_level[l];
+      if (nodes_per_level[l] > 0) finest = int(l) + 1;
+    }
+    double shell = 0.0;
+    for (int l = std::max(finest - 1, 1); l <= finest; ++l)
+      shell = std::max(shell, double(nodes_per_level[std::size_t(l - 1)]) * std::pow(4.0, finest - l));
+    triangles = kTrianglesPerNode * shell;
+    // The extraction's seeds come from the leaves coarser than the finest level (a level's
+    // nodes less its children's parents). Where the finest level covers little of the surface
+    // (its nodes against 4 times the level above's), they find most cells and the rest costs
+    // 1 us a triangle; where it covers it, the following finds them: 2.1-3.5 us. The following
+    // processes about the finest level's nodes in the second case, half a cell a triangle in
+    // the first (0.84-1.0x on 4 scans, 2 of them noisy).
+    double coarse = 0.0;
+    for (int l = std::max(full_depth, 1); l < finest; ++l)
+      coarse += std::max(0.0, double(nodes_per_level[std::size_t(l - 1)]) - double(nodes_per_level[std::size_t(l)]) / 8.0);
+    const double cover = finest > 1 ? double(nodes_per_level[std::size_t(finest - 1)]) / std::max(1.0, 4.0 * double(nodes_per_level[std::size_t(finest - 2)])) : 1.0;
+    solver = kPerNode * double(nodes) + kSolverPerTriangle * triangles + kPerSample * double(samples);
+    seeds = kPerCoarseLeaf * coarse;
+    const double followed = std::min(1.0, cover / 0.5);
+    extraction = seeds + triangles * (1.0 + 1.7 * followed) * 1e-6;
+    cells = followed * double(finest > 0 ? nodes_per_level[std::size_t(finest - 1)] : 0) + (1.0 - followed) * 0.5 * triangles;
+    density = kDensityPerTriangle * triangles;
+  }
+  double total() const { return solver + extraction + density; }
+};
 
 // Removes the pieces (vertex-connected components) whose sample support per area lies more than
 // `gap` depth units (factors of 4) below the largest piece's, and the vertices they leave unused.
@@ -221,7 +268,20 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   sys.dirichlet = params.boundary == PoissonBoundary::Dirichlet;
   sys.max_iterations = params.max_iterations;
   sys.tolerance = params.tolerance;
-  const detail::PoissonFunction function(std::move(samples), sys, lattice, sub_progress(progress, 0.0, kSolveEnd));
+  // the split of the progress follows the cost predicted once the octree is known
+  MovableProgress solver_part(progress, 0.0, kSolveEnd);
+  const std::size_t sample_count = samples.size();
+  double extraction_end = kExtractionEnd, expected_cells = 0.0, seed_share = 0.0;
+  const auto on_octree = [&](const std::vector<std::size_t>& nodes) {
+    const PoissonCost cost(nodes, sample_count, sys.full_depth);
+    if (!(cost.total() > 0.0)) return;
+    solver_part.move_end(cost.solver / cost.total());
+    extraction_end = std::max(solver_part.end(), (cost.solver + cost.extraction) / cost.total());
+    report_forecast(progress, {cost.total(), cost.triangles});
+    expected_cells = cost.cells;
+    seed_share = cost.extraction > 0.0 ? cost.seeds / cost.extraction : 0.0;
+  };
+  const detail::PoissonFunction function(std::move(samples), sys, lattice, solver_part.callback(), on_octree);
   result.iso_value = function.iso_value();
   result.peak_bytes = function.peak_bytes();
   result.nodes_per_level.assign(std::size_t(depth + 1), 0);
@@ -237,10 +297,12 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
   iso.iso_value = function.iso_value();
   iso.inside_positive = false;  // the function grows along the (outward) normals
   iso.root_refinement_steps = params.root_refinement_steps;
+  iso.expected_cells = expected_cells;
+  iso.seed_share = seed_share;
   // Meshed at the finest level the samples reached, as PoissonRecon meshes its leaves: a depth
   // beyond what the sampling supports adds no detail, only triangles.
   lattice.depth = function.finest_level();
-  detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, sub_progress(progress, kSolveEnd, kExtractionEnd, "extraction"));
+  detail::IsoSurface surface = detail::extract_iso_surface(function, lattice, iso, sub_progress(progress, solver_part.end(), extraction_end, "extraction"));
 
   TriangleMesh& mesh = result.mesh;
   mesh.vertices.positions = std::move(surface.vertices);
@@ -261,7 +323,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
       nearest[v] = hit.empty() ? 0 : hit.front().index;
     }
   });
-  if (progress && !progress(kExtractionEnd + 0.4 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
+  if (progress && !progress(extraction_end + 0.4 * (1.0 - extraction_end))) throw CancelledError("reconstruct_poisson: cancelled");
   if (cloud.has_colors()) {
     mesh.vertices.colors.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) mesh.vertices.colors[v] = cloud.colors[nearest[v]];
@@ -292,7 +354,7 @@ PoissonResult reconstruct_poisson(const PointCloud& cloud, const PoissonParams& 
 
   detail::TrimResult trim;
   report_phase(progress, "trim and topology");
-  if (progress && !progress(kExtractionEnd + 0.8 * (1.0 - kExtractionEnd))) throw CancelledError("reconstruct_poisson: cancelled");
+  if (progress && !progress(extraction_end + 0.8 * (1.0 - extraction_end))) throw CancelledError("reconstruct_poisson: cancelled");
   if (params.trim_depth > 0.0) {
     trim = detail::trim_by_vertex_field(mesh, "density", params.trim_depth, params.island_area_ratio);
     result.trimmed_triangles = trim.removed_triangles;

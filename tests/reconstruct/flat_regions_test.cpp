@@ -158,6 +158,21 @@ TEST(FlatRegions, BoundaryNonManifoldAndDegenerateFacesSeparate) {
   EXPECT_EQ(label_flat_regions(TriangleMesh{}).regions, 0u);
 }
 
+TEST(FlatRegions, ReportsMonotoneProgressAndCancels) {
+  const TriangleMesh sphere = test::icosphere_mesh(4);
+  std::vector<double> fractions;
+  const FlatRegionResult r = label_flat_regions(sphere, {}, [&](double f) {
+    fractions.push_back(f);
+    return true;
+  });
+  EXPECT_EQ(r.regions, label_flat_regions(sphere).regions);
+  ASSERT_GE(fractions.size(), 4u);
+  for (std::size_t i = 1; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1]);
+  EXPECT_GE(fractions.back(), 0.95);
+  EXPECT_LE(fractions.back(), 1.0);
+  EXPECT_THROW(label_flat_regions(sphere, {}, [](double) { return false; }), CancelledError);
+}
+
 TEST(FlatRegions, BadParametersAndMeshesThrow) {
   const TriangleMesh cube = test::grid_cube(1);
   FlatRegionParams p;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pointsurf/core/fields.h"
+#include "pointsurf/core/progress.h"
 #include "pointsurf/core/results.h"
 #include "pointsurf/core/triangle_mesh.h"
 
@@ -56,7 +57,8 @@ struct FlatRegionResult {
 /// Normals come from edge vectors (differences of vertex positions), so coordinates far from
 /// the origin (1e6 m) lose nothing. O(F log F) time (parallel sorts), O(F) memory. Throws
 /// UsageError for a parameter out of range and InputError for an invalid mesh (see
-/// TriangleMesh::validate). Thread-safe (reads `mesh` only).
-FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionParams& params = {});
+/// TriangleMesh::validate). Thread-safe (reads `mesh` only). `progress` hears the finished
+/// fraction (the growing by faces labelled); returning false throws CancelledError.
+FlatRegionResult label_flat_regions(const TriangleMesh& mesh, const FlatRegionParams& params = {}, const ProgressCallback& progress = {});
 
 }  // namespace pointsurf

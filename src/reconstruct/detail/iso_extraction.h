@@ -92,8 +92,9 @@ class Extraction {
   /// Processes every brick with pending cells once (their corner values, the crossed cells made
   /// active, the cells around their crossed edges queued, other bricks' through the outboxes);
   /// returns false when no brick had pending cells.
-  /// `brick_done`, when given, is called (from any worker) after each brick processed.
-  bool follow_round(const std::function<void()>& brick_done = {});
+  /// `brick_done`, when given, is called (from any worker) after each brick processed, with the
+  /// cells it processed.
+  bool follow_round(const std::function<void(std::size_t cells)>& brick_done = {});
   /// Sorts the bricks by key and re-indexes them.
   void index_bricks();
   /// Reads the active cells; produces each brick's sorted owned crossed edges and first vertex.
@@ -122,7 +123,7 @@ class Extraction {
   void cells_around_edge(Key corner, int axis, std::vector<Key>& out) const;
   Brick& brick_at(Key brick_key);
   void enqueue(Key cell);
-  void process(Brick& b) const;
+  std::size_t process(Brick& b) const;  // the cells processed
   void evaluate_missing_corners(Brick& b, const std::vector<std::uint16_t>& wave) const;
   void follow_crossed_edges(Brick& b, std::uint16_t cell, std::vector<std::uint16_t>& next_wave) const;
   const Brick* owner_and_edge(const Brick& b, int cell, int e, std::uint16_t& local_edge) const;

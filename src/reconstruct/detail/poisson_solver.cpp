@@ -54,9 +54,10 @@ constexpr Key kNoKey = ~Key{0};
 // The progress of PoissonFunction's construction, by phase: shares of its time measured on 1M
 // samples (bench/notes/progress.md); a level's solve is split into set-up, iterations and the
 // carried normals.
-constexpr double kOctreeShare = 0.1, kSplatShare = 0.25, kSampleValueShare = 0.02;
+// the sorted samples and the octree 16 % (of which the sort 4 %), the splatting 34 %
+constexpr double kSortShare = 0.04, kOctreeShare = 0.16, kSplatShare = 0.34, kSampleValueShare = 0.02;
 constexpr double kScreeningCostInNodes = 2.0;  // a level's work per screening point (a cell with samples), in nodes
-constexpr double kLevelSetupShare = 0.2, kLevelSolveShare = 0.6;
+constexpr double kLevelSetupShare = 0.4, kLevelSolveShare = 0.5;
 
 Key morton(int x, int y, int z) { return detail::morton_code(std::uint64_t(x), std::uint64_t(y), std::uint64_t(z)); }
 // The hash key of a cell: cheaper than its Morton code, which orders the arrays.
@@ -304,6 +305,16 @@ struct PoissonFunction::Impl {
   void level_done(double f) const {
     if (level_progress) level_progress(f);
   }
+  // body(k) for k in [0, n) in parallel, in consecutive parts of at least 32768, with
+  // level_done from `begin` to `end` after each: a long loop keeps the progress alive.
+  template <class Body>
+  void parallel_steps(std::size_t n, double begin, double end, const Body& body) const {
+    const std::size_t steps = std::clamp<std::size_t>(n / 32768, 1, 32);
+    for (std::size_t step = 0; step < steps; ++step) {
+      tbb::parallel_for(n * step / steps, n * (step + 1) / steps, body);
+      level_done(begin + (end - begin) * double(step + 1) / double(steps));
+    }
+  }
   // Sum over t of the level's coefficients `c` around p times the weights (derivative per
   // axis `d`: 0 none, 1..3); `complete` set false where a node is missing (counted as 0).
   double gather(const Level& L, const std::vector<double>& c, const Eigen::Vector3d& p, int d, bool& complete) const;
@@ -434,6 +445,7 @@ void PoissonFunction::Impl::build_level(int l) {
     blocks.reserve(set.size());
     for (const auto& c : set) blocks.push_back(morton(c[0], c[1], c[2]));
   }
+  level_done(0.4);
   tbb::parallel_sort(blocks.begin(), blocks.end());
   L.block_cells.resize(blocks.size());
   for (std::size_t b = 0; b < blocks.size(); ++b) L.block_cells[b] = decode(blocks[b], l - 1);
@@ -447,6 +459,7 @@ void PoissonFunction::Impl::build_level(int l) {
         for (int dx = -1; dx <= 1; ++dx)
           L.nb[b][std::size_t((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1))] = L.block(c[0] + dx, c[1] + dy, c[2] + dz);
   });
+  level_done(0.7);
   const std::size_t nodes = L.nodes();
   L.x.assign(nodes, 0.0);
   L.F.assign(nodes, 0.0);
@@ -566,15 +579,17 @@ void add_divergence(Level& L, const std::vector<Eigen::Vector3d>& v) {
 void PoissonFunction::Impl::splat_and_restrict() {
   const int depth = params.depth;
   Level& L = levels[std::size_t(depth)];
+  // the shares: the finest level's normals and divergence to 28 %, the level above's to 46 %,
+  // the restriction to the coarser levels the rest by their nodes (hand 400k: 2.3 s and 2.6 s)
   const std::vector<Eigen::Vector3d> v = splat(depth);
-  level_done(0.4);
+  level_done(0.2);
   add_divergence(L, v);
-  level_done(0.55);
+  level_done(0.28);
   // The level above the finest directly from V: the finest level's b reaches 3 cells beyond
   // the samples, one more than its nodes, so restricting it would lose a part.
   if (depth >= 2) {
     Level& C = levels[std::size_t(depth - 1)];
-    tbb::parallel_for(std::size_t(0), C.nodes(), [&](std::size_t k) {
+    parallel_steps(C.nodes(), 0.28, 0.34, [&](std::size_t k) {
       const auto c = C.node_cell(k);
       std::int32_t fine_blocks[27];  // the finest level's blocks at cells c-1..c+1
       for (int d = 0; d < 27; ++d) fine_blocks[d] = L.block(c[0] + d % 3 - 1, c[1] + d / 3 % 3 - 1, c[2] + d / 9 - 1);
@@ -599,15 +614,17 @@ void PoissonFunction::Impl::splat_and_restrict() {
       }
       C.b[k] = sum;
     });
-    level_done(0.75);
     add_divergence(C, splat(depth - 1));
-    level_done(0.9);
   }
+  level_done(0.46);
+  double restricted = 0.0, to_restrict = 0.0;
+  for (int l = depth - 1; l >= 2; --l) to_restrict += double(levels[std::size_t(l - 1)].nodes());
   // restriction: b(coarse k) = sum over fine j of P(j, k) b(fine j)
   for (int l = depth - 1; l >= 2; --l) {
     const Level& Fl = levels[std::size_t(l)];
     Level& C = levels[std::size_t(l - 1)];
-    tbb::parallel_for(std::size_t(0), C.nodes(), [&](std::size_t k) {
+    const auto share = [&](double nodes) { return 0.46 + 0.54 * nodes / std::max(to_restrict, 1.0); };
+    parallel_steps(C.nodes(), share(restricted), share(restricted + 0.8 * double(C.nodes())), [&](std::size_t k) {
       const auto c = C.node_cell(k);
       double sum = 0.0;
       for (int jz = 2 * c[2] - 1; jz <= 2 * c[2] + 2; ++jz) {
@@ -630,6 +647,8 @@ void PoissonFunction::Impl::splat_and_restrict() {
       C.b[k] = sum;
     });
     if (l - 1 >= params.kernel_depth) add_divergence(C, splat(l - 1));
+    restricted += double(C.nodes());
+    level_done(share(restricted));
   }
 }
 
@@ -830,7 +849,7 @@ void PoissonFunction::Impl::LevelSolve::coarse_terms(const std::array<int, 3>& c
 void PoissonFunction::Impl::LevelSolve::coarse_right_hand_side() {
   r.assign(nodes, 0.0);
   diag.assign(nodes, 0.0);
-  tbb::parallel_for(std::size_t(0), nblocks, [&](std::size_t b) {
+  m.parallel_steps(nblocks, kLevelSetupShare * 0.12, kLevelSetupShare * 0.88, [&](std::size_t b) {
     const auto& bc = L.block_cells[b];
     const std::int32_t cb = C ? C->block(bc[0] >> 1, bc[1] >> 1, bc[2] >> 1) : -1;
     for (std::size_t k = 0; k < 8; ++k) {
@@ -944,8 +963,11 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
     VF.clear();
     return level.report;
   }
+  // the set-up's shares (level 9 of hand 400k: 0.13, 0.02, 1.7 and 0.18 s)
   level.merge_screening_points();
+  level_done(kLevelSetupShare * 0.08);
   level.colour_points();
+  level_done(kLevelSetupShare * 0.12);
   level.coarse_right_hand_side();
   level.add_screening();
   level_done(kLevelSetupShare);
@@ -958,7 +980,8 @@ PoissonLevelReport PoissonFunction::Impl::solve_level(int l) {
 }
 
 PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const PoissonSystemParams& params, const IsoLattice& frame,
-                                 const ProgressCallback& progress)
+                                 const ProgressCallback& progress,
+                                 const std::function<void(const std::vector<std::size_t>& nodes_per_level)>& on_octree)
     : impl_(std::make_unique<Impl>()), frame_(frame) {
   Impl& m = *impl_;
   m.params = params;
@@ -968,6 +991,7 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   m.alpha = params.point_weight * double(std::uint64_t{1} << params.depth);
   const int depth = params.depth;
   const int n = 1 << depth;
+  report_phase(progress, "octree");
   // Morton order of the finest cells, ties by position: independent of the input order
   const std::size_t ns = samples.size();
   std::vector<Key> keys(ns);
@@ -1001,13 +1025,39 @@ PoissonFunction::PoissonFunction(std::vector<PoissonSample> samples, const Poiss
   auto report = [&](double f) {
     if (progress && !progress(f)) throw CancelledError("reconstruct_poisson: cancelled");
   };
-  report_phase(progress, "octree");
+  report(kSortShare);
   m.levels.assign(std::size_t(depth + 1), Level{});
   m.level_of.assign(ns, std::uint8_t(depth));  // every sample reaches the kernel level
-  for (int l = 1; l <= m.params.kernel_depth; ++l) m.build_level(l), report(kOctreeShare * l / (depth + 1));
+  // the octree's shares: the levels to the kernel level 20 % (the kernel level most), the
+  // density 15 %, the finer levels the rest by the samples that reach them (hand 400k: 0.4,
+  // 0.36 and 1.3 s)
+  const auto build = [&](int l, double begin, double end) {
+    m.level_progress = [&](double f) { report(kSortShare + (kOctreeShare - kSortShare) * (begin + (end - begin) * f)); };
+    m.build_level(l);
+    m.level_progress = nullptr;
+    report(kSortShare + (kOctreeShare - kSortShare) * end);
+  };
+  for (int l = 1; l <= m.params.kernel_depth; ++l) build(l, l == m.params.kernel_depth ? 0.05 : 0.0, l == m.params.kernel_depth ? 0.2 : 0.05);
   m.estimate_density();
-  for (int l = m.params.kernel_depth + 1; l <= depth; ++l) m.build_level(l), report(kOctreeShare * l / (depth + 1));
+  report(kSortShare + (kOctreeShare - kSortShare) * 0.35);
+  {
+    std::vector<double> reach(std::size_t(depth + 2), 0.0);  // samples reaching each level and all finer
+    for (const std::uint8_t l : m.level_of) reach[std::min<std::size_t>(l, std::size_t(depth))] += 1.0;
+    for (int l = depth - 1; l >= 0; --l) reach[std::size_t(l)] += reach[std::size_t(l + 1)];
+    double total = 0.0, done = 0.0;
+    for (int l = m.params.kernel_depth + 1; l <= depth; ++l) total += reach[std::size_t(l)];
+    for (int l = m.params.kernel_depth + 1; l <= depth; ++l) {
+      const double w = reach[std::size_t(l)] / std::max(total, 1.0);
+      build(l, 0.35 + 0.65 * done, 0.35 + 0.65 * (done + w));
+      done += w;
+    }
+  }
   report(kOctreeShare);
+  if (on_octree) {
+    std::vector<std::size_t> nodes(std::size_t(depth), 0);
+    for (int l = 1; l <= depth; ++l) nodes[std::size_t(l - 1)] = m.levels[std::size_t(l)].nodes();
+    on_octree(nodes);
+  }
   report_phase(progress, "splatting");
   m.level_progress = [&](double f) { report(kOctreeShare + kSplatShare * f); };
   m.splat_and_restrict();

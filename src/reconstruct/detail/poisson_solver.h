@@ -89,8 +89,11 @@ class PoissonFunction final : public IsoFunction {
   /// density, splats the normals and solves. Thread-safe; parallel with oneTBB.
   /// `frame`: where the unit cube lies in cloud units (its depth is params.depth); value(),
   /// gradient() and density_depth() take points in cloud units, corner_values() lattice corners.
+  /// `on_octree`, when given, hears the nodes per level (index 0: level 1) once the octree is
+  /// built, before the splatting: the caller's progress model decides its split there.
   PoissonFunction(std::vector<PoissonSample> samples, const PoissonSystemParams& params, const IsoLattice& frame,
-                  const ProgressCallback& progress = {});
+                  const ProgressCallback& progress = {},
+                  const std::function<void(const std::vector<std::size_t>& nodes_per_level)>& on_octree = {});
   ~PoissonFunction() override;
 
   void corner_values(int level, const std::uint32_t* corners, std::size_t n, double* values) const override;
