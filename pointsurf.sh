@@ -22,6 +22,7 @@ BUILD_PACKAGES=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libpng-dev libfreetype-dev fonts-dejavu-core libjs-three libjs-chart.js
   libpugixml-dev
+  libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-modeling-data-dev libocct-foundation-dev
 )
 # The browser test of the HTML report (tests/report): headless Chromium, driven from Python.
 TEST_PACKAGES=(chromium python3)
