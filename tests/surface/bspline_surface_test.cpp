@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "pointsurf/core/error.h"
+#include "support/bspline_shapes.h"
 
 namespace pointsurf {
 namespace {
@@ -17,17 +18,7 @@ namespace {
 using Eigen::Vector3d;
 
 // A bicubic surface over [0, 1]^2 with uneven interior knots (one double) and a wavy net.
-BSplineSurface wavy_surface(const Vector3d& origin = Vector3d::Zero()) {
-  const std::vector<double> U = {0, 0, 0, 0, 0.2, 0.45, 0.45, 0.7, 1, 1, 1, 1};
-  const std::vector<double> V = {0, 0, 0, 0, 0.3, 0.6, 1, 1, 1, 1};
-  const int nu = int(U.size()) - 4, nv = int(V.size()) - 4;
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
-  std::vector<Vector3d> net;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) net.emplace_back(double(i) + 0.2 * jitter(rng), 0.8 * double(j) + 0.2 * jitter(rng), jitter(rng));
-  return BSplineSurface(3, 3, U, V, nu, nv, net, origin);
-}
+BSplineSurface wavy_surface(const Vector3d& origin = Vector3d::Zero()) { return test::wavy_bspline(3, origin, 7); }
 
 TEST(BSplineBasis, PartitionOfUnityAndDerivativesMatchFiniteDifferences) {
   const std::vector<double> U = {0, 0, 0, 0, 0.1, 0.25, 0.25, 0.6, 0.8, 1, 1, 1, 1};

@@ -13,6 +13,7 @@
 
 #include "pointsurf/core/error.h"
 #include "pointsurf/surface/fit_bspline.h"
+#include "support/bspline_shapes.h"
 #include "support/files.h"
 
 // STEP and IGES written by write_cad and read back by OpenCASCADE (read_cad): the same degrees,
@@ -26,17 +27,7 @@ namespace fs = std::filesystem;
 fs::path scratch(const std::string& name) { return fs::temp_directory_path() / ("pointsurf_cad_" + std::to_string(::getpid()) + "_" + name); }
 
 // A bicubic x quadratic surface with uneven interior knots (one double) and a wavy net.
-BSplineSurface wavy_cad_surface(const Vector3d& origin = Vector3d::Zero()) {
-  const std::vector<double> U = {0, 0, 0, 0, 0.2, 0.45, 0.45, 0.7, 1, 1, 1, 1};
-  const std::vector<double> V = {0, 0, 0, 0.3, 0.6, 1, 1, 1};
-  const int nu = int(U.size()) - 4, nv = int(V.size()) - 3;
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> jitter(-0.3, 0.3);
-  std::vector<Vector3d> net;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) net.emplace_back(double(i) + 0.2 * jitter(rng), 0.8 * double(j) + 0.2 * jitter(rng), jitter(rng));
-  return BSplineSurface(3, 2, U, V, nu, nv, net, origin);
-}
+BSplineSurface wavy_cad_surface(const Vector3d& origin = Vector3d::Zero()) { return test::wavy_bspline(2, origin, 11); }
 
 void expect_same_surface(const BSplineSurface& a, const BSplineSurface& b, double tolerance) {
   ASSERT_EQ(a.degree_u(), b.degree_u());
