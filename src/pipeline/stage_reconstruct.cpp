@@ -243,12 +243,12 @@ void run_reconstruct(StageRun& run) {
   TailShares tail;
   double forecast_tail = 0.0;
   // Poisson's share starts after the noise estimate (1-7 % of the stage: more at low depths)
-  MovableProgress method_part(run.progress, method == "poisson" ? begin + 0.03 : begin, tail.begin);
+  const double method_begin = method == "poisson" ? begin + 0.03 : begin;
+  MovableProgress method_part(run.progress, method_begin, tail.begin);
   const ProgressCallback progress = method_part.callback([&](const ProgressForecast& f) {
     if (method != "poisson" || !(f.seconds > 0.0)) return;
     forecast_tail = PoissonTailCost(f.output_size, double(cloud.size()), true, PoissonTailCost::kAssumedSearch * f.seconds).total();
-    const double from = begin + 0.03;
-    method_part.move_end(from + (1.0 - from) * f.seconds / (f.seconds + forecast_tail));
+    method_part.move_end(method_begin + (1.0 - method_begin) * f.seconds / (f.seconds + forecast_tail));
   });
   const NoiseEstimate noise = estimate_noise(cloud, tree);
   MeshSummary m;

@@ -47,7 +47,10 @@ constexpr double kSolveEnd = 0.45, kExtractionEnd = 0.85;
 // noisy: 4.6x there).
 struct PoissonCost {
   static constexpr double kPerNode = 1.1e-6, kSolverPerTriangle = 0.7e-6, kPerSample = 2.0e-6;  // the solver
-  static constexpr double kPerCoarseLeaf = 2.0e-6, kDensityPerTriangle = 0.5e-6;  // the extraction: below
+  // the extraction (below): its seeds, the rest per triangle and the following's part of it
+  static constexpr double kPerCoarseLeaf = 2.0e-6, kRestPerTriangle = 1.0e-6, kFollowPerTriangle = 1.7e-6;
+  static constexpr double kFollowedCover = 0.5, kCellsPerSeededTriangle = 0.5;
+  static constexpr double kDensityPerTriangle = 0.5e-6;
   static constexpr double kTrianglesPerNode = 0.215;
   double solver = 0.0, seeds = 0.0, extraction = 0.0, density = 0.0, triangles = 0.0, cells = 0.0;
 
@@ -74,9 +77,10 @@ struct PoissonCost {
     const double cover = finest > 1 ? double(nodes_per_level[std::size_t(finest - 1)]) / std::max(1.0, 4.0 * double(nodes_per_level[std::size_t(finest - 2)])) : 1.0;
     solver = kPerNode * double(nodes) + kSolverPerTriangle * triangles + kPerSample * double(samples);
     seeds = kPerCoarseLeaf * coarse;
-    const double followed = std::min(1.0, cover / 0.5);
-    extraction = seeds + triangles * (1.0 + 1.7 * followed) * 1e-6;
-    cells = followed * double(finest > 0 ? nodes_per_level[std::size_t(finest - 1)] : 0) + (1.0 - followed) * 0.5 * triangles;
+    const double followed = std::min(1.0, cover / kFollowedCover);
+    extraction = seeds + triangles * (kRestPerTriangle + kFollowPerTriangle * followed);
+    cells = followed * double(finest > 0 ? nodes_per_level[std::size_t(finest - 1)] : 0) +
+            (1.0 - followed) * kCellsPerSeededTriangle * triangles;
     density = kDensityPerTriangle * triangles;
   }
   double total() const { return solver + extraction + density; }
